@@ -1,0 +1,1 @@
+//! The `chisel` command line. PLACEHOLDER.

@@ -1,0 +1,248 @@
+//! Typed GPU buffers: Pod arrays for storage, encase structs for uniforms,
+//! and `Result`-returning readback.
+
+use std::marker::PhantomData;
+use std::ops::Range;
+
+use bytemuck::Pod;
+use encase::{ShaderType, UniformBuffer as EncaseUniform, internal::WriteInto};
+use wgpu::util::DeviceExt;
+
+use super::Gpu;
+use crate::{Error, Result};
+
+/// A storage buffer of `len` elements of Pod type `T`.
+#[derive(Debug)]
+pub struct GpuArray<T: Pod> {
+    pub buffer: wgpu::Buffer,
+    len: usize,
+    label: String,
+    _t: PhantomData<T>,
+}
+
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+impl<T: Pod> GpuArray<T> {
+    fn check_size(gpu: &Gpu, label: &str, len: usize) -> Result<u64> {
+        let bytes = (len.max(1) as u64).saturating_mul(std::mem::size_of::<T>() as u64);
+        if bytes > gpu.max_binding_bytes() {
+            return Err(Error::OutOfMemory(format!(
+                "allocating `{label}`: {bytes} bytes exceed one storage binding \
+                 ({} bytes); split the data with `chunk_ranges`",
+                gpu.max_binding_bytes()
+            )));
+        }
+        Ok(bytes)
+    }
+
+    /// Uploads `data` into a new storage buffer (readable and writable by kernels).
+    pub fn from_slice(gpu: &Gpu, label: &str, data: &[T]) -> Result<Self> {
+        Self::check_size(gpu, label, data.len())?;
+        let label = format!("chisel.{label}");
+        let zero = [T::zeroed()];
+        let contents: &[T] = if data.is_empty() { &zero } else { data };
+        let buffer = gpu.scoped(&label, || {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&label),
+                    contents: bytemuck::cast_slice(contents),
+                    usage: STORAGE,
+                })
+        })?;
+        Ok(GpuArray {
+            buffer,
+            len: data.len(),
+            label,
+            _t: PhantomData,
+        })
+    }
+
+    /// A new buffer of `len` copies of `sentinel` (e.g. NaN or `u32::MAX`),
+    /// so a kernel that misses an element is caught by the comparison.
+    pub fn filled(gpu: &Gpu, label: &str, len: usize, sentinel: T) -> Result<Self> {
+        Self::check_size(gpu, label, len)?;
+        Self::from_slice(gpu, label, &vec![sentinel; len])
+    }
+
+    /// Wraps an existing buffer holding `len` elements.
+    pub(crate) fn from_raw(buffer: wgpu::Buffer, len: usize, label: &str) -> Self {
+        GpuArray {
+            buffer,
+            len,
+            label: format!("chisel.{label}"),
+            _t: PhantomData,
+        }
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the array has no elements.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Bytes of the elements (0 for an empty array).
+    pub fn byte_len(&self) -> u64 {
+        (self.len * std::mem::size_of::<T>()) as u64
+    }
+
+    /// The whole buffer as a binding resource.
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.buffer.as_entire_binding()
+    }
+
+    /// Overwrites the elements from `data` (same length).
+    pub fn write(&self, gpu: &Gpu, data: &[T]) -> Result<()> {
+        if data.len() != self.len {
+            return Err(Error::InvalidInput(format!(
+                "write to `{}`: {} elements for a buffer of {}",
+                self.label,
+                data.len(),
+                self.len
+            )));
+        }
+        if !data.is_empty() {
+            gpu.queue
+                .write_buffer(&self.buffer, 0, bytemuck::cast_slice(data));
+        }
+        Ok(())
+    }
+
+    /// Copies the elements back to the host; waits for queued work first.
+    pub fn read(&self, gpu: &Gpu) -> Result<Vec<T>> {
+        let mut encoder = gpu.encoder("readback");
+        let staging = self.stage(gpu, &mut encoder)?;
+        gpu.submit_and_wait(encoder)?;
+        staging.finish(gpu)
+    }
+
+    /// Records a copy into a mappable staging buffer on `encoder`; call
+    /// [`Staged::finish`] after submitting to get the data.
+    pub fn stage(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<Staged<T>> {
+        let bytes = self.byte_len();
+        let staging = gpu.scoped(&self.label, || {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&format!("{}.staging", self.label)),
+                size: bytes.max(4),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })?;
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, bytes);
+        }
+        Ok(Staged {
+            staging,
+            len: self.len,
+            label: self.label.clone(),
+            _t: PhantomData,
+        })
+    }
+}
+
+/// A recorded copy waiting to be mapped; see [`GpuArray::stage`].
+#[derive(Debug)]
+pub struct Staged<T: Pod> {
+    staging: wgpu::Buffer,
+    len: usize,
+    label: String,
+    _t: PhantomData<T>,
+}
+
+impl<T: Pod> Staged<T> {
+    /// Maps the staging buffer and copies it out (after the copy was submitted).
+    pub fn finish(self, gpu: &Gpu) -> Result<Vec<T>> {
+        if self.len == 0 {
+            return Ok(Vec::new());
+        }
+        let bytes = (self.len * std::mem::size_of::<T>()) as u64;
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.staging
+            .map_async(wgpu::MapMode::Read, 0..bytes, move |r| {
+                let _ = tx.send(r);
+            });
+        gpu.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| Error::Readback {
+                label: self.label.clone(),
+                message: e.to_string(),
+            })?;
+        gpu.check_lost()?;
+        let mapped = rx.recv().map_err(|_| Error::Readback {
+            label: self.label.clone(),
+            message: "map callback never ran".into(),
+        })?;
+        mapped.map_err(|e| Error::Readback {
+            label: self.label.clone(),
+            message: e.to_string(),
+        })?;
+        let out = {
+            let view = self
+                .staging
+                .get_mapped_range(0..bytes)
+                .map_err(|e| Error::Readback {
+                    label: self.label.clone(),
+                    message: e.to_string(),
+                })?;
+            bytemuck::pod_collect_to_vec(&view)
+        };
+        self.staging.unmap();
+        Ok(out)
+    }
+}
+
+/// A uniform buffer holding one encase [`ShaderType`] value (std140 layout).
+#[derive(Debug)]
+pub struct UniformBuffer<T> {
+    pub buffer: wgpu::Buffer,
+    _t: PhantomData<T>,
+}
+
+impl<T: ShaderType + WriteInto> UniformBuffer<T> {
+    /// Uploads `value` laid out by encase.
+    pub fn new(gpu: &Gpu, label: &str, value: &T) -> Result<Self> {
+        let mut bytes = EncaseUniform::new(Vec::<u8>::new());
+        bytes.write(value).map_err(|e| Error::Validation {
+            label: label.into(),
+            message: e.to_string(),
+        })?;
+        let label = format!("chisel.{label}");
+        let buffer = gpu.scoped(&label, || {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(&label),
+                    contents: &bytes.into_inner(),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                })
+        })?;
+        Ok(UniformBuffer {
+            buffer,
+            _t: PhantomData,
+        })
+    }
+
+    /// The buffer as a binding resource.
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.buffer.as_entire_binding()
+    }
+}
+
+/// Splits `n` elements of `elem_bytes` each into consecutive ranges of at
+/// most `max_bytes` per range (at least one element each). This is how data
+/// larger than one storage binding is processed in slabs.
+pub fn chunk_ranges(n: usize, elem_bytes: usize, max_bytes: u64) -> Vec<Range<usize>> {
+    let per = usize::try_from(max_bytes / elem_bytes.max(1) as u64)
+        .unwrap_or(usize::MAX)
+        .max(1);
+    (0..n.div_ceil(per))
+        .map(|i| i * per..((i + 1) * per).min(n))
+        .collect()
+}

@@ -1,0 +1,337 @@
+//! GPU context: adapter choice, device, queue, kernel registry, typed buffers,
+//! readback and timing (SPEC §0.3).
+//!
+//! One [`Gpu`] owns instance, adapter, device and queue. Adapter choice follows
+//! [`AdapterChoice`] (env `CHISEL_ADAPTER`, CLI `--adapter`). Optional features
+//! (`SHADER_INT64`, `TIMESTAMP_QUERY`, `SUBGROUP`) are requested when present
+//! and reported in [`GpuFeatures`]; every kernel that can use them keeps a
+//! portable path. Limits are raised to what the adapter allows. Device loss,
+//! out-of-memory and validation failures come back as [`crate::Error`] values.
+
+mod adapter;
+mod buffer;
+mod registry;
+mod timing;
+
+pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
+pub use buffer::{GpuArray, UniformBuffer, chunk_ranges};
+pub use registry::{Kernel, Shader, preprocess};
+pub use timing::GpuTiming;
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use crate::{Error, Result};
+
+/// Optional adapter features the device was opened with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct GpuFeatures {
+    /// `SHADER_INT64`: 64-bit integers in WGSL (exact hull predicates).
+    pub int64: bool,
+    /// `TIMESTAMP_QUERY`: kernel timing on the GPU clock.
+    pub timestamps: bool,
+    /// `SUBGROUP`: subgroup operations (never assumed by a kernel).
+    pub subgroups: bool,
+}
+
+/// Options for opening a [`Gpu`].
+#[derive(Debug, Clone, Default)]
+pub struct GpuOptions {
+    /// Which adapter to use; `None` reads `CHISEL_ADAPTER` (default `auto`).
+    pub adapter: Option<AdapterChoice>,
+    /// Cap on the bytes of one storage binding, below the adapter's own
+    /// limit; lets tests exercise slab/chunk paths on small data.
+    pub max_binding_bytes: Option<u64>,
+    /// Open the device without optional features (tests the portable paths).
+    pub portable: bool,
+}
+
+/// The GPU context: instance, adapter, device, queue and cached pipelines.
+#[derive(Debug)]
+pub struct Gpu {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    /// What the adapter says about itself.
+    pub info: wgpu::AdapterInfo,
+    /// Optional features in use.
+    pub features: GpuFeatures,
+    max_binding_bytes: u64,
+    lost: Arc<Mutex<Option<String>>>,
+    pipelines: Mutex<HashMap<Kernel, Arc<wgpu::ComputePipeline>>>,
+}
+
+impl Gpu {
+    /// Opens the adapter named by `CHISEL_ADAPTER` (default `auto`).
+    pub fn new() -> Result<Self> {
+        Self::with_options(GpuOptions::default())
+    }
+
+    /// Opens a device with explicit options.
+    pub fn with_options(options: GpuOptions) -> Result<Self> {
+        let choice = match options.adapter {
+            Some(c) => c,
+            None => AdapterChoice::from_env()?,
+        };
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = adapter::select(&instance, &choice)?;
+        let info = adapter.get_info();
+        let available = adapter.features();
+        let mut wanted = wgpu::Features::empty();
+        if !options.portable {
+            wanted |= wgpu::Features::SHADER_INT64
+                | wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::SUBGROUP;
+        }
+        let required_features = available & wanted;
+        let required_limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("chisel"),
+            required_features,
+            required_limits: required_limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| Error::RequestDevice {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        let lost = Arc::new(Mutex::new(None));
+        let lost_cb = Arc::clone(&lost);
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut slot) = lost_cb.lock() {
+                *slot = Some(format!("{reason:?}: {message}"));
+            }
+        });
+        let adapter_max = required_limits
+            .max_storage_buffer_binding_size
+            .min(required_limits.max_buffer_size);
+        let max_binding_bytes = options
+            .max_binding_bytes
+            .map_or(adapter_max, |cap| cap.min(adapter_max))
+            .max(256);
+        let features = GpuFeatures {
+            int64: required_features.contains(wgpu::Features::SHADER_INT64),
+            timestamps: required_features.contains(wgpu::Features::TIMESTAMP_QUERY),
+            subgroups: required_features.contains(wgpu::Features::SUBGROUP),
+        };
+        Ok(Gpu {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+            features,
+            max_binding_bytes,
+            lost,
+            pipelines: Mutex::new(HashMap::new()),
+        })
+    }
+
+    /// One line naming the adapter: `name (backend, type, driver)`.
+    pub fn describe(&self) -> String {
+        adapter::describe(&self.info)
+    }
+
+    /// Largest number of bytes one storage binding may hold on this device
+    /// (after any [`GpuOptions::max_binding_bytes`] cap).
+    pub fn max_binding_bytes(&self) -> u64 {
+        self.max_binding_bytes
+    }
+
+    /// Largest number of `T` elements that fit one storage binding.
+    pub fn max_binding_len<T>(&self) -> usize {
+        let size = std::mem::size_of::<T>().max(1) as u64;
+        usize::try_from(self.max_binding_bytes / size).unwrap_or(usize::MAX)
+    }
+
+    /// Fails with [`Error::DeviceLost`] if the device-lost callback fired.
+    pub fn check_lost(&self) -> Result<()> {
+        match self.lost.lock().ok().and_then(|s| s.clone()) {
+            Some(msg) => Err(Error::DeviceLost(msg)),
+            None => Ok(()),
+        }
+    }
+
+    /// The compute pipeline of `kernel`, built once (inside validation and
+    /// out-of-memory error scopes) and cached for the life of the device.
+    pub fn pipeline(&self, kernel: Kernel) -> Result<Arc<wgpu::ComputePipeline>> {
+        if let Some(p) = self
+            .pipelines
+            .lock()
+            .ok()
+            .and_then(|m| m.get(&kernel).cloned())
+        {
+            return Ok(p);
+        }
+        self.check_lost()?;
+        if !self.device.features().contains(kernel.requires()) {
+            return Err(Error::Kernel {
+                name: kernel.name().into(),
+                message: format!(
+                    "needs device features {:?}, which this adapter lacks",
+                    kernel.requires()
+                ),
+            });
+        }
+        let source = preprocess(kernel.source()).map_err(|message| Error::Kernel {
+            name: kernel.name().into(),
+            message,
+        })?;
+        let label = kernel.label();
+        let pipeline = self
+            .scoped(&label, || {
+                let module = self
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(&label),
+                        source: wgpu::ShaderSource::Wgsl(source.into()),
+                    });
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(&label),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some("main"),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
+            })
+            .map_err(|e| match e {
+                Error::Validation { message, .. } => Error::Kernel {
+                    name: kernel.name().into(),
+                    message,
+                },
+                other => other,
+            })?;
+        let pipeline = Arc::new(pipeline);
+        if let Ok(mut m) = self.pipelines.lock() {
+            m.insert(kernel, Arc::clone(&pipeline));
+        }
+        Ok(pipeline)
+    }
+
+    /// Runs `f` inside validation + out-of-memory error scopes and turns a
+    /// captured error into [`Error::Validation`] / [`Error::OutOfMemory`].
+    pub fn scoped<T>(&self, label: &str, f: impl FnOnce() -> T) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        self.check_lost()?;
+        if let Some(e) = o {
+            return Err(Error::OutOfMemory(format!("{label}: {e}")));
+        }
+        if let Some(e) = v {
+            return Err(Error::Validation {
+                label: label.into(),
+                message: e.to_string(),
+            });
+        }
+        Ok(out)
+    }
+
+    /// A bind group for `kernel` with `buffers` at bindings `0..n` of group 0
+    /// (order: uniform → read-only → read-write, as the kernel declares them).
+    pub fn bind(
+        &self,
+        kernel: Kernel,
+        pipeline: &wgpu::ComputePipeline,
+        buffers: &[wgpu::BindingResource<'_>],
+    ) -> Result<wgpu::BindGroup> {
+        let label = kernel.label();
+        self.scoped(&label, || {
+            let layout = pipeline.get_bind_group_layout(0);
+            let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, r)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: r.clone(),
+                })
+                .collect();
+            self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&label),
+                layout: &layout,
+                entries: &entries,
+            })
+        })
+    }
+
+    /// Workgroup counts `(x, y)` covering `n_invocations` at `wg_size` per
+    /// group, going 2-D past `max_compute_workgroups_per_dimension`. Kernels
+    /// recover the linear index as `gid.x + gid.y * nwg.x * WG_SIZE`.
+    pub fn workgroups(&self, n_invocations: u32, wg_size: u32) -> (u32, u32) {
+        let groups = n_invocations.div_ceil(wg_size);
+        let max = self
+            .device
+            .limits()
+            .max_compute_workgroups_per_dimension
+            .max(1);
+        if groups <= max {
+            (groups, 1)
+        } else {
+            let y = groups.div_ceil(max);
+            (groups.div_ceil(y), y)
+        }
+    }
+
+    /// Records a dispatch of `n_invocations` (skipped when zero).
+    pub fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        pipeline: &wgpu::ComputePipeline,
+        bind_group: &wgpu::BindGroup,
+        n_invocations: u32,
+        wg_size: u32,
+    ) {
+        if n_invocations == 0 {
+            return;
+        }
+        let (x, y) = self.workgroups(n_invocations, wg_size);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Submits `encoder` and waits for the queue to drain.
+    pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
+        let index = self.queue.submit([encoder.finish()]);
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| Error::DeviceLost(e.to_string()))?;
+        self.check_lost()
+    }
+
+    /// A fresh command encoder labelled `chisel.<label>`.
+    pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        self.device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some(&format!("chisel.{label}")),
+            })
+    }
+}
+
+/// The GPU in tests: the adapter from `CHISEL_ADAPTER`, or `None` with a note
+/// on stderr when none exists. With `CI=true` a missing adapter is an error.
+pub fn gpu_for_tests() -> Result<Option<Gpu>> {
+    match Gpu::new() {
+        Ok(g) => Ok(Some(g)),
+        Err(e @ Error::NoAdapter { .. }) => {
+            if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {
+                Err(e)
+            } else {
+                eprintln!("skipping GPU part: {e}");
+                Ok(None)
+            }
+        }
+        Err(e) => Err(e),
+    }
+}

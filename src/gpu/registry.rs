@@ -1,0 +1,111 @@
+//! The kernel registry: every `kernels/*.wgsl` and `shaders/*.wgsl` file,
+//! embedded at build time, under one name used everywhere (WGSL file, CPU
+//! mirror, GPU pass, parity test, bench id, wgpu label `chisel.<name>`).
+//!
+//! `tests/shaders.rs` walks both folders and checks that every file is here
+//! and passes naga validation.
+
+/// Declares the registry: one variant per file, with its source.
+macro_rules! registry {
+    (
+        $(#[$meta:meta])* $ty:ident, $dir:literal, requires $req:ident:
+        $($(#[$vmeta:meta])* $variant:ident => $file:literal $(needs $feat:ident)?),* $(,)?
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum $ty {
+            $($(#[$vmeta])* $variant,)*
+        }
+
+        impl $ty {
+            /// Every entry, in declaration order.
+            pub const ALL: &'static [$ty] = &[$($ty::$variant,)*];
+
+            /// The file stem, which is also the kernel's name.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($ty::$variant => $file,)*
+                }
+            }
+
+            /// Path relative to the crate root.
+            pub fn path(self) -> String {
+                format!("{}/{}.wgsl", $dir, self.name())
+            }
+
+            /// The embedded WGSL source (before `#import` expansion).
+            pub fn source(self) -> &'static str {
+                match self {
+                    $($ty::$variant => include_str!(concat!("../../", $dir, "/", $file, ".wgsl")),)*
+                }
+            }
+
+            /// Device features the file needs (empty = portable).
+            pub fn $req(self) -> wgpu::Features {
+                match self {
+                    $($ty::$variant => wgpu::Features::empty() $(| wgpu::Features::$feat)?,)*
+                }
+            }
+
+            /// The wgpu label `chisel.<name>`.
+            pub fn label(self) -> String {
+                format!("chisel.{}", self.name())
+            }
+        }
+    };
+}
+
+registry! {
+    /// Compute kernels in `kernels/`.
+    Kernel, "kernels", requires requires:
+    /// Area-weighted vertex normals by gather over CSR vertex→triangle adjacency.
+    VertexNormals => "vertex_normals",
+    /// Per-workgroup min/max of `vec4` positions (bounding box).
+    BoundsReduce => "bounds_reduce",
+    /// Per-workgroup min/max of `f32` samples (volume intensity range).
+    RangeReduce => "range_reduce",
+    /// Exclusive scan of `u32` within workgroup blocks, block totals out.
+    ExclusiveScanBlocks => "exclusive_scan_blocks",
+    /// Adds scanned block totals back to every element of its block.
+    ExclusiveScanAdd => "exclusive_scan_add",
+}
+
+registry! {
+    /// Render shaders in `shaders/`.
+    Shader, "shaders", requires requires:
+    /// Shaded triangles with optional scalar colour map.
+    Mesh => "mesh",
+    /// Wireframe lines drawn over the shaded mesh.
+    Wireframe => "wireframe",
+}
+
+/// Files under `kernels/shared/`, available to `#import <name>`.
+const SHARED: &[(&str, &str)] = &[(
+    "dispatch",
+    include_str!("../../kernels/shared/dispatch.wgsl"),
+)];
+
+/// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`
+/// (each imported once). Errors name the unknown import.
+pub fn preprocess(source: &str) -> Result<String, String> {
+    let mut out = String::with_capacity(source.len());
+    let mut seen: Vec<&str> = Vec::new();
+    for (n, line) in source.lines().enumerate() {
+        if let Some(rest) = line.trim_start().strip_prefix("#import") {
+            let name = rest.trim();
+            let (key, body) = SHARED
+                .iter()
+                .find(|(k, _)| *k == name)
+                .ok_or_else(|| format!("line {}: unknown `#import {name}`", n + 1))?;
+            if !seen.contains(key) {
+                seen.push(key);
+                out.push_str(body);
+                out.push('\n');
+            }
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    Ok(out)
+}

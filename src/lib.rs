@@ -1,0 +1,34 @@
+//! chisel: a GPU compute engine for surgical-planning geometry.
+//!
+//! Data flows one way:
+//!
+//! ```text
+//!  files ──io──▶ TriMesh / Volume (host topology: CSR, edge maps, components)
+//!                   │ flatten to Pod arrays
+//!                   ▼
+//!            GpuArray uploads ──▶ kernels/*.wgsl ──▶ readback of what the host needs
+//!                   │                                   │
+//!                   └──── CPU mirror (same loop, f32) ──┴──▶ parity comparison
+//!                                                      ▼
+//!                         render (shaders/*.wgsl) ──▶ PNG previews, JSON reports
+//! ```
+//!
+//! Every kernel is reachable through [`Backend::Cpu`] and [`Backend::Gpu`];
+//! `tests/parity/` proves they agree.
+
+pub mod error;
+pub mod gpu;
+pub mod io;
+pub mod mesh;
+pub mod normals;
+pub mod parity;
+pub mod reduce;
+pub mod render;
+pub mod scan;
+pub mod volume;
+
+pub use error::{Error, Position, Result};
+pub use gpu::Gpu;
+pub use mesh::TriMesh;
+pub use parity::Backend;
+pub use volume::Volume;

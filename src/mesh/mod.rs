@@ -1,0 +1,105 @@
+//! Host-side triangle meshes and their topology.
+//!
+//! A [`TriMesh`] is an indexed triangle list: `positions` (#V points, units of
+//! the input file) and `triangles` (#F index triples, counter-clockwise =
+//! right-hand-rule normal, whatever way the file winds them). Per-vertex
+//! scalar fields (e.g. displacement) ride along by name.
+
+pub mod csr;
+pub mod topology;
+
+pub use csr::Csr;
+pub use topology::{Orientation, Topology};
+
+use glam::Vec3;
+
+/// A named per-vertex scalar field: `values.len() == positions.len()`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScalarField {
+    pub name: String,
+    pub values: Vec<f32>,
+}
+
+/// Indexed triangle mesh.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriMesh {
+    /// #V vertex positions.
+    pub positions: Vec<Vec3>,
+    /// #F triangles as vertex-index triples into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-vertex scalar fields, each with #V values.
+    pub scalars: Vec<ScalarField>,
+}
+
+impl TriMesh {
+    /// A mesh from positions and triangles, with every index checked.
+    pub fn new(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> crate::Result<Self> {
+        let mesh = TriMesh {
+            positions,
+            triangles,
+            scalars: Vec::new(),
+        };
+        mesh.validate()?;
+        Ok(mesh)
+    }
+
+    /// Checks indices are in range, positions finite and scalar lengths match.
+    pub fn validate(&self) -> crate::Result<()> {
+        let n = self.positions.len();
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(crate::Error::InvalidInput(format!(
+                "vertex {i} has a non-finite coordinate {:?}",
+                self.positions[i]
+            )));
+        }
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
+                return Err(crate::Error::InvalidInput(format!(
+                    "triangle {t} references vertex {v} but the mesh has {n} vertices"
+                )));
+            }
+        }
+        for s in &self.scalars {
+            if s.values.len() != n {
+                return Err(crate::Error::InvalidInput(format!(
+                    "scalar field `{}` has {} values for {n} vertices",
+                    s.name,
+                    s.values.len()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of triangles.
+    pub fn n_triangles(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The scalar field called `name`, if any.
+    pub fn scalar(&self, name: &str) -> Option<&ScalarField> {
+        self.scalars.iter().find(|s| s.name == name)
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of all vertices; `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
+    }
+
+    /// Reverses the winding of every triangle (flips all normals).
+    pub fn flip_winding(&mut self) {
+        for t in &mut self.triangles {
+            t.swap(1, 2);
+        }
+    }
+}

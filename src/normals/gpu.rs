@@ -1,0 +1,82 @@
+//! GPU pass for `kernels/vertex_normals.wgsl`.
+
+use super::NormalsInput;
+use crate::Result;
+use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+
+const WG_SIZE: u32 = 256;
+
+/// Uniform parameters of `vertex_normals`.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct Params {
+    pub n_vertices: u32,
+}
+
+/// Device buffers of one `vertex_normals` problem, kept for resident reruns.
+#[derive(Debug)]
+pub struct NormalsBuffers {
+    params: UniformBuffer<Params>,
+    positions: GpuArray<[f32; 4]>,
+    triangles: GpuArray<u32>,
+    offsets: GpuArray<u32>,
+    tri_ids: GpuArray<u32>,
+    /// #V output normals (NaN-filled until the kernel writes them).
+    pub normals: GpuArray<[f32; 4]>,
+    n_vertices: u32,
+}
+
+impl NormalsBuffers {
+    /// Uploads `input`; the output starts filled with NaN sentinels.
+    pub fn upload(gpu: &Gpu, input: &NormalsInput) -> Result<Self> {
+        let n_vertices = u32::try_from(input.positions.len()).map_err(|_| {
+            crate::Error::InvalidInput("vertex_normals: more than 2^32 vertices".into())
+        })?;
+        Ok(NormalsBuffers {
+            params: UniformBuffer::new(gpu, "vertex_normals.params", &Params { n_vertices })?,
+            positions: GpuArray::from_slice(gpu, "vertex_normals.positions", &input.positions)?,
+            triangles: GpuArray::from_slice(gpu, "vertex_normals.triangles", &input.triangles)?,
+            offsets: GpuArray::from_slice(gpu, "vertex_normals.offsets", &input.adjacency.offsets)?,
+            tri_ids: GpuArray::from_slice(gpu, "vertex_normals.tri_ids", &input.adjacency.targets)?,
+            normals: GpuArray::filled(
+                gpu,
+                "vertex_normals.normals",
+                input.positions.len(),
+                [f32::NAN; 4],
+            )?,
+            n_vertices,
+        })
+    }
+
+    /// Records the kernel into `encoder` (no submission).
+    pub fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let kernel = Kernel::VertexNormals;
+        let pipeline = gpu.pipeline(kernel)?;
+        let bind = gpu.bind(
+            kernel,
+            &pipeline,
+            &[
+                self.params.binding(),
+                self.positions.binding(),
+                self.triangles.binding(),
+                self.offsets.binding(),
+                self.tri_ids.binding(),
+                self.normals.binding(),
+            ],
+        )?;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&kernel.label()),
+            timestamp_writes: None,
+        });
+        gpu.dispatch(&mut pass, &pipeline, &bind, self.n_vertices, WG_SIZE);
+        Ok(())
+    }
+}
+
+/// Uploads, dispatches once and reads the normals back.
+pub fn vertex_normals(gpu: &Gpu, input: &NormalsInput) -> Result<Vec<[f32; 4]>> {
+    let buffers = NormalsBuffers::upload(gpu, input)?;
+    let mut encoder = gpu.encoder("vertex_normals");
+    buffers.record(gpu, &mut encoder)?;
+    gpu.submit_and_wait(encoder)?;
+    buffers.normals.read(gpu)
+}

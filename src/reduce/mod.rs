@@ -1,0 +1,1 @@
+//! Min/max reductions. PLACEHOLDER.

@@ -1,0 +1,174 @@
+//! Shared fixtures for the test binaries (libigl `test_common.h` style):
+//! named synthetic families, the real data in `../shared/data`, and the GPU.
+#![allow(dead_code, reason = "each test binary uses a different subset")]
+
+use std::path::PathBuf;
+
+use chisel::gpu::Gpu;
+use chisel::{TriMesh, Volume};
+use glam::Vec3;
+
+/// `../shared/data` next to the crate. With `CI=true` a missing folder
+/// panics (the tests must run there); elsewhere `None` and a note to stderr.
+pub fn data_dir() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    if is_ci() {
+        panic!(
+            "CI=true but the real data folder {} is missing",
+            dir.display()
+        );
+    }
+    eprintln!("skipping real-data part: {} not found", dir.display());
+    None
+}
+
+/// Whether `CI` is set to `true`/`1`.
+pub fn is_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+}
+
+/// A real-data file, or `None` (skip) as in [`data_dir`].
+pub fn data(rel: &str) -> Option<PathBuf> {
+    data_dir().map(|d| d.join(rel))
+}
+
+/// A real mesh read with chisel's own reader.
+pub fn real_mesh(rel: &str) -> Option<TriMesh> {
+    data(rel).map(|p| chisel::io::read_mesh(&p).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// A real volume read with chisel's own reader.
+pub fn real_volume(rel: &str) -> Option<Volume> {
+    data(rel).map(|p| chisel::io::read_volume(&p).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// The GPU for parity tests: `None` (skip, with a note) when no adapter
+/// exists on a developer machine; a panic under `CI=true`.
+pub fn gpu() -> Option<Gpu> {
+    chisel::gpu::gpu_for_tests().unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Regular tetrahedron, outward winding, 4 vertices, 4 triangles.
+pub fn tetra() -> TriMesh {
+    TriMesh::new(
+        vec![
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(-1.0, -1.0, 1.0),
+        ],
+        vec![[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+    )
+    .expect("valid tetra")
+}
+
+/// Unit cube [0,1]³, outward winding, 8 vertices, 12 triangles.
+pub fn cube() -> TriMesh {
+    let p = (0..8)
+        .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+        .collect();
+    let quads = [
+        [0, 2, 3, 1], // z = 0, normal −z
+        [4, 5, 7, 6], // z = 1, normal +z
+        [0, 1, 5, 4], // y = 0, normal −y
+        [2, 6, 7, 3], // y = 1, normal +y
+        [0, 4, 6, 2], // x = 0, normal −x
+        [1, 3, 7, 5], // x = 1, normal +x
+    ];
+    let t = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    TriMesh::new(p, t).expect("valid cube")
+}
+
+/// Icosphere of radius 1 with `n` subdivisions, outward winding:
+/// 10·4ⁿ + 2 vertices, 20·4ⁿ triangles.
+pub fn icosphere(n: u32) -> TriMesh {
+    let g = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut p: Vec<Vec3> = [
+        [-1.0, g, 0.0],
+        [1.0, g, 0.0],
+        [-1.0, -g, 0.0],
+        [1.0, -g, 0.0],
+        [0.0, -1.0, g],
+        [0.0, 1.0, g],
+        [0.0, -1.0, -g],
+        [0.0, 1.0, -g],
+        [g, 0.0, -1.0],
+        [g, 0.0, 1.0],
+        [-g, 0.0, -1.0],
+        [-g, 0.0, 1.0],
+    ]
+    .iter()
+    .map(|a| Vec3::from_array(*a).normalize())
+    .collect();
+    let mut t: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..n {
+        let mut mid = std::collections::HashMap::new();
+        let mut midpoint = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
+                (p.len() - 1) as u32
+            })
+        };
+        let mut next = Vec::with_capacity(t.len() * 4);
+        for [a, b, c] in t {
+            let ab = midpoint(a, b, &mut p);
+            let bc = midpoint(b, c, &mut p);
+            let ca = midpoint(c, a, &mut p);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        t = next;
+    }
+    TriMesh::new(p, t).expect("valid icosphere")
+}
+
+/// A seeded random soup of `n` triangles over `n_vertices` points in
+/// [-1, 1]³ (xorshift; reproducible, no external RNG).
+pub fn random_mesh(seed: u64, n_vertices: usize, n: usize) -> TriMesh {
+    let mut s = seed.max(1);
+    let mut next = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    };
+    let p = (0..n_vertices)
+        .map(|_| {
+            let mut c = || (next() % 2_000_001) as f32 / 1_000_000.0 - 1.0;
+            Vec3::new(c(), c(), c())
+        })
+        .collect();
+    let t = (0..n)
+        .map(|_| {
+            let mut v = || (next() % n_vertices as u64) as u32;
+            [v(), v(), v()]
+        })
+        .collect();
+    TriMesh::new(p, t).expect("valid random mesh")
+}

@@ -22,6 +22,7 @@ pub mod io;
 pub mod mesh;
 pub mod normals;
 pub mod parity;
+pub mod phantom;
 pub mod reduce;
 pub mod render;
 pub mod scan;

@@ -1,1 +1,5 @@
-fn main() {}
+//! The `chisel` binary: see `chisel --help`.
+
+fn main() -> std::process::ExitCode {
+    chisel::cli::main()
+}

@@ -1,1 +1,120 @@
-//! The `chisel` command line. PLACEHOLDER.
+//! The `chisel` command line (SPEC §0.7): one module per command.
+//!
+//! Conventions shared by every command: `--adapter` picks the GPU (same
+//! values as `CHISEL_ADAPTER`), `--backend cpu|gpu` picks where data-parallel
+//! work runs, `--quiet` hides progress bars (they also hide when stderr is
+//! not a terminal), `--json` prints the report on stdout, `--report FILE`
+//! writes it atomically.
+
+mod convert;
+mod demo;
+mod info;
+mod render;
+mod report;
+mod stats;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use crate::gpu::{AdapterChoice, Gpu, GpuOptions};
+
+/// chisel: GPU compute for surgical-planning geometry.
+#[derive(Debug, Parser)]
+#[command(name = "chisel", version, about, long_about = None)]
+pub struct Cli {
+    #[command(flatten)]
+    global: Global,
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Options every command accepts.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Global {
+    /// GPU adapter: auto, cpu (lavapipe), an index from `chisel info`, or a name substring.
+    #[arg(long, global = true, env = "CHISEL_ADAPTER", default_value = "auto")]
+    adapter: String,
+    /// Hide progress bars and informational messages.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+}
+
+/// Where data-parallel work runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU mirror of each kernel.
+    Cpu,
+    /// The WGSL kernels on the chosen adapter.
+    Gpu,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List GPU adapters (backend, type, driver, limits, features) and the chosen one.
+    Info(info::Args),
+    /// Figures of a mesh (topology, orientation) or a volume (range, labels, components).
+    Stats(stats::Args),
+    /// Convert between mesh formats (vtk, ply, obj, stl, byu) or volume formats.
+    Convert(convert::Args),
+    /// Render a mesh to a PNG preview (shaded, views, wireframe, scalar colour map).
+    Render(render::Args),
+    /// The main job on embedded generated data: phantom → GPU kernels → previews + report.
+    Demo(demo::Args),
+}
+
+impl Global {
+    /// Opens the GPU this invocation asked for.
+    fn gpu(&self) -> anyhow::Result<Gpu> {
+        let adapter: AdapterChoice = self.adapter.parse()?;
+        let gpu = Gpu::with_options(GpuOptions {
+            adapter: Some(adapter),
+            ..Default::default()
+        })?;
+        if !self.quiet {
+            eprintln!("adapter: {}", gpu.describe());
+        }
+        Ok(gpu)
+    }
+
+    /// A progress bar on stderr (hidden with `--quiet` or without a terminal).
+    fn progress(&self, len: u64, what: &str) -> indicatif::ProgressBar {
+        if self.quiet {
+            return indicatif::ProgressBar::hidden();
+        }
+        let bar = indicatif::ProgressBar::new(len);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar.set_message(what.to_string());
+        bar
+    }
+
+    /// Prints an informational line unless `--quiet`.
+    fn note(&self, msg: impl std::fmt::Display) {
+        if !self.quiet {
+            eprintln!("{msg}");
+        }
+    }
+}
+
+/// Parses arguments, runs the command, maps errors to exit code 1 (2 for usage).
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info(a) => info::run(&cli.global, a),
+        Command::Stats(a) => stats::run(&cli.global, a),
+        Command::Convert(a) => convert::run(&cli.global, a),
+        Command::Render(a) => render::run(&cli.global, a),
+        Command::Demo(a) => demo::run(&cli.global, a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

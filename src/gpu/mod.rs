@@ -74,8 +74,7 @@ impl Gpu {
             Some(c) => c,
             None => AdapterChoice::from_env()?,
         };
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = instance();
         let adapter = adapter::select(&instance, &choice)?;
         let info = adapter.get_info();
         let available = adapter.features();
@@ -317,6 +316,17 @@ impl Gpu {
                 label: Some(&format!("chisel.{label}")),
             })
     }
+}
+
+/// A wgpu instance over the primary backends (Vulkan, Metal, DX12); the GL
+/// backend only when `WGPU_BACKEND` asks for it (its probing is slow and noisy
+/// on headless machines, and it duplicates Vulkan adapters with fewer features).
+pub fn instance() -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if std::env::var_os("WGPU_BACKEND").is_none() {
+        desc.backends = wgpu::Backends::PRIMARY;
+    }
+    wgpu::Instance::new(desc)
 }
 
 /// The GPU in tests: the adapter from `CHISEL_ADAPTER`, or `None` with a note

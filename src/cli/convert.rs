@@ -1,0 +1,55 @@
+//! `chisel convert IN OUT`: mesh ↔ mesh or volume ↔ volume, by extension.
+
+use std::path::PathBuf;
+
+use super::Global;
+use super::stats::is_volume;
+
+/// Arguments of `chisel convert`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Input mesh or volume.
+    input: PathBuf,
+    /// Output file; its extension picks the format (written atomically).
+    output: PathBuf,
+}
+
+pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    match (is_volume(&args.input), is_volume(&args.output)) {
+        (true, true) => {
+            let v = crate::io::read_volume(&args.input)?;
+            crate::io::write_volume(&args.output, &v)?;
+            global.note(format!(
+                "wrote {} ({}×{}×{} {})",
+                args.output.display(),
+                v.dims[0],
+                v.dims[1],
+                v.dims[2],
+                v.data.scalar_type().name()
+            ));
+        }
+        (false, false) => {
+            let m = crate::io::read_mesh(&args.input)?;
+            if !m.scalars.is_empty() && !crate::io::mesh_format_carries_scalars(&args.output) {
+                global.note(format!(
+                    "note: {} cannot store per-vertex scalars; dropped: {}",
+                    args.output.display(),
+                    m.scalars.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
+                ));
+            }
+            crate::io::write_mesh(&args.output, &m)?;
+            global.note(format!(
+                "wrote {} ({} vertices, {} triangles)",
+                args.output.display(),
+                m.n_vertices(),
+                m.n_triangles()
+            ));
+        }
+        _ => anyhow::bail!(
+            "cannot convert between a mesh and a volume ({} → {}); use `chisel mc` for surfaces",
+            args.input.display(),
+            args.output.display()
+        ),
+    }
+    Ok(())
+}

@@ -1,0 +1,50 @@
+//! `chisel render IN -o OUT.png`: a shaded preview of a mesh.
+
+use std::path::PathBuf;
+
+use super::Global;
+use crate::render::{RenderOptions, View};
+
+/// Arguments of `chisel render`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Mesh to draw.
+    input: PathBuf,
+    /// Output PNG (written atomically).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Colour the surface by this per-vertex scalar field (with a legend).
+    #[arg(long)]
+    scalars: Option<String>,
+    /// Views, in order: front, back, left, right (= side), top, bottom, iso.
+    #[arg(long, value_delimiter = ',', default_value = "front,side,top,iso")]
+    views: Vec<View>,
+    /// Draw the triangle edges over the shading.
+    #[arg(long)]
+    wireframe: bool,
+    /// Pixel size of each view.
+    #[arg(long, default_value_t = 512)]
+    size: u32,
+}
+
+pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    let mesh = crate::io::read_mesh(&args.input)?;
+    let gpu = global.gpu()?;
+    let opts = RenderOptions {
+        width: args.size,
+        height: args.size,
+        views: args.views.clone(),
+        wireframe: args.wireframe,
+        scalars: args.scalars.clone(),
+        title: Some(
+            args.input
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        ),
+        ..Default::default()
+    };
+    crate::render::render_png(&gpu, &mesh, &opts, &args.output)?;
+    global.note(format!("wrote {}", args.output.display()));
+    Ok(())
+}

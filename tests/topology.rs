@@ -575,7 +575,7 @@ fn perforated_spheres_match_brute_force_and_directed_loops() {
     for seed in 1..=8u64 {
         let mut next = rng(seed * 7919);
         let mut m = icosphere(2);
-        m.triangles.retain(|_| next() % 5 != 0);
+        m.triangles.retain(|_| !next().is_multiple_of(5));
         assert_matches_reference(&m, &format!("perforated {seed}"));
         let topo = Topology::of(&m);
         // Without pinch vertices, boundary loops are the cycles of the
@@ -613,7 +613,7 @@ fn perforated_spheres_match_brute_force_and_directed_loops() {
         // Random flips are undone by orient_consistently, patch by patch.
         let mut scrambled = m.clone();
         for t in scrambled.triangles.iter_mut() {
-            if next() % 7 == 0 {
+            if next().is_multiple_of(7) {
                 t.swap(1, 2);
             }
         }

@@ -452,18 +452,17 @@ pub(crate) fn analyse(mesh: &TriMesh) -> Analysis {
     let mut collapsed = 0;
     let mut degenerate = 0;
     for tri in tris {
-        let p = corners(mesh, tri);
-        let longest = (p[1] - p[0])
-            .length_squared()
-            .max((p[2] - p[1]).length_squared())
-            .max((p[0] - p[2]).length_squared());
-        let doubled_area = doubled_area_vector(p).length();
         if is_collapsed(tri) {
             collapsed += 1;
             degenerate += 1;
             continue;
         }
-        if doubled_area <= f64::from(f32::EPSILON) * longest {
+        let p = corners(mesh, tri);
+        let longest = (p[1] - p[0])
+            .length_squared()
+            .max((p[2] - p[1]).length_squared())
+            .max((p[0] - p[2]).length_squared());
+        if doubled_area_vector(p).length() <= f64::from(f32::EPSILON) * longest {
             degenerate += 1;
         }
         for &v in tri {

@@ -6,10 +6,14 @@
 //! scalar fields (e.g. displacement) ride along by name.
 
 pub mod csr;
+pub mod disjoint_sets;
+pub mod orient;
 pub mod topology;
 
 pub use csr::Csr;
-pub use topology::{Orientation, Topology};
+pub use disjoint_sets::DisjointSets;
+pub use orient::{orient_consistently, orient_outward};
+pub use topology::{Bounds, Component, Orientation, Topology};
 
 use glam::Vec3;
 

@@ -6,7 +6,10 @@
 
 pub mod analysis;
 
-pub use analysis::{ComponentCount, VolumeStats};
+pub use analysis::{
+    ComponentCount, LabelCount, Labelling, VolumeStats, label_6_connected, label_components,
+    threshold_components,
+};
 
 /// Sample storage, one variant per element type a reader can produce.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,3 +1,72 @@
-// placeholder
-@compute @workgroup_size(1)
-fn main() {}
+// bounds_reduce: one pass of the bounding-box reduction. Each workgroup
+// reduces WG_SIZE items to one (min, max) pair of order keys by a tree in
+// workgroup memory (no atomics); the host repeats the pass on the pairs
+// until one pair is left.
+//
+// Dispatch: one invocation per item, WG_SIZE per workgroup, 2-D grid past
+// the per-dimension limit (shared/dispatch.wgsl); workgroup w writes pair w.
+// Buffers:
+//   params:  n_items; pairs = 0: src holds #N positions, vec4<f32> bit
+//            patterns (xyz + w, all four lanes reduced); pairs = 1: src holds
+//            #N (lo, hi) key pairs written by the previous pass
+//   src:     #N or 2·#N vec4<u32> (see params.pairs)
+//   dst:     2·ceil(#N / WG_SIZE) vec4<u32> out: dst[2w] = min keys,
+//            dst[2w + 1] = max keys of workgroup w's items
+// Order: component-wise IEEE totalOrder via order keys (shared/order_key.wgsl),
+// so the result is exact and independent of the tree shape.
+// Mirror: reduce::cpu::bounds_pass (whole reduction: reduce::cpu::bounds_reduce).
+
+#import dispatch
+#import order_key
+
+struct Params {
+    n_items: u32,
+    pairs: u32,
+}
+
+const WG_SIZE: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> src: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read_write> dst: array<vec4<u32>>;
+
+var<workgroup> sh_lo: array<vec4<u32>, WG_SIZE>;
+var<workgroup> sh_hi: array<vec4<u32>, WG_SIZE>;
+
+// (lo, hi) keys of item ix.
+fn load(ix: u32) -> array<vec4<u32>, 2> {
+    if params.pairs == 0u {
+        let k = order_key4(src[ix]);
+        return array<vec4<u32>, 2>(k, k);
+    }
+    return array<vec4<u32>, 2>(src[2u * ix], src[2u * ix + 1u]);
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32,
+        @builtin(num_workgroups) n_groups: vec3<u32>) {
+    let w = workgroup_index(wid, n_groups);
+    let first_ix = w * WG_SIZE;
+    // Surplus workgroups of a 2-D grid: the whole group leaves (uniform).
+    if first_ix >= params.n_items {
+        return;
+    }
+    let ix = first_ix + lid;
+    // Lanes past the end repeat the group's first item: min/max are
+    // idempotent, so no identity element (and no infinity) is needed.
+    let item = load(select(first_ix, ix, ix < params.n_items));
+    sh_lo[lid] = item[0];
+    sh_hi[lid] = item[1];
+    for (var stride = WG_SIZE / 2u; stride > 0u; stride >>= 1u) {
+        workgroupBarrier();
+        if lid < stride {
+            sh_lo[lid] = min(sh_lo[lid], sh_lo[lid + stride]);
+            sh_hi[lid] = max(sh_hi[lid], sh_hi[lid + stride]);
+        }
+    }
+    if lid == 0u {
+        dst[2u * w] = sh_lo[0];
+        dst[2u * w + 1u] = sh_hi[0];
+    }
+}

@@ -60,9 +60,9 @@ registry! {
     Kernel, "kernels", requires requires:
     /// Area-weighted vertex normals by gather over CSR vertex→triangle adjacency.
     VertexNormals => "vertex_normals",
-    /// Per-workgroup min/max of `vec4` positions (bounding box).
+    /// Per-workgroup min/max of `vec4` positions (bounding box), as order keys.
     BoundsReduce => "bounds_reduce",
-    /// Per-workgroup min/max of `f32` samples (volume intensity range).
+    /// Per-workgroup min/max of `f32` samples (volume intensity range), as order keys.
     RangeReduce => "range_reduce",
     /// Exclusive scan of `u32` within workgroup blocks, block totals out.
     ExclusiveScanBlocks => "exclusive_scan_blocks",
@@ -80,10 +80,16 @@ registry! {
 }
 
 /// Files under `kernels/shared/`, available to `#import <name>`.
-const SHARED: &[(&str, &str)] = &[(
-    "dispatch",
-    include_str!("../../kernels/shared/dispatch.wgsl"),
-)];
+const SHARED: &[(&str, &str)] = &[
+    (
+        "dispatch",
+        include_str!("../../kernels/shared/dispatch.wgsl"),
+    ),
+    (
+        "order_key",
+        include_str!("../../kernels/shared/order_key.wgsl"),
+    ),
+];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`
 /// (each imported once). Errors name the unknown import.

@@ -1,1 +1,98 @@
-//! Min/max reductions. PLACEHOLDER.
+//! Min/max reductions: the bounding box of positions (kernel `bounds_reduce`)
+//! and the intensity range of volume samples (kernel `range_reduce`).
+//!
+//! Both reduce by a multi-pass tree: each pass turns #N items into
+//! ceil(#N / 256) (min, max) pairs in workgroup memory, repeated until one
+//! pair is left; no atomics. Floats are compared through order keys
+//! ([`cpu::order_key`], IEEE 754 totalOrder), so min/max are exact integer
+//! operations whose result does not depend on the tree shape, the chunking
+//! or the backend: parity is bit-for-bit. −0 sorts below +0.
+//!
+//! NaN policy: inputs must not contain NaN. totalOrder puts a NaN beyond
+//! ±inf, so a NaN anywhere in the input shows up in the result, and the
+//! entries here return [`Error::InvalidInput`] for it (no extra pass over
+//! the data). Infinities are ordinary values. Empty input gives `Ok(None)`.
+
+pub mod cpu;
+pub mod gpu;
+
+use glam::Vec3;
+
+use crate::parity::Backend;
+use crate::{Error, Result, TriMesh, Volume};
+
+/// Axis-aligned bounding box (units of the positions).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Component-wise minimum.
+    pub min: Vec3,
+    /// Component-wise maximum.
+    pub max: Vec3,
+}
+
+/// Smallest and largest sample of a volume or array.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleRange {
+    pub min: f32,
+    pub max: f32,
+}
+
+/// Bounding box of `positions` (#N points as `[x, y, z, w]`, w ignored) on
+/// `backend`; `None` when empty. Exact (no rounding).
+pub fn bounds_reduce(positions: &[[f32; 4]], backend: Backend<'_>) -> Result<Option<Bounds>> {
+    let pair = match backend {
+        Backend::Cpu => cpu::bounds_reduce(positions),
+        Backend::Gpu(g) => gpu::bounds_reduce(g, positions)?,
+    };
+    pair.map(|(lo, hi)| {
+        let bounds = Bounds {
+            min: Vec3::new(lo[0], lo[1], lo[2]),
+            max: Vec3::new(hi[0], hi[1], hi[2]),
+        };
+        if bounds.min.is_nan() || bounds.max.is_nan() {
+            return Err(Error::InvalidInput(
+                "bounds_reduce: positions contain NaN".into(),
+            ));
+        }
+        Ok(bounds)
+    })
+    .transpose()
+}
+
+/// Bounding box of the vertices of `mesh` (unused vertices included, like
+/// [`TriMesh::bounds`]); `None` for a mesh without vertices.
+pub fn mesh_bounds(mesh: &TriMesh, backend: Backend<'_>) -> Result<Option<Bounds>> {
+    let positions: Vec<[f32; 4]> = mesh
+        .positions
+        .iter()
+        .map(|p| [p.x, p.y, p.z, 0.0])
+        .collect();
+    bounds_reduce(&positions, backend)
+}
+
+/// Range of `samples` on `backend`; `None` when empty. On the GPU, arrays
+/// larger than one storage binding are reduced chunk by chunk
+/// ([`crate::gpu::chunk_ranges`]) and the chunk results combined.
+pub fn range_reduce(samples: &[f32], backend: Backend<'_>) -> Result<Option<SampleRange>> {
+    let pair = match backend {
+        Backend::Cpu => cpu::range_reduce(samples),
+        Backend::Gpu(g) => gpu::range_reduce(g, samples)?,
+    };
+    pair.map(|(min, max)| {
+        if min.is_nan() || max.is_nan() {
+            return Err(Error::InvalidInput(
+                "range_reduce: samples contain NaN".into(),
+            ));
+        }
+        Ok(SampleRange { min, max })
+    })
+    .transpose()
+}
+
+/// Intensity range of `volume`, over its samples converted to f32. Exact for
+/// element types with [`crate::volume::ScalarType::exact_in_f32`]; for
+/// `u32`/`i32`/`f64` it is the true range rounded to nearest f32 (rounding
+/// is monotonic, so it commutes with min/max).
+pub fn volume_range(volume: &Volume, backend: Backend<'_>) -> Result<Option<SampleRange>> {
+    range_reduce(&volume.data.to_f32(), backend)
+}

@@ -1,0 +1,212 @@
+//! GPU passes for `kernels/bounds_reduce.wgsl` and `kernels/range_reduce.wgsl`.
+//!
+//! [`ReduceBuffers`] holds one problem: the input (f32 bit patterns) and one
+//! output buffer per pass, 2·ceil(n / 256) keys each, down to a single
+//! (min, max) pair. Every pass has its own uniform, so all passes record
+//! into one command buffer.
+
+use bytemuck::Pod;
+
+use super::cpu::from_key;
+use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer, chunk_ranges};
+use crate::{Error, Result};
+
+/// Items per workgroup (`WG_SIZE` in both kernels).
+pub const WG_SIZE: u32 = 256;
+
+/// Uniform parameters of `bounds_reduce` and `range_reduce`.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct Params {
+    /// Items this pass reduces.
+    pub n_items: u32,
+    /// 0: `src` holds raw f32 bit patterns; 1: (lo, hi) key pairs.
+    pub pairs: u32,
+}
+
+/// Bindings of both kernels, by binding number (group 0).
+pub const BINDINGS: &[wgpu::BufferBindingType] = &[
+    wgpu::BufferBindingType::Uniform,
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: false },
+];
+
+/// One pass: its parameters and its 2·ceil(n_items / WG_SIZE) output keys.
+#[derive(Debug)]
+struct Pass<T: Pod> {
+    params: UniformBuffer<Params>,
+    n_items: u32,
+    dst: GpuArray<T>,
+}
+
+/// Device buffers of one reduction, kept for resident reruns. `T` is the
+/// key type: `[u32; 4]` for `bounds_reduce`, `u32` for `range_reduce`.
+#[derive(Debug)]
+pub struct ReduceBuffers<T: Pod> {
+    kernel: Kernel,
+    input: GpuArray<T>,
+    passes: Vec<Pass<T>>,
+}
+
+/// Buffers of a `bounds_reduce` problem.
+pub type BoundsBuffers = ReduceBuffers<[u32; 4]>;
+/// Buffers of a `range_reduce` problem (one chunk).
+pub type RangeBuffers = ReduceBuffers<u32>;
+
+impl<T: Pod> ReduceBuffers<T> {
+    /// Uploads `input` (bit patterns, ≥ 1 item, one storage binding) and
+    /// allocates the passes; outputs start as `sentinel`.
+    fn upload(gpu: &Gpu, kernel: Kernel, input: &[T], sentinel: T) -> Result<Self> {
+        let name = kernel.name();
+        let n = u32::try_from(input.len())
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "{name}: {} items (need 1 to 2^32 − 1 per binding)",
+                    input.len()
+                ))
+            })?;
+        let input = GpuArray::from_slice(gpu, &format!("{name}.input"), input)?;
+        let mut passes = Vec::new();
+        let mut n_items = n;
+        loop {
+            let pairs = u32::from(!passes.is_empty());
+            let n_out = n_items.div_ceil(WG_SIZE);
+            passes.push(Pass {
+                params: UniformBuffer::new(
+                    gpu,
+                    &format!("{name}.params{}", passes.len()),
+                    &Params { n_items, pairs },
+                )?,
+                n_items,
+                dst: GpuArray::filled(
+                    gpu,
+                    &format!("{name}.pass{}", passes.len()),
+                    2 * n_out as usize,
+                    sentinel,
+                )?,
+            });
+            if n_out == 1 {
+                break;
+            }
+            n_items = n_out;
+        }
+        Ok(ReduceBuffers {
+            kernel,
+            input,
+            passes,
+        })
+    }
+
+    /// Number of passes (⌈log₂₅₆ n⌉, at least 1).
+    pub fn n_passes(&self) -> usize {
+        self.passes.len()
+    }
+
+    /// Records every pass into `encoder` (no submission).
+    pub fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        let pipeline = gpu.pipeline(self.kernel)?;
+        let mut binds = Vec::with_capacity(self.passes.len());
+        let mut src = &self.input;
+        for pass in &self.passes {
+            binds.push(gpu.bind(
+                self.kernel,
+                &pipeline,
+                &[pass.params.binding(), src.binding(), pass.dst.binding()],
+            )?);
+            src = &pass.dst;
+        }
+        let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&self.kernel.label()),
+            timestamp_writes: None,
+        });
+        for (pass, bind) in self.passes.iter().zip(&binds) {
+            gpu.dispatch(&mut cpass, &pipeline, bind, pass.n_items, WG_SIZE);
+        }
+        Ok(())
+    }
+
+    /// The output keys of every pass, first pass first (for parity tests of
+    /// the individual dispatches).
+    pub fn pass_outputs(&self, gpu: &Gpu) -> Result<Vec<Vec<T>>> {
+        self.passes.iter().map(|p| p.dst.read(gpu)).collect()
+    }
+
+    /// Records, submits, waits and reads the final (min, max) keys.
+    pub fn run(&self, gpu: &Gpu) -> Result<[T; 2]> {
+        let mut encoder = gpu.encoder(self.kernel.name());
+        self.record(gpu, &mut encoder)?;
+        let last = self.passes.last().ok_or_else(|| Error::Kernel {
+            name: self.kernel.name().into(),
+            message: "no passes".into(),
+        })?;
+        let staged = last.dst.stage(gpu, &mut encoder)?;
+        gpu.submit_and_wait(encoder)?;
+        let keys = staged.finish(gpu)?;
+        match keys[..] {
+            [lo, hi] => Ok([lo, hi]),
+            _ => Err(Error::Readback {
+                label: self.kernel.label(),
+                message: format!("expected 2 keys, got {}", keys.len()),
+            }),
+        }
+    }
+}
+
+impl BoundsBuffers {
+    /// Uploads #N ≥ 1 positions `[x, y, z, w]`.
+    pub fn new(gpu: &Gpu, positions: &[[f32; 4]]) -> Result<Self> {
+        Self::upload(
+            gpu,
+            Kernel::BoundsReduce,
+            bytemuck::cast_slice(positions),
+            [u32::MAX; 4],
+        )
+    }
+}
+
+impl RangeBuffers {
+    /// Uploads #N ≥ 1 samples (at most one storage binding).
+    pub fn new(gpu: &Gpu, samples: &[f32]) -> Result<Self> {
+        Self::upload(
+            gpu,
+            Kernel::RangeReduce,
+            bytemuck::cast_slice(samples),
+            u32::MAX,
+        )
+    }
+}
+
+/// Component-wise (min, max) of `positions` (all four lanes): uploads,
+/// dispatches every pass and reads one pair back, one chunk of at most one
+/// storage binding at a time, chunk results combined on the host by key.
+/// `None` when empty.
+pub fn bounds_reduce(gpu: &Gpu, positions: &[[f32; 4]]) -> Result<Option<([f32; 4], [f32; 4])>> {
+    let mut acc: Option<[[u32; 4]; 2]> = None;
+    for chunk in chunk_ranges(positions.len(), 16, gpu.max_binding_bytes()) {
+        let [lo, hi] = BoundsBuffers::new(gpu, &positions[chunk])?.run(gpu)?;
+        acc = Some(match acc {
+            None => [lo, hi],
+            Some([a, b]) => [
+                std::array::from_fn(|i| a[i].min(lo[i])),
+                std::array::from_fn(|i| b[i].max(hi[i])),
+            ],
+        });
+    }
+    Ok(acc.map(|[lo, hi]| (lo.map(from_key), hi.map(from_key))))
+}
+
+/// (min, max) of `samples`, one chunk of at most one storage binding at a
+/// time (`chunk_ranges` over `gpu.max_binding_bytes()`), chunk results
+/// combined on the host by key. `None` when empty.
+pub fn range_reduce(gpu: &Gpu, samples: &[f32]) -> Result<Option<(f32, f32)>> {
+    let mut acc: Option<[u32; 2]> = None;
+    for chunk in chunk_ranges(samples.len(), 4, gpu.max_binding_bytes()) {
+        let [lo, hi] = RangeBuffers::new(gpu, &samples[chunk])?.run(gpu)?;
+        acc = Some(match acc {
+            None => [lo, hi],
+            Some([a, b]) => [a.min(lo), b.max(hi)],
+        });
+    }
+    Ok(acc.map(|[lo, hi]| (from_key(lo), from_key(hi))))
+}

@@ -34,8 +34,10 @@
 //! the fixed axes.
 //!
 //! # Layout
-//! Each view is drawn `width`×`height` pixels with its name as a caption in
-//! its top-left corner. [`render_image`] lays the views out as a grid of
+//! Each view is a `width`×`height` cell: its name (with the panel caption)
+//! in a band of [`CAPTION_HEIGHT`] pixels at the top, the mesh framed in
+//! the `width`×(`height` − band) area below (views under 4 bands tall draw
+//! the caption over the mesh and frame the whole cell). [`render_image`] lays the views out as a grid of
 //! ⌈√n⌉ columns, row by row; [`render_panels`] puts panels side by side
 //! (one column each) and views in rows. An optional title adds a band of
 //! [`TITLE_HEIGHT`] pixels on top; a colour map adds the legend strip at the
@@ -61,6 +63,10 @@ use text::{draw_text, fill_rect, text_height};
 
 /// Height in pixels of the title band (only when a title is given).
 pub const TITLE_HEIGHT: u32 = 32;
+/// Height in pixels of the caption band at the top of each view, kept
+/// free of the mesh when the view is at least 4 bands tall (smaller views
+/// draw the caption over the mesh instead).
+pub const CAPTION_HEIGHT: u32 = 28;
 /// Text scale of captions and title (8×8 glyphs drawn 16×16).
 const TEXT_SCALE: u32 = 2;
 /// Inset of a caption from its cell's top-left corner, pixels.
@@ -327,6 +333,11 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         (panels.len(), opts.views.len())
     };
     let (w, h) = (opts.width, opts.height);
+    let band = if h >= 4 * CAPTION_HEIGHT {
+        CAPTION_HEIGHT
+    } else {
+        0
+    };
     let grid_w = dim(cols, w)?;
     let grid_h = dim(rows, h)?;
     let mut cells = Vec::new();
@@ -341,9 +352,9 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
             let (x, y) = (c as u32 * w, r as u32 * h);
             cells.push(CellDraw {
                 panel: pi,
-                camera: view_camera(&frame, sphere, view, w, h),
+                camera: view_camera(&frame, sphere, view, w, h - band),
                 x,
-                y,
+                y: y + band,
             });
             let caption = if p.caption.is_empty() {
                 view.name().to_string()
@@ -357,7 +368,7 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         gpu,
         &geometry,
         &cells,
-        (w, h),
+        (w, h - band),
         (grid_w, grid_h),
         opts.wireframe,
     )?;

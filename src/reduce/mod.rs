@@ -22,7 +22,7 @@ use crate::parity::Backend;
 use crate::{Error, Result, TriMesh, Volume};
 
 /// Axis-aligned bounding box (units of the positions).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Bounds {
     /// Component-wise minimum.
     pub min: Vec3,
@@ -31,7 +31,7 @@ pub struct Bounds {
 }
 
 /// Smallest and largest sample of a volume or array.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct SampleRange {
     pub min: f32,
     pub max: f32,

@@ -28,8 +28,8 @@
 //! With [`Facing::Auto`] (the default) the frame is turned about +y so that
 //! `front` looks at the bulging side of an *open* surface (a scan whose
 //! vector area is at least a quarter of its area, e.g. a face): fran_cut's
-//! face looks toward ≈ (+0.87, 0, −0.5), and that is where its `front`
-//! camera sits. Closed or nearly closed meshes (footbones, the bunny, whose
+//! face looks toward ≈ (+0.81, 0, −0.59), and that is where its `front`
+//! camera sits (its scan axis is y, so the face is upright, chin at −y). Closed or nearly closed meshes (footbones, the bunny, whose
 //! holes are small) keep the fixed axes above. [`Facing::Axes`] always uses
 //! the fixed axes.
 //!
@@ -37,9 +37,10 @@
 //! Each view is a `width`×`height` cell: its name (with the panel caption)
 //! in a band of [`CAPTION_HEIGHT`] pixels at the top, the mesh framed in
 //! the `width`×(`height` − band) area below (views under 4 bands tall draw
-//! the caption over the mesh and frame the whole cell). [`render_image`] lays the views out as a grid of
-//! ⌈√n⌉ columns, row by row; [`render_panels`] puts panels side by side
-//! (one column each) and views in rows. An optional title adds a band of
+//! the caption over the mesh and frame the whole cell). [`render_image`]
+//! lays the views out as a grid of ⌈√n⌉ columns, row by row;
+//! [`render_panels`] puts panels side by side (one column each) and views
+//! in rows. An optional title adds a band of
 //! [`TITLE_HEIGHT`] pixels on top; a colour map adds the legend strip at the
 //! right. Without both the image is exactly the grid.
 

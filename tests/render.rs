@@ -287,13 +287,13 @@ fn panels_share_one_framing_and_one_colour_range() {
     let panels = [
         Panel {
             mesh: &big,
-            caption: "before",
-            scalars: Some("d"),
+            caption: "before".into(),
+            scalars: Some("d".into()),
         },
         Panel {
             mesh: &small,
-            caption: "after",
-            scalars: Some("d"),
+            caption: "after".into(),
+            scalars: Some("d".into()),
         },
     ];
     let o = opts(size, &[View::Front, View::Iso]);

@@ -245,14 +245,14 @@ impl Image {
 }
 
 /// One mesh of a side-by-side comparison ([`render_panels`]).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Panel<'a> {
     pub mesh: &'a TriMesh,
     /// Caption prefix (e.g. `before`); empty for none.
-    pub caption: &'a str,
+    pub caption: String,
     /// Scalar field to colour by; `None` falls back to
     /// [`RenderOptions::scalars`].
-    pub scalars: Option<&'a str>,
+    pub scalars: Option<String>,
 }
 
 /// Renders `mesh` as described by `opts` (views in a grid).
@@ -261,7 +261,7 @@ pub fn render_image(gpu: &Gpu, mesh: &TriMesh, opts: &RenderOptions) -> Result<I
         gpu,
         &[Panel {
             mesh,
-            caption: "",
+            caption: String::new(),
             scalars: None,
         }],
         opts,
@@ -301,7 +301,7 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         if p.mesh.triangles.is_empty() {
             return Err(Error::InvalidInput(format!(
                 "render: mesh{} has no triangles to draw",
-                caption_suffix(p.caption)
+                caption_suffix(&p.caption)
             )));
         }
     }
@@ -427,10 +427,10 @@ fn caption_suffix(caption: &str) -> String {
 /// The scalar field a panel is coloured by, as `(name, values)`, or `None`
 /// for plain shading. An unknown name is an error listing the fields.
 fn scalar_values<'a>(
-    p: &Panel<'a>,
+    p: &'a Panel<'a>,
     opts: &'a RenderOptions,
 ) -> Result<Option<(&'a str, &'a [f32])>> {
-    let Some(name) = p.scalars.or(opts.scalars.as_deref()) else {
+    let Some(name) = p.scalars.as_deref().or(opts.scalars.as_deref()) else {
         return Ok(None);
     };
     match p.mesh.scalar(name) {
@@ -439,7 +439,7 @@ fn scalar_values<'a>(
             let available: Vec<&str> = p.mesh.scalars.iter().map(|s| s.name.as_str()).collect();
             Err(Error::InvalidInput(format!(
                 "render: mesh{} has no scalar field `{name}`; available: [{}]",
-                caption_suffix(p.caption),
+                caption_suffix(&p.caption),
                 available.join(", ")
             )))
         }

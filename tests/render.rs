@@ -287,13 +287,13 @@ fn panels_share_one_framing_and_one_colour_range() {
     let panels = [
         Panel {
             mesh: &big,
-            caption: "before",
-            scalars: Some("d"),
+            caption: "before".into(),
+            scalars: Some("d".into()),
         },
         Panel {
             mesh: &small,
-            caption: "after",
-            scalars: Some("d"),
+            caption: "after".into(),
+            scalars: Some("d".into()),
         },
     ];
     let o = opts(size, &[View::Front, View::Iso]);
@@ -407,9 +407,9 @@ fn coverage(img: &Image, x0: u32, y0: u32, w: u32, h: u32) -> f32 {
 fn real_meshes_render_framed_and_winding_independent() {
     let Some(gpu) = common::gpu() else { return };
     for (rel, min_cover) in [
-        ("fran_cut.vtk", 0.25),
-        ("bunny.ply", 0.25),
-        ("fsu/footbones.ply", 0.15),
+        ("fran_cut.vtk", 0.15),
+        ("bunny.ply", 0.2),
+        ("fsu/footbones.ply", 0.08),
     ] {
         let Some(mesh) = common::real_mesh(rel) else {
             return;
@@ -441,7 +441,7 @@ fn real_meshes_render_framed_and_winding_independent() {
 
 #[test]
 fn fran_front_view_faces_the_face() {
-    // fran_cut is an open face scan looking toward ≈ (+0.87, 0, −0.5); with
+    // fran_cut is an open face scan looking toward ≈ (+0.81, 0, −0.59); with
     // Facing::Auto the front view sees the face square on, so it covers
     // more of the view than the fixed +z view, which sees it from the side.
     let Some(gpu) = common::gpu() else { return };

@@ -87,7 +87,7 @@ pub(crate) fn open_surface_facing(mesh: &TriMesh) -> Option<Vec3> {
         area += 0.5 * twice;
         weighted_centroid += (a + b + c) / 3.0 * (0.5 * twice);
     }
-    if !(area > 0.0) || vector_area.length() < 0.25 * area {
+    if area.is_nan() || area <= 0.0 || vector_area.length() < 0.25 * area {
         return None;
     }
     let edges = undirected_edges(&mesh.triangles);
@@ -104,7 +104,7 @@ pub(crate) fn open_surface_facing(mesh: &TriMesh) -> Option<Vec3> {
         }
         k += run;
     }
-    if !(boundary_len > 0.0) {
+    if boundary_len.is_nan() || boundary_len <= 0.0 {
         return None;
     }
     let bulge = weighted_centroid / area - boundary_centroid / boundary_len;

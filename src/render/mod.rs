@@ -28,8 +28,8 @@
 //! With [`Facing::Auto`] (the default) the frame is turned about +y so that
 //! `front` looks at the bulging side of an *open* surface (a scan whose
 //! vector area is at least a quarter of its area, e.g. a face): fran_cut's
-//! face looks toward ≈ (+0.87, 0, −0.5), and that is where its `front`
-//! camera sits. Closed or nearly closed meshes (footbones, the bunny, whose
+//! face looks toward ≈ (+0.81, 0, −0.59), and that is where its `front`
+//! camera sits (its scan axis is y, so the face is upright, chin at −y). Closed or nearly closed meshes (footbones, the bunny, whose
 //! holes are small) keep the fixed axes above. [`Facing::Axes`] always uses
 //! the fixed axes.
 //!
@@ -37,9 +37,10 @@
 //! Each view is a `width`×`height` cell: its name (with the panel caption)
 //! in a band of [`CAPTION_HEIGHT`] pixels at the top, the mesh framed in
 //! the `width`×(`height` − band) area below (views under 4 bands tall draw
-//! the caption over the mesh and frame the whole cell). [`render_image`] lays the views out as a grid of
-//! ⌈√n⌉ columns, row by row; [`render_panels`] puts panels side by side
-//! (one column each) and views in rows. An optional title adds a band of
+//! the caption over the mesh and frame the whole cell). [`render_image`]
+//! lays the views out as a grid of ⌈√n⌉ columns, row by row;
+//! [`render_panels`] puts panels side by side (one column each) and views
+//! in rows. An optional title adds a band of
 //! [`TITLE_HEIGHT`] pixels on top; a colour map adds the legend strip at the
 //! right. Without both the image is exactly the grid.
 
@@ -244,14 +245,14 @@ impl Image {
 }
 
 /// One mesh of a side-by-side comparison ([`render_panels`]).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Panel<'a> {
     pub mesh: &'a TriMesh,
     /// Caption prefix (e.g. `before`); empty for none.
-    pub caption: &'a str,
+    pub caption: String,
     /// Scalar field to colour by; `None` falls back to
     /// [`RenderOptions::scalars`].
-    pub scalars: Option<&'a str>,
+    pub scalars: Option<String>,
 }
 
 /// Renders `mesh` as described by `opts` (views in a grid).
@@ -260,7 +261,7 @@ pub fn render_image(gpu: &Gpu, mesh: &TriMesh, opts: &RenderOptions) -> Result<I
         gpu,
         &[Panel {
             mesh,
-            caption: "",
+            caption: String::new(),
             scalars: None,
         }],
         opts,
@@ -300,7 +301,7 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         if p.mesh.triangles.is_empty() {
             return Err(Error::InvalidInput(format!(
                 "render: mesh{} has no triangles to draw",
-                caption_suffix(p.caption)
+                caption_suffix(&p.caption)
             )));
         }
     }
@@ -426,10 +427,10 @@ fn caption_suffix(caption: &str) -> String {
 /// The scalar field a panel is coloured by, as `(name, values)`, or `None`
 /// for plain shading. An unknown name is an error listing the fields.
 fn scalar_values<'a>(
-    p: &Panel<'a>,
+    p: &'a Panel<'a>,
     opts: &'a RenderOptions,
 ) -> Result<Option<(&'a str, &'a [f32])>> {
-    let Some(name) = p.scalars.or(opts.scalars.as_deref()) else {
+    let Some(name) = p.scalars.as_deref().or(opts.scalars.as_deref()) else {
         return Ok(None);
     };
     match p.mesh.scalar(name) {
@@ -438,7 +439,7 @@ fn scalar_values<'a>(
             let available: Vec<&str> = p.mesh.scalars.iter().map(|s| s.name.as_str()).collect();
             Err(Error::InvalidInput(format!(
                 "render: mesh{} has no scalar field `{name}`; available: [{}]",
-                caption_suffix(p.caption),
+                caption_suffix(&p.caption),
                 available.join(", ")
             )))
         }

@@ -344,7 +344,7 @@ impl Reader<'_> {
             for w in offsets.windows(2) {
                 polygons.push((cat, w[0] as usize..w[1] as usize));
             }
-            self.n_cells = offsets.len().saturating_sub(1) as u64;
+            self.n_cells += offsets.len().saturating_sub(1) as u64;
         } else {
             let min = self.min_bytes(Num::I32);
             let count = self.sc.check_count(at, "cell list entries", size, min)?;
@@ -377,7 +377,7 @@ impl Reader<'_> {
                     format!("{} entries", corners.len()),
                 ));
             }
-            self.n_cells = n;
+            self.n_cells += n;
         }
         if kind == CellKind::Skip {
             return Ok(());

@@ -113,7 +113,7 @@ const WRITE_NAMES: [&str; 6] = ["v.nrrd", "v.nhdr", "v.mha", "v.mhd", "v.nii", "
 /// (so a byte-order mistake shows), f32-exact spacing and origin.
 fn sample_volumes() -> Vec<Volume> {
     let dims = [5, 4, 3];
-    let n = 60;
+    let n: usize = 60;
     let data = [
         VolumeData::U8((0..n).map(|i| (i * 37 % 256) as u8).collect()),
         VolumeData::I8((0..n).map(|i| (i as i8).wrapping_mul(-7)).collect()),

@@ -36,6 +36,15 @@ impl<'a> Scanner<'a> {
         self.pos
     }
 
+    /// Offset of the next token: skips whitespace first while the file is
+    /// text (never inside binary payloads), so errors point at the token.
+    pub fn mark(&mut self) -> usize {
+        if !self.binary {
+            self.skip_ws();
+        }
+        self.pos
+    }
+
     /// Bytes left after the current offset.
     pub fn remaining(&self) -> usize {
         self.bytes.len() - self.pos
@@ -62,12 +71,16 @@ impl<'a> Scanner<'a> {
         Error::format(self.path, self.position(at), expected, found)
     }
 
-    /// An [`Error::Size`] at `at`: `count` items of at least `min_bytes` each
-    /// do not fit in the rest of the file.
+    /// An [`Error::Size`] at byte offset `at`: `needed` bytes for `what` do
+    /// not fit in the rest of the file.
     pub fn size_error(&self, at: usize, what: impl Into<String>, needed: u64) -> Error {
+        self.size_error_at(self.position(at), what, needed)
+    }
+
+    fn size_error_at(&self, at: Position, what: impl Into<String>, needed: u64) -> Error {
         Error::Size {
             path: self.path.into(),
-            at: self.position(at),
+            at,
             what: what.into(),
             needed,
             limit_kind: REST_OF_FILE,
@@ -78,11 +91,23 @@ impl<'a> Scanner<'a> {
     /// Checks that `count` items of at least `min_bytes` each can still be in
     /// the file before anything is allocated for them; returns `count` as `usize`.
     pub fn check_count(&self, at: usize, what: &str, count: u64, min_bytes: u64) -> Result<usize> {
+        self.check_count_at(self.position(at), what, count, min_bytes)
+    }
+
+    /// [`Scanner::check_count`] with an explicit position (e.g. a header line
+    /// of a binary file).
+    pub fn check_count_at(
+        &self,
+        at: Position,
+        what: &str,
+        count: u64,
+        min_bytes: u64,
+    ) -> Result<usize> {
         let needed = count.saturating_mul(min_bytes);
         if needed > self.remaining() as u64 {
-            return Err(self.size_error(at, format!("{count} {what}"), needed));
+            return Err(self.size_error_at(at, format!("{count} {what}"), needed));
         }
-        usize::try_from(count).map_err(|_| self.size_error(at, what.to_string(), needed))
+        usize::try_from(count).map_err(|_| self.size_error_at(at, what.to_string(), needed))
     }
 
     fn skip_ws(&mut self) {
@@ -351,7 +376,7 @@ impl Scanner<'_> {
 
     /// One vertex index of type `num` (an integer that fits `i64`).
     pub fn index(&mut self, num: Num, binary: Option<Endian>, expected: &str) -> Result<i64> {
-        let at = self.pos();
+        let at = self.mark();
         let v = self.value(num, binary, expected)?;
         if v.fract() != 0.0 || !v.is_finite() || v.abs() > 9.0e15 {
             return Err(self.error(at, expected, format!("{v}")));

@@ -259,11 +259,13 @@ where
             .map(|n| n.to_string_lossy())
             .unwrap_or_default()
     );
-    let tmp = tempfile::Builder::new()
-        .prefix(&prefix)
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // Outputs are ordinary files (0644 less the umask), not the 0600 of a
+    // private temp file.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     let mut w = std::io::BufWriter::new(tmp);
     fill(&mut w).map_err(|e| Error::io(path, e))?;
     let tmp = w

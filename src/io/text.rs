@@ -3,6 +3,7 @@
 //! the position (1-based line while the file is text, 0-based byte offset
 //! once a binary block has been read) and what was expected.
 
+use std::cell::Cell;
 use std::path::Path;
 use std::str::FromStr;
 
@@ -18,6 +19,9 @@ pub(crate) struct Scanner<'a> {
     bytes: &'a [u8],
     pos: usize,
     binary: bool,
+    /// `(offset, line at offset)` of the last position asked for, so that
+    /// positions requested in file order cost O(file) in total.
+    line_cache: Cell<(usize, usize)>,
 }
 
 impl<'a> Scanner<'a> {
@@ -28,6 +32,7 @@ impl<'a> Scanner<'a> {
             bytes,
             pos: 0,
             binary: false,
+            line_cache: Cell::new((0, 1)),
         }
     }
 
@@ -62,7 +67,13 @@ impl<'a> Scanner<'a> {
             Position::Byte(at as u64)
         } else {
             let at = at.min(self.bytes.len());
-            Position::Line(1 + self.bytes[..at].iter().filter(|&&b| b == b'\n').count())
+            let (from, line) = match self.line_cache.get() {
+                (off, line) if off <= at => (off, line),
+                _ => (0, 1),
+            };
+            let line = line + self.bytes[from..at].iter().filter(|&&b| b == b'\n').count();
+            self.line_cache.set((at, line));
+            Position::Line(line)
         }
     }
 
@@ -91,7 +102,12 @@ impl<'a> Scanner<'a> {
     /// Checks that `count` items of at least `min_bytes` each can still be in
     /// the file before anything is allocated for them; returns `count` as `usize`.
     pub fn check_count(&self, at: usize, what: &str, count: u64, min_bytes: u64) -> Result<usize> {
-        self.check_count_at(self.position(at), what, count, min_bytes)
+        // The position (a newline count) is only computed on the error path.
+        let needed = count.saturating_mul(min_bytes);
+        match usize::try_from(count) {
+            Ok(n) if needed <= self.remaining() as u64 => Ok(n),
+            _ => self.check_count_at(self.position(at), what, count, min_bytes),
+        }
     }
 
     /// [`Scanner::check_count`] with an explicit position (e.g. a header line
@@ -107,7 +123,8 @@ impl<'a> Scanner<'a> {
         if needed > self.remaining() as u64 {
             return Err(self.size_error_at(at, format!("{count} {what}"), needed));
         }
-        usize::try_from(count).map_err(|_| self.size_error_at(at, what.to_string(), needed))
+        usize::try_from(count)
+            .map_err(|_| self.size_error_at(at, format!("{count} {what}"), needed))
     }
 
     fn skip_ws(&mut self) {

@@ -557,11 +557,17 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &TriMesh) -> io::Result<()> {
     Ok(())
 }
 
-/// A scalar name as one whitespace-free token (`scalar` when empty).
+/// A scalar name as one whitespace-free token that cannot be taken for a
+/// coordinate: whitespace becomes `_`, an empty name `scalar`, and `x`, `y`,
+/// `z` get a `scalar_` prefix.
 pub(crate) fn field_name(name: &str) -> String {
     let n: String = name
         .chars()
         .map(|c| if c.is_whitespace() { '_' } else { c })
         .collect();
-    if n.is_empty() { "scalar".into() } else { n }
+    match n.as_str() {
+        "" => "scalar".into(),
+        "x" | "y" | "z" => format!("scalar_{n}"),
+        _ => n,
+    }
 }

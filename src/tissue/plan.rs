@@ -294,7 +294,7 @@ impl Plan {
             let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
             s.select.validate(&what)?;
             if s.increments == 0 {
-                return bad("increments (k) must be ≥ 1, got 0".into());
+                return bad("increments (k) must be ≥ 1, got k = 0".into());
             }
             if s.iterations == Iterations::Fixed(0) {
                 return bad("iterations must be ≥ 1 or \"converge\", got 0".into());

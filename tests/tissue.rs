@@ -662,11 +662,21 @@ fn compare_solvers(
     };
     let a = relax(net, plan, &opts(Solver::Explicit), Backend::Cpu).unwrap();
     let b = relax(net, plan, &opts(Solver::Chebyshev), Backend::Cpu).unwrap();
-    let per_inc = |r: &chisel::tissue::RelaxReport| r.steps[0].increments.iter().map(|i| i.iterations).collect::<Vec<_>>();
+    let per_inc = |r: &chisel::tissue::RelaxReport| {
+        r.steps[0]
+            .increments
+            .iter()
+            .map(|i| i.iterations)
+            .collect::<Vec<_>>()
+    };
     eprintln!("explicit {:?}\nchebyshev {:?}", per_inc(&a), per_inc(&b));
     // Stalled = at rest within the f32 noise floor of the positions.
     for r in [&a, &b] {
-        assert!(matches!(r.status, Status::Converged | Status::Stalled), "{:?}", r.status);
+        assert!(
+            matches!(r.status, Status::Converged | Status::Stalled),
+            "{:?}",
+            r.status
+        );
     }
     let dist = (0..net.n_free)
         .map(|i| {

@@ -1,6 +1,10 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod spring_chebyshev;
+mod spring_step;
+mod tissue_reduce_max;
+
 #[test]
 fn smoke_vertex_normals() {
     let Some(gpu) = common::gpu() else { return };

@@ -32,6 +32,7 @@ struct Params {
 
 const WG_SIZE: u32 = 256u;
 const INDEX_MASK: u32 = 0x0fffffffu;
+const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> offsets: array<u32>;
@@ -71,7 +72,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     let v = vel[ix].xyz;
     let r = (f_ext - g) * p.w;
-    let v_new = params.momentum * v + params.gain * r;
+    let v_raw = params.momentum * v + params.gain * r;
+    // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
+    let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
     let x_new = x + params.h * v_new;
     pos_out[ix] = vec4<f32>(x_new, p.w);
     vel[ix] = vec4<f32>(v_new, 0.0);

@@ -23,6 +23,7 @@
 //   with the biphasic law f(e) = c1 e + (c2 − c1) max(e − knee l, 0),
 //   a_i = (f_i − γ v_i − g_i) · B_i / m_i                           (eq. 4.5)
 //   v_i ← v_i + Δt a_i;  x_i ← x_i + Δt v_i                         (eq. 4.7)
+//   (velocity components below VELOCITY_FLUSH = 1e-30 are set to 0)
 // Mirror: tissue::cpu::spring_step (same operations in the same order).
 
 #import dispatch
@@ -38,6 +39,7 @@ struct Params {
 
 const WG_SIZE: u32 = 256u;
 const INDEX_MASK: u32 = 0x0fffffffu;
+const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> offsets: array<u32>;
@@ -78,7 +80,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     }
     let v = vel[ix].xyz;
     let a = (f_ext - params.damping * v - g) * p.w;
-    let v_new = v + params.dt * a;
+    let v_raw = v + params.dt * a;
+    // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
+    let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
     let x_new = x + params.dt * v_new;
     pos_out[ix] = vec4<f32>(x_new, p.w);
     vel[ix] = vec4<f32>(v_new, 0.0);

@@ -14,6 +14,12 @@ use crate::parity::Tolerance;
 /// Nodes per rayon task.
 const CHUNK: usize = 512;
 
+/// Velocity components below this magnitude are flushed to zero after each
+/// update (kernel and mirror alike): subnormal floats are 100× slower on
+/// CPUs (GPUs flush them anyway), and velocities this small move no
+/// coordinate of any mesh in any unit.
+pub const VELOCITY_FLUSH: f32 = 1e-30;
+
 /// Uniform parameters shared by the step kernels (`StepParams` in WGSL).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepParams {
@@ -77,6 +83,11 @@ fn gather(
     g
 }
 
+#[inline(always)]
+fn flush(v: f32) -> f32 {
+    if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
+}
+
 /// Runs `update(i, x, w, g, v, f) -> (x', v')` over the free nodes.
 #[inline(always)]
 fn for_free_nodes(
@@ -134,7 +145,7 @@ pub fn spring_step(
         for k in 0..3 {
             // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; x += Δt v.
             let a = (f[k] - gamma * v[k] - g[k]) * w;
-            v2[k] = v[k] + dt * a;
+            v2[k] = flush(v[k] + dt * a);
             x2[k] = x[k] + dt * v2[k];
         }
         (x2, v2)
@@ -159,7 +170,7 @@ pub fn spring_chebyshev(
         let mut v2 = [0.0f32; 3];
         for k in 0..3 {
             let r = (f[k] - g[k]) * w;
-            v2[k] = beta * v[k] + gain * r;
+            v2[k] = flush(beta * v[k] + gain * r);
             x2[k] = x[k] + h * v2[k];
         }
         (x2, v2)

@@ -35,5 +35,6 @@ pub use network::{
 };
 pub use plan::{Fragments, Iterations, Plan, ResolvedPlan, Rotation, Selector, Step};
 pub use relax::{
-    IncrementReport, RelaxOptions, RelaxReport, Solver, Status, StepReport, iterate, relax,
+    IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,
+    iterate, relax,
 };

@@ -491,6 +491,79 @@ fn run_increment(
     }
 }
 
+/// A relaxation state resident on one backend, for callers that drive the
+/// iterations themselves (interactive previews, benchmarks). On the GPU the
+/// state stays on the device; only the convergence keys come back per
+/// [`Simulation::step`].
+pub struct Simulation<'a> {
+    stepper: Box<dyn Stepper + 'a>,
+    setup: Setup,
+}
+
+impl std::fmt::Debug for Simulation<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation")
+            .field("solver", &self.setup.solver)
+            .field("dt", &self.setup.dt)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Convergence figures after [`Simulation::step`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepProbe {
+    /// max_i |v_i| over the free nodes.
+    pub max_speed: f32,
+    /// max_i |x_i − x_i(snapshot)| (the window change), then re-snapshotted.
+    pub window_change: f32,
+}
+
+impl<'a> Simulation<'a> {
+    /// The rest state of `network` with `opts`' solver on `backend`.
+    pub fn new(
+        network: &'a SpringNetwork,
+        opts: &RelaxOptions,
+        backend: Backend<'a>,
+    ) -> Result<Self> {
+        let setup = Setup::new(network, opts)?;
+        let stepper: Box<dyn Stepper + 'a> = match backend {
+            Backend::Cpu => Box::new(CpuStepper::new(network, setup.clone())),
+            Backend::Gpu(gpu) => Box::new(GpuStepper::new(gpu, network, &setup)?),
+        };
+        Ok(Simulation { stepper, setup })
+    }
+
+    /// Δt (explicit) or h (Chebyshev) in use.
+    pub fn dt(&self) -> f32 {
+        self.setup.dt
+    }
+
+    /// Moves the bone layer to `bone` (#bone positions).
+    pub fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
+        self.stepper.set_bone(bone)
+    }
+
+    /// Zeroes the velocities.
+    pub fn reset_velocities(&mut self) -> Result<()> {
+        self.stepper.reset_velocities()
+    }
+
+    /// Runs `n` iterations (recorded into few submissions on the GPU) and
+    /// probes the convergence figures.
+    pub fn step(&mut self, n: u32) -> Result<StepProbe> {
+        let probe = self.stepper.advance(n, true)?;
+        Ok(StepProbe {
+            max_speed: sqrt_key(probe.keys[0]),
+            window_change: sqrt_key(probe.keys[1]),
+        })
+    }
+
+    /// All node positions `[x, y, z, w]`.
+    pub fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
+        self.stepper.positions()
+    }
+}
+
 /// Relaxes `network` through `plan` on `backend`.
 ///
 /// Each step's motion is applied in its k increments (bone targets computed

@@ -433,13 +433,8 @@ fn oracle_chain_reaches_series_spring_equilibrium() {
     s.settle(&net, 0.1, &[], 1e-12, 1_000_000);
     let tension = 1.0 / (1.0 + 0.5 + 1.0 + 0.5);
     let expect = [1.0 + tension, 2.0 + tension * 1.5, 3.0 + tension * 2.5];
-    for k in 0..3 {
-        assert!(
-            (s.x[k].x - expect[k]).abs() < 1e-9,
-            "{k}: {} vs {}",
-            s.x[k].x,
-            expect[k]
-        );
+    for (k, (x, want)) in s.x.iter().zip(expect).enumerate() {
+        assert!((x.x - want).abs() < 1e-9, "{k}: {} vs {want}", x.x);
     }
     assert!(s.residual(&net, &[]) < 1e-10);
 }
@@ -572,7 +567,7 @@ fn stop_criteria_converged_stalled_diverged_limit() {
             .iter()
             .all(|i| i.max_speed < r.epsilon)
     );
-    assert!(r.iterations > 0 && r.iterations % 25 == 0);
+    assert!(r.iterations > 0 && r.iterations.is_multiple_of(25));
     assert!(r.max_displacement > 0.0);
 
     let limited = RelaxOptions {

@@ -58,6 +58,19 @@ fn kernel_of(solver: Solver) -> Kernel {
     }
 }
 
+/// Buffers only the bind groups reference (kept alive with them).
+type KeepAlive = (
+    UniformBuffer<StepUniform>,
+    GpuArray<u32>,
+    GpuArray<[u32; 2]>,
+    GpuArray<[f32; 4]>,
+    GpuArray<[u32; 2]>,
+    [UniformBuffer<ReduceUniform>; 2],
+);
+
+/// Free-node positions and velocities after one step.
+pub type StepOutput = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+
 /// A relaxation state resident on the GPU.
 #[derive(Debug)]
 pub struct GpuStepper<'g> {
@@ -79,14 +92,7 @@ pub struct GpuStepper<'g> {
     reduce_final: wgpu::BindGroup,
     cur: usize,
     // Kept alive for the bind groups.
-    _buffers: (
-        UniformBuffer<StepUniform>,
-        GpuArray<u32>,
-        GpuArray<[u32; 2]>,
-        GpuArray<[f32; 4]>,
-        GpuArray<[u32; 2]>,
-        [UniformBuffer<ReduceUniform>; 2],
-    ),
+    _buffers: KeepAlive,
 }
 
 impl<'g> GpuStepper<'g> {
@@ -376,7 +382,7 @@ pub fn step_once(
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     vel: &[[f32; 4]],
-) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>)> {
+) -> Result<StepOutput> {
     let mut s = GpuStepper::from_parts(gpu, kernel_of(solver), params, csr, forces, pos_in, vel)?;
     let mut encoder = gpu.encoder(s.kernel.name());
     s.record_steps(&mut encoder, 1);

@@ -483,13 +483,12 @@ impl SpringNetwork {
             push(ep + a, ep + b, SpringClass::Epidermis);
             push(sub + a, sub + b, SpringClass::Subcutis);
         }
-        for i in 0..n {
+        for (i, &b) in nearest.iter().enumerate() {
             let qi = sub + i as u32;
             push(ep + i as u32, qi, SpringClass::Dermis);
             for &j in ring.row(i) {
                 push(ep + j, qi, SpringClass::Dermis);
             }
-            let b = nearest[i];
             push(qi, bo + b, SpringClass::Muscle);
             for &bj in bone_ring.row(b as usize) {
                 push(qi, bo + bj, SpringClass::Muscle);

@@ -70,6 +70,10 @@ impl OracleState {
     /// One semi-implicit Euler step with external forces `f` (#free or
     /// empty = 0): a = (f − γv − g)·B/m, v += Δt a, x += Δt v; fixed nodes
     /// have B = 0.
+    #[expect(
+        clippy::needless_range_loop,
+        reason = "x, v, g and f are indexed by node id alike"
+    )]
     pub fn step(&mut self, net: &SpringNetwork, dt: f64, f: &[DVec3]) {
         let g = spring_forces(net, &self.x);
         let (m, gamma) = (net.params.mass as f64, net.params.damping as f64);

@@ -302,16 +302,15 @@ impl Plan {
             if !finite3(&s.translate) {
                 return bad(format!("translate is not finite: {:?}", s.translate));
             }
-            if let Some(r) = &s.rotate {
-                if !finite3(&r.axis)
+            if let Some(r) = &s.rotate
+                && (!finite3(&r.axis)
                     || !finite3(&r.center)
                     || !r.degrees.is_finite()
-                    || Vec3::from_array(r.axis).length() == 0.0
-                {
-                    return bad(format!(
-                        "rotate needs a finite non-zero axis, finite centre and angle, got {r:?}"
-                    ));
-                }
+                    || Vec3::from_array(r.axis).length() == 0.0)
+            {
+                return bad(format!(
+                    "rotate needs a finite non-zero axis, finite centre and angle, got {r:?}"
+                ));
             }
         }
         Ok(())

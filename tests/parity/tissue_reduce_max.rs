@@ -17,7 +17,10 @@ const TOL: Tolerance = Tolerance {
     rel: 2.4e-7,
 };
 
-fn inputs(n: usize, seed: u64) -> (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>) {
+/// Velocities, positions and snapshot positions.
+type Inputs = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
+
+fn inputs(n: usize, seed: u64) -> Inputs {
     let mut s = seed;
     let mut next = move || {
         s ^= s << 13;

@@ -27,6 +27,7 @@ pub mod phantom;
 pub mod reduce;
 pub mod render;
 pub mod scan;
+pub mod tissue;
 pub mod volume;
 
 pub use error::{Error, Position, Result};

@@ -68,6 +68,12 @@ registry! {
     ExclusiveScanBlocks => "exclusive_scan_blocks",
     /// Adds scanned block totals back to every element of its block.
     ExclusiveScanAdd => "exclusive_scan_add",
+    /// One damped semi-implicit Euler step of the tissue spring network (eq. 4.4–4.7).
+    SpringStep => "spring_step",
+    /// One stationary Chebyshev step toward the tissue network's equilibrium.
+    SpringChebyshev => "spring_chebyshev",
+    /// Max |v|² and max window change of a relaxation, as u32 keys.
+    TissueReduceMax => "tissue_reduce_max",
 }
 
 registry! {

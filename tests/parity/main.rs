@@ -11,4 +11,7 @@ mod common;
 mod bounds_reduce;
 mod exclusive_scan;
 mod range_reduce;
+mod spring_chebyshev;
+mod spring_step;
+mod tissue_reduce_max;
 mod vertex_normals;

@@ -270,7 +270,7 @@ fn demo_runs_and_writes_its_outputs() {
     let Some(_gpu) = common::gpu() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("demo");
-    let out = chisel(&["demo", "--out", path_str(&out_dir), "--rings", "48"]);
+    let out = chisel(&["demo", "--out", path_str(&out_dir)]);
     assert!(
         out.status.success(),
         "{}",
@@ -278,11 +278,17 @@ fn demo_runs_and_writes_its_outputs() {
     );
     let report: Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["parity"]["vertex_normals"]["status"], "match");
-    assert_eq!(report["parity"]["bounds_reduce"]["status"], "exact match");
-    assert!(out_dir.join("preview.png").is_file());
-    let mesh = chisel::io::read_mesh(&out_dir.join("phantom_skin.ply")).unwrap();
-    assert!(mesh.scalar("normal_deviation_deg").is_some());
+    assert_eq!(report["relax_gpu"]["status"], "converged");
+    assert_eq!(report["parity"]["same_status_and_iterations"], true);
+    assert!(report["parity"]["max_epidermis_distance"].as_f64().unwrap() < 1e-3);
+    assert!(out_dir.join("before_after.png").is_file());
+    let mesh = chisel::io::read_mesh(&out_dir.join("relaxed_skin.ply")).unwrap();
+    let d = mesh.scalar("displacement").expect("displacement field");
+    let max = d.values.iter().copied().fold(0.0f32, f32::max);
+    assert!(
+        max > 3.0 && max < 12.0,
+        "a 6 mm jaw advance moved the skin by {max} mm"
+    );
 }
 
 #[cfg(unix)]
@@ -306,4 +312,89 @@ fn outputs_are_world_readable_files() {
         0o044,
         "mode {mode:o}: group/other cannot read the output"
     );
+}
+
+#[test]
+fn relax_fran_chin_advance_agrees_between_backends() {
+    let Some(_gpu) = common::gpu() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/src/tissue/plans/fran_chin_advance.toml"
+    );
+    let fran = dir.join("fran_cut.vtk");
+    let mut reports = Vec::new();
+    for backend in ["gpu", "cpu"] {
+        let out = tmp.path().join(format!("fran_{backend}.ply"));
+        let report = tmp.path().join(format!("fran_{backend}.json"));
+        let mut args = vec![
+            "relax",
+            path_str(&fran),
+            "--plan",
+            plan,
+            "--backend",
+            backend,
+            "-o",
+            path_str(&out),
+            "--report",
+            path_str(&report),
+        ];
+        let preview = tmp.path().join("fran.png");
+        if backend == "gpu" {
+            args.extend(["--preview", path_str(&preview)]);
+        }
+        let run = chisel(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let mesh = chisel::io::read_mesh(&out).unwrap();
+        let d = mesh.scalar("displacement").expect("displacement field");
+        let max = d.values.iter().copied().fold(0.0f32, f32::max);
+        // The plan moves the chin by 4 mm; the skin follows by millimetres.
+        assert!(max > 0.002 && max < 0.008, "max displacement {max} m");
+        let v: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        assert_eq!(v["relax"]["status"], "converged", "{backend}");
+        reports.push((mesh, v));
+    }
+    assert!(tmp.path().join("fran.png").is_file());
+    let (gpu_mesh, gpu_v) = &reports[0];
+    let (cpu_mesh, cpu_v) = &reports[1];
+    assert_eq!(gpu_v["relax"]["iterations"], cpu_v["relax"]["iterations"]);
+    let max_diff = gpu_mesh
+        .positions
+        .iter()
+        .zip(&cpu_mesh.positions)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    assert!(max_diff < 1e-6, "GPU and CPU skins differ by {max_diff} m");
+}
+
+#[test]
+fn relax_rejects_a_bad_plan_clearly() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = tmp.path().join("bad_plan.toml");
+    std::fs::write(&plan, "[[step]]\nname = \"x\"\nselect = { sphere = { center = [0, 0, 0], radius = 1.0 } }\ntranslate = [0, 0, 1]\nincrements = 0\niterations = 1\nfoo = 3\n").unwrap();
+    let out = tmp.path().join("o.ply");
+    assert_clean_error(
+        &[
+            "relax",
+            path_str(&dir.join("fran_cut.vtk")),
+            "--plan",
+            path_str(&plan),
+            "--backend",
+            "cpu",
+            "-o",
+            path_str(&out),
+        ],
+        "bad_plan.toml",
+    );
+    assert!(!out.exists());
 }

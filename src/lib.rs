@@ -25,6 +25,7 @@ pub mod parity;
 pub mod reduce;
 pub mod render;
 pub mod scan;
+pub mod surface;
 pub mod volume;
 
 pub use error::{Error, Position, Result};

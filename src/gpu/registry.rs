@@ -68,6 +68,12 @@ registry! {
     ExclusiveScanBlocks => "exclusive_scan_blocks",
     /// Adds scanned block totals back to every element of its block.
     ExclusiveScanAdd => "exclusive_scan_add",
+    /// Marching cubes: per-point vertex and triangle counts, summed per block.
+    McClassify => "mc_classify",
+    /// Marching cubes: welded vertices at scanned offsets, per-point first vertex id.
+    McVertices => "mc_vertices",
+    /// Marching cubes: triangles of each cell at scanned offsets.
+    McTriangles => "mc_triangles",
 }
 
 registry! {

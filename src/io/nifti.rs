@@ -1,0 +1,324 @@
+//! NIfTI-1 single-file images (`.nii`, `.nii.gz`).
+//!
+//! Read: the 348-byte header in either byte order (told apart by
+//! `sizeof_hdr`), magic `n+1`, `dim[0]` 1–7 with axes beyond the third of
+//! size 1, datatypes u8/i8/i16/u16/i32/u32/f32/f64 (`bitpix` must agree),
+//! spacing from `pixdim[1..=3]` (positive), samples from `vox_offset`.
+//! Origin: `qoffset_*` when `qform_code > 0` (the quaternion must be the
+//! identity and `qfac = pixdim[0]` not negative), else the translation column
+//! of the `srow_*` matrix when `sform_code > 0` (which must be diagonal and
+//! positive), else 0; any rotation or flip is [`Error::Unsupported`], since
+//! a [`Volume`] has no orientation. Intensity scaling: when `scl_slope` is
+//! finite, non-zero and `(scl_slope, scl_inter) ≠ (1, 0)`, samples become
+//! `F32` values `slope·x + inter` (computed in `f64`, rounded once);
+//! otherwise the stored type is kept.
+//!
+//! Write: little-endian, `vox_offset` 352 (no extensions), `qform_code` 1
+//! with the identity quaternion and `qoffset` = origin, `xyzt_units` mm,
+//! `scl_slope` 1. `pixdim` and `qoffset` are `f32` in the format, so
+//! spacing and origin round-trip exactly only when they are `f32` values.
+//! `.nii.gz` is gzip-compressed.
+
+use std::fs::File;
+use std::io::{self, BufReader, Write};
+use std::path::Path;
+
+use flate2::Compression;
+use flate2::write::GzEncoder;
+
+use super::raw::{Encoding, Payload, Piece, Skip, read_samples, write_le};
+use super::text::{Endian, Num};
+use super::write_atomic_with;
+use crate::volume::{ScalarType, VolumeData};
+use crate::{Error, Position, Result, Volume};
+
+const HEADER_LEN: usize = 348;
+
+struct Header<'a> {
+    path: &'a Path,
+    bytes: &'a [u8],
+    endian: Endian,
+}
+
+impl Header<'_> {
+    fn i16(&self, at: usize) -> i16 {
+        Num::I16.decode(&self.bytes[at..at + 2], self.endian) as i16
+    }
+    fn f32(&self, at: usize) -> f64 {
+        Num::F32.decode(&self.bytes[at..at + 4], self.endian)
+    }
+    fn error(&self, at: usize, expected: impl Into<String>, found: impl Into<String>) -> Error {
+        Error::format(self.path, Position::Byte(at as u64), expected, found)
+    }
+    fn unsupported(&self, at: usize, what: String) -> Error {
+        Error::Unsupported {
+            path: self.path.into(),
+            what: format!("byte {at}: {what}"),
+        }
+    }
+}
+
+/// Reads a NIfTI-1 image (`gz` = the file is gzip-compressed).
+pub(crate) fn read(path: &Path) -> Result<Volume> {
+    let gz = path
+        .file_name()
+        .is_some_and(|n| n.to_string_lossy().to_ascii_lowercase().ends_with(".gz"));
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = vec![0u8; HEADER_LEN];
+    let got = if gz {
+        let mut dec = flate2::read::MultiGzDecoder::new(BufReader::new(file));
+        read_up_to(&mut dec, &mut bytes).map_err(|e| {
+            Error::format(
+                path,
+                Position::Byte(0),
+                "a valid gzip stream",
+                e.to_string(),
+            )
+        })?
+    } else {
+        read_up_to(&mut BufReader::new(file), &mut bytes).map_err(|e| Error::io(path, e))?
+    };
+    if got < HEADER_LEN {
+        return Err(Error::Size {
+            path: path.into(),
+            at: Position::Byte(0),
+            what: "the NIfTI-1 header".into(),
+            needed: HEADER_LEN as u64,
+            limit_kind: "the file",
+            limit: got as u64,
+        });
+    }
+    let endian = match (
+        i32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+        i32::from_be_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]),
+    ) {
+        (348, _) => Endian::Little,
+        (_, 348) => Endian::Big,
+        (le, _) => {
+            return Err(Error::format(
+                path,
+                Position::Byte(0),
+                "sizeof_hdr = 348 (NIfTI-1, either byte order)",
+                format!("{le}"),
+            ));
+        }
+    };
+    let h = Header {
+        path,
+        bytes: &bytes,
+        endian,
+    };
+    match &bytes[344..348] {
+        b"n+1\0" => {}
+        b"ni1\0" => {
+            return Err(h.unsupported(
+                344,
+                "a two-file NIfTI (`ni1`: header and .img); convert it to .nii".into(),
+            ));
+        }
+        other => {
+            return Err(h.error(344, "magic `n+1\\0`", format!("`{}`", other.escape_ascii())));
+        }
+    }
+    let ndim = h.i16(40);
+    if !(1..=7).contains(&ndim) {
+        return Err(h.error(40, "dim[0] in 1..=7", format!("{ndim}")));
+    }
+    let ndim = ndim as usize;
+    let mut dims = [1usize; 3];
+    for i in 1..=ndim {
+        let d = h.i16(40 + 2 * i);
+        if d < 1 {
+            return Err(h.error(40 + 2 * i, format!("dim[{i}] ≥ 1"), format!("{d}")));
+        }
+        if i > 3 && d != 1 {
+            return Err(h.unsupported(40 + 2 * i, format!("dim[{i}] = {d}: more than 3 axes")));
+        }
+        if i <= 3 {
+            dims[i - 1] = d as usize;
+        }
+    }
+    let code = h.i16(70);
+    let ty = match code {
+        2 => ScalarType::U8,
+        4 => ScalarType::I16,
+        8 => ScalarType::I32,
+        16 => ScalarType::F32,
+        64 => ScalarType::F64,
+        256 => ScalarType::I8,
+        512 => ScalarType::U16,
+        768 => ScalarType::U32,
+        _ => {
+            return Err(h.unsupported(
+                70,
+                format!("datatype {code} (supported: 2, 4, 8, 16, 64, 256, 512, 768)"),
+            ));
+        }
+    };
+    let bitpix = h.i16(72);
+    if i64::from(bitpix) != 8 * ty.size() as i64 {
+        return Err(h.error(
+            72,
+            format!("bitpix {} for datatype {code}", 8 * ty.size()),
+            format!("{bitpix}"),
+        ));
+    }
+    let mut spacing = [1.0f64; 3];
+    for (i, s) in spacing.iter_mut().enumerate().take(ndim) {
+        let at = 80 + 4 * i;
+        let v = h.f32(at);
+        if !(v.is_finite() && v > 0.0) {
+            return Err(h.error(at, format!("pixdim[{}] > 0", i + 1), format!("{v}")));
+        }
+        *s = v;
+    }
+    let vox = h.f32(108);
+    if !(vox.is_finite() && vox >= HEADER_LEN as f64 && vox.fract() == 0.0) {
+        return Err(h.error(108, "an integral vox_offset ≥ 348", format!("{vox}")));
+    }
+    let origin = orientation(&h)?;
+
+    let piece = if gz {
+        Piece::new(path.into(), 0, 0, Skip::Bytes(vox as u64))
+    } else {
+        Piece::new(path.into(), vox as u64, 0, Skip::Bytes(0))
+    };
+    let data = read_samples(&Payload {
+        header: path,
+        field: Position::Byte(40),
+        ty,
+        dims,
+        endian,
+        encoding: if gz { Encoding::Gzip } else { Encoding::Raw },
+        pieces: vec![piece],
+    })?;
+    let (slope, inter) = (h.f32(112), h.f32(116));
+    let data = if slope.is_finite() && slope != 0.0 && (slope != 1.0 || inter != 0.0) {
+        if !inter.is_finite() {
+            return Err(h.error(116, "a finite scl_inter", format!("{inter}")));
+        }
+        VolumeData::F32(
+            (0..data.len())
+                .map(|i| (slope * data.get_f64(i) + inter) as f32)
+                .collect(),
+        )
+    } else {
+        data
+    };
+    Volume::new(dims, spacing, origin, data)
+}
+
+/// The origin from qform or sform; an error for rotations and flips.
+fn orientation(h: &Header) -> Result<[f64; 3]> {
+    let (qcode, scode) = (h.i16(252), h.i16(254));
+    if qcode > 0 {
+        let q = [h.f32(256), h.f32(260), h.f32(264)];
+        if q.iter().any(|&x| x != 0.0) || h.f32(76) < 0.0 {
+            return Err(h.unsupported(
+                256,
+                format!(
+                    "qform rotation (quatern {q:?}, qfac {}); only identity orientation can be represented",
+                    h.f32(76)
+                ),
+            ));
+        }
+        let o = [h.f32(268), h.f32(272), h.f32(276)];
+        if o.iter().any(|x| !x.is_finite()) {
+            return Err(h.error(268, "finite qoffset values", format!("{o:?}")));
+        }
+        return Ok(o);
+    }
+    if scode > 0 {
+        let mut o = [0.0; 3];
+        for (r, out) in o.iter_mut().enumerate() {
+            let row: Vec<f64> = (0..4).map(|c| h.f32(280 + 16 * r + 4 * c)).collect();
+            let diagonal = row[..3]
+                .iter()
+                .enumerate()
+                .all(|(c, &x)| if c == r { x > 0.0 } else { x == 0.0 });
+            if !diagonal || !row[3].is_finite() {
+                return Err(h.unsupported(
+                    280 + 16 * r,
+                    format!("sform row {r} {row:?}: only positive axis-aligned matrices can be represented"),
+                ));
+            }
+            *out = row[3];
+        }
+        return Ok(o);
+    }
+    Ok([0.0; 3])
+}
+
+fn read_up_to(r: &mut dyn io::Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..]) {
+            Ok(0) => break,
+            Ok(k) => got += k,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(got)
+}
+
+/// The 352-byte little-endian header (348 + empty extension flag) for `v`.
+fn header(v: &Volume) -> Result<Vec<u8>> {
+    let mut b = vec![0u8; 352];
+    let put =
+        |b: &mut Vec<u8>, at: usize, bytes: &[u8]| b[at..at + bytes.len()].copy_from_slice(bytes);
+    put(&mut b, 0, &348i32.to_le_bytes());
+    let ty = v.data.scalar_type();
+    let dims = v.dims.map(i16::try_from);
+    let [Ok(nx), Ok(ny), Ok(nz)] = dims else {
+        return Err(Error::InvalidInput(format!(
+            "NIfTI-1 holds at most 32767 samples per axis; dims are {:?}",
+            v.dims
+        )));
+    };
+    for (i, d) in [3, nx, ny, nz, 1, 1, 1, 1].iter().enumerate() {
+        put(&mut b, 40 + 2 * i, &d.to_le_bytes());
+    }
+    let code: i16 = match ty {
+        ScalarType::U8 => 2,
+        ScalarType::I16 => 4,
+        ScalarType::I32 => 8,
+        ScalarType::F32 => 16,
+        ScalarType::F64 => 64,
+        ScalarType::I8 => 256,
+        ScalarType::U16 => 512,
+        ScalarType::U32 => 768,
+    };
+    put(&mut b, 70, &code.to_le_bytes());
+    put(&mut b, 72, &(8 * ty.size() as i16).to_le_bytes());
+    let pixdim = [1.0, v.spacing[0], v.spacing[1], v.spacing[2]];
+    for (i, p) in pixdim.iter().enumerate() {
+        put(&mut b, 76 + 4 * i, &(*p as f32).to_le_bytes());
+    }
+    put(&mut b, 108, &352f32.to_le_bytes());
+    put(&mut b, 112, &1f32.to_le_bytes());
+    b[123] = 2; // xyzt_units: millimetres
+    put(&mut b, 252, &1i16.to_le_bytes());
+    for (i, o) in v.origin.iter().enumerate() {
+        put(&mut b, 268 + 4 * i, &(*o as f32).to_le_bytes());
+    }
+    put(&mut b, 344, b"n+1\0");
+    Ok(b)
+}
+
+/// Writes `v` as little-endian NIfTI-1, gzip-compressed when `gz`.
+pub(crate) fn write(path: &Path, v: &Volume, gz: bool) -> Result<()> {
+    let head = header(v)?;
+    write_atomic_with(path, |w| {
+        if gz {
+            let mut enc = GzEncoder::new(w, Compression::default());
+            enc.write_all(&head)?;
+            write_le(&mut enc, &v.data)?;
+            enc.finish()?;
+            Ok(())
+        } else {
+            w.write_all(&head)?;
+            write_le(w, &v.data)
+        }
+    })
+}

@@ -74,11 +74,11 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let x = q % params.nx;
     let y = q / params.nx;
     let z = params.z_begin + layer;
-    let active = layer < params.n_layers && q < n_layer
+    let in_range = layer < params.n_layers && q < n_layer
         && x + 1u < params.nx && y + 1u < params.ny;
     var case_ix = 0u;
     var nt = 0u;
-    if active {
+    if in_range {
         for (var c = 0u; c < 8u; c++) {
             case_ix |= inside(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
         }

@@ -54,7 +54,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
     let n_layer = params.nx * params.ny;
-    let active = layer < params.n_layers && q < n_layer;
+    let in_range = layer < params.n_layers && q < n_layer;
     let x = q % params.nx;
     let y = q / params.nx;
     let z = params.z_begin + layer;
@@ -62,7 +62,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     var crossing = 0u;
     var a = 0.0;
     var far = vec3<f32>(0.0);
-    if active {
+    if in_range {
         a = sample(x, y, z);
         let m = a >= params.level;
         if x + 1u < params.nx {
@@ -91,7 +91,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         sh_scan[lid.x] += add;
         workgroupBarrier();
     }
-    if !active {
+    if !in_range {
         return;
     }
     let base = block_offsets[w] + sh_scan[lid.x] - nv;

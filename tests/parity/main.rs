@@ -1,5 +1,6 @@
 #[path = "../common/mod.rs"]
 mod common;
+mod mc_surface;
 
 #[test]
 fn smoke_vertex_normals() {

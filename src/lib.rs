@@ -16,6 +16,7 @@
 //! Every kernel is reachable through [`Backend::Cpu`] and [`Backend::Gpu`];
 //! `tests/parity/` proves they agree.
 
+pub mod cut;
 pub mod error;
 pub mod gpu;
 pub mod io;

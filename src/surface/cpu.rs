@@ -214,26 +214,36 @@ fn number_points(
     let (lo, hi) = split_two(ring, slot, up);
     let layer = lo;
     let above = hi;
+    // Stale ids are never read: cells only look up crossing edges, and every
+    // crossing edge of this layer is numbered below.
     let mut vid = std::mem::take(&mut layer.vid);
-    for v in &mut vid {
-        v.fill(NONE);
-    }
     let zf = z as f32;
     for y in 0..ny {
         let row = y * nx;
-        let m = &layer.inside[row..row + nx];
         let has_y = y + 1 < ny;
-        let uniform = |s: &[u8], val: u8| s.iter().all(|&b| b == val);
-        let first = m[0];
-        if uniform(m, first)
-            && (!has_y || uniform(&layer.inside[row + nx..row + 2 * nx], first))
-            && (!has_up || uniform(&above.inside[row..row + nx], first))
-        {
-            continue;
-        }
-        for x in 0..nx {
+        let m = &layer.inside[row..row + nx];
+        let my = if has_y {
+            &layer.inside[row + nx..row + 2 * nx]
+        } else {
+            m
+        };
+        let mz = if has_up {
+            &above.inside[row..row + nx]
+        } else {
+            m
+        };
+        let mut x = 0;
+        while x < nx {
+            // Eight points at once when none of their edges cross.
+            if x + 9 <= nx {
+                let w = word(m, x);
+                if w == word(m, x + 1) && w == word(my, x) && w == word(mz, x) {
+                    x += 8;
+                    continue;
+                }
+            }
             let q = row + x;
-            let mq = layer.inside[q];
+            let mq = m[x];
             let a = layer.values[q];
             let point = (q + z * nx * ny) as u64;
             let mut add = |axis: usize, b: f32, out: &mut Chunk, vid: &mut [Vec<u32>; 3]| {
@@ -248,18 +258,27 @@ fn number_points(
                     out.edges.push(3 * point + axis as u64);
                 }
             };
-            if x + 1 < nx && layer.inside[q + 1] != mq {
+            if x + 1 < nx && m[x + 1] != mq {
                 add(0, layer.values[q + 1], out, &mut vid);
             }
-            if has_y && layer.inside[q + nx] != mq {
+            if has_y && my[x] != mq {
                 add(1, layer.values[q + nx], out, &mut vid);
             }
-            if has_up && above.inside[q] != mq {
+            if has_up && mz[x] != mq {
                 add(2, above.values[q], out, &mut vid);
             }
+            x += 1;
         }
     }
     layer.vid = vid;
+}
+
+/// Eight inside flags starting at `x` as one word (`x + 8 <= s.len()`).
+#[inline]
+fn word(s: &[u8], x: usize) -> u64 {
+    let mut b = [0u8; 8];
+    b.copy_from_slice(&s[x..x + 8]);
+    u64::from_ne_bytes(b)
 }
 
 /// Mutable references to two distinct ring slots.
@@ -295,11 +314,16 @@ fn emit_cells(field: &Field<'_>, lower: &Layer, upper: &Layer, z: usize, out: &m
             &upper.inside[r0..r0 + nx],
             &upper.inside[r1..r1 + nx],
         ];
-        let first = rows[0][0];
-        if rows.iter().all(|r| r.iter().all(|&b| b == first)) {
-            continue;
-        }
-        for x in 0..cx {
+        let mut x = 0;
+        while x < cx {
+            // Eight empty (or full) cells at once.
+            if x + 9 <= nx {
+                let w = word(rows[0], x);
+                if rows.iter().all(|r| word(r, x) == w && word(r, x + 1) == w) {
+                    x += 8;
+                    continue;
+                }
+            }
             let case = usize::from(rows[0][x])
                 | usize::from(rows[0][x + 1]) << 1
                 | usize::from(rows[1][x]) << 2
@@ -309,6 +333,7 @@ fn emit_cells(field: &Field<'_>, lower: &Layer, upper: &Layer, z: usize, out: &m
                 | usize::from(rows[3][x]) << 6
                 | usize::from(rows[3][x + 1]) << 7;
             if case == 0 || case == 255 {
+                x += 1;
                 continue;
             }
             let q = r0 + x;
@@ -323,6 +348,7 @@ fn emit_cells(field: &Field<'_>, lower: &Layer, upper: &Layer, z: usize, out: &m
                 out.triangles.push(v);
                 out.cells.push(cell);
             }
+            x += 1;
         }
     }
 }

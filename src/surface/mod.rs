@@ -34,6 +34,7 @@ use std::collections::HashSet;
 use glam::DVec3;
 use rayon::prelude::*;
 
+pub use cpu::UnionFind;
 pub use field::Field;
 pub use tree::{Aabb, CellNode, Forest, GroupNode, LayerNode, RowNode, Span};
 

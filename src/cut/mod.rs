@@ -557,14 +557,14 @@ fn assemble(
             local.push(HashMap::new());
             pieces.len() - 1
         });
-        if let Some(neg) = side_of(&out_tris[i].0, out_tris[i].1) {
-            if neg {
-                piece_side[pi].0 = true;
-            } else {
-                piece_side[pi].1 = true;
-            }
-        } else {
-            piece_side[pi] = (true, true);
+        // Glued sub-triangles (an open knife ends there) touch both sides;
+        // unsplit triangles of a mesh knife say nothing about their side.
+        let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
+        match side_of(&out_tris[i].0, out_tris[i].1) {
+            _ if glued_sub => piece_side[pi] = (true, true),
+            Some(true) => piece_side[pi].0 = true,
+            Some(false) => piece_side[pi].1 = true,
+            None => {}
         }
         let piece = &mut pieces[pi];
         let map = &mut local[pi];

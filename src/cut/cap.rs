@@ -214,58 +214,71 @@ fn in_triangle(a: DVec2, b: DVec2, c: DVec2, p: DVec2) -> bool {
 }
 
 /// Ear clipping of a counter-clockwise polygon (bridges allowed: repeated
-/// indices). When no proper ear exists (degenerate input) the most convex
-/// vertex is clipped, so it always terminates with n − 2 triangles.
-fn ear_clip(pts: &[DVec2], mut poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
-    while poly.len() > 3 {
-        let n = poly.len();
-        let reflex: Vec<usize> = (0..n)
-            .filter(|&i| {
-                cross(
-                    pts[poly[(i + n - 1) % n]],
-                    pts[poly[i]],
-                    pts[poly[(i + 1) % n]],
-                ) <= 0.0
-            })
-            .collect();
-        let is_ear = |i: usize| {
-            let (ia, ib, ic) = (poly[(i + n - 1) % n], poly[i], poly[(i + 1) % n]);
-            let (a, b, c) = (pts[ia], pts[ib], pts[ic]);
-            cross(a, b, c) > 0.0
-                && !reflex.iter().any(|&r| {
-                    let q = poly[r];
-                    q != ia
-                        && q != ib
-                        && q != ic
-                        && pts[q] != a
-                        && pts[q] != b
-                        && pts[q] != c
-                        && in_triangle(a, b, c, pts[q])
-                })
+/// indices) over a linked ring, walking on after each clip (earcut's
+/// scheme, O(n²) typical). When a full turn finds no proper ear
+/// (degenerate input) the most convex vertex is clipped, so it always
+/// terminates with n − 2 triangles.
+fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
+    let n = poly.len();
+    if n < 3 {
+        return;
+    }
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let at = |i: usize| pts[poly[i]];
+    let mut remaining = n;
+    let mut i = 0;
+    let mut since = 0;
+    while remaining > 3 {
+        let (a, c) = (prev[i], next[i]);
+        let ear = cross(at(a), at(i), at(c)) > 0.0 && {
+            let (pa, pb, pc) = (at(a), at(i), at(c));
+            let mut j = next[c];
+            let mut blocked = false;
+            while j != a {
+                let q = at(j);
+                let reflex = cross(at(prev[j]), q, at(next[j])) <= 0.0;
+                if reflex && q != pa && q != pb && q != pc && in_triangle(pa, pb, pc, q) {
+                    blocked = true;
+                    break;
+                }
+                j = next[j];
+            }
+            !blocked
         };
-        let pick = (0..n).find(|&i| is_ear(i)).unwrap_or_else(|| {
-            (0..n)
-                .max_by(|&x, &y| {
-                    let cx = cross(
-                        pts[poly[(x + n - 1) % n]],
-                        pts[poly[x]],
-                        pts[poly[(x + 1) % n]],
-                    );
-                    let cy = cross(
-                        pts[poly[(y + n - 1) % n]],
-                        pts[poly[y]],
-                        pts[poly[(y + 1) % n]],
-                    );
-                    cx.total_cmp(&cy)
-                })
-                .unwrap_or(0)
-        });
-        out.push([poly[(pick + n - 1) % n], poly[pick], poly[(pick + 1) % n]]);
-        poly.remove(pick);
+        let clip = if ear {
+            Some(i)
+        } else {
+            since += 1;
+            (since >= remaining).then(|| {
+                let mut best = i;
+                let mut best_c = f64::NEG_INFINITY;
+                let mut j = i;
+                for _ in 0..remaining {
+                    let cj = cross(at(prev[j]), at(j), at(next[j]));
+                    if cj > best_c {
+                        best_c = cj;
+                        best = j;
+                    }
+                    j = next[j];
+                }
+                best
+            })
+        };
+        match clip {
+            Some(v) => {
+                let (a, c) = (prev[v], next[v]);
+                out.push([poly[a], poly[v], poly[c]]);
+                next[a] = c;
+                prev[c] = a;
+                remaining -= 1;
+                since = 0;
+                i = c;
+            }
+            None => i = next[i],
+        }
     }
-    if poly.len() == 3 {
-        out.push([poly[0], poly[1], poly[2]]);
-    }
+    out.push([poly[prev[i]], poly[i], poly[next[i]]]);
 }
 
 /// Ear clipping of a loop of either orientation (keeps the loop's direction).

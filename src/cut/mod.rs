@@ -124,7 +124,7 @@ pub struct Located {
 /// [`Forest::from_mesh`]) with `knife`, through the tree.
 pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     let t0 = Instant::now();
-    let prepared = knife.prepare(scene_scale(mesh))?;
+    let prepared = knife.prepare(forest_scale(forest))?;
     let mut located = locate_prepared(mesh, forest, &prepared);
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
     assemble(mesh, located, &prepared, opts)
@@ -188,6 +188,24 @@ fn add_stats(a: &mut CutStats, b: &CutStats) {
     a.assemble_seconds += b.assemble_seconds;
 }
 
+/// Scene size from the group boxes (no pass over the vertices).
+fn forest_scale(forest: &Forest) -> f64 {
+    forest
+        .groups
+        .iter()
+        .map(|g| {
+            f64::from(
+                g.bbox
+                    .min
+                    .abs()
+                    .max(g.bbox.max.abs())
+                    .max_element()
+                    .max((g.bbox.max - g.bbox.min).max_element()),
+            )
+        })
+        .fold(1e-30, f64::max)
+}
+
 fn scene_scale(mesh: &TriMesh) -> f64 {
     mesh.bounds().map_or(1.0, |(lo, hi)| {
         f64::from(
@@ -201,7 +219,7 @@ fn scene_scale(mesh: &TriMesh) -> f64 {
 
 /// Locates the cut through the tree (public for benchmarks and tests).
 pub fn locate(mesh: &TriMesh, forest: &Forest, knife: &Knife) -> Result<Located> {
-    let prepared = knife.prepare(scene_scale(mesh))?;
+    let prepared = knife.prepare(forest_scale(forest))?;
     Ok(locate_prepared(mesh, forest, &prepared))
 }
 
@@ -288,12 +306,16 @@ fn crossed_flags(mesh: &TriMesh, tris: &[u32], k: &PreparedKnife<'_>) -> Vec<boo
         let (lo, hi) = if a < b { (a, b) } else { (b, a) };
         k.crossing(p[lo as usize], p[hi as usize]).is_some()
     };
-    tris.par_iter()
-        .map(|&t| {
-            let [a, b, c] = mesh.triangles[t as usize];
-            edge(a, b) || edge(b, c) || edge(c, a)
-        })
-        .collect()
+    let test = |&t: &u32| {
+        let [a, b, c] = mesh.triangles[t as usize];
+        edge(a, b) || edge(b, c) || edge(c, a)
+    };
+    // Small candidate sets (the tree's usual case) are not worth a fork.
+    if tris.len() < 1 << 14 {
+        tris.iter().map(test).collect()
+    } else {
+        tris.par_iter().map(test).collect()
+    }
 }
 
 fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Located {
@@ -528,10 +550,12 @@ fn assemble(
         uf.union(k3[0], k3[2]);
     }
     // Pieces by first triangle; per piece its own vertex numbering.
-    let mut piece_of_root: HashMap<u32, usize> = HashMap::new();
+    // Every vertex node belongs to exactly one piece (all triangles using it
+    // were united), so one global node → local index table serves all pieces.
+    let mut piece_of_root = vec![u32::MAX; n_nodes];
     let mut pieces: Vec<TriMesh> = Vec::new();
     let mut piece_side: Vec<(bool, bool)> = Vec::new();
-    let mut local: Vec<HashMap<u32, u32>> = Vec::new();
+    let mut local = vec![u32::MAX; n_nodes];
     let position = |key: u32| -> Vec3 {
         if key < n_v {
             mesh.positions[key as usize]
@@ -550,13 +574,13 @@ fn assemble(
         })
     };
     for (i, k3) in keyed.iter().enumerate() {
-        let root = uf.find(k3[0]);
-        let pi = *piece_of_root.entry(root).or_insert_with(|| {
+        let root = uf.find(k3[0]) as usize;
+        if piece_of_root[root] == u32::MAX {
+            piece_of_root[root] = pieces.len() as u32;
             pieces.push(TriMesh::default());
             piece_side.push((false, false));
-            local.push(HashMap::new());
-            pieces.len() - 1
-        });
+        }
+        let pi = piece_of_root[root] as usize;
         // Glued sub-triangles (an open knife ends there) touch both sides;
         // unsplit triangles of a mesh knife say nothing about their side.
         let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
@@ -567,12 +591,13 @@ fn assemble(
             None => {}
         }
         let piece = &mut pieces[pi];
-        let map = &mut local[pi];
         let tri = k3.map(|key| {
-            *map.entry(key).or_insert_with(|| {
+            let slot = &mut local[key as usize];
+            if *slot == u32::MAX {
+                *slot = piece.positions.len() as u32;
                 piece.positions.push(position(key));
-                (piece.positions.len() - 1) as u32
-            })
+            }
+            *slot
         });
         piece.triangles.push(tri);
     }

@@ -143,8 +143,7 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
         pad: field.pad,
     };
     let groups = group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid);
-    let cell_dims = field.dims.map(|d| d.saturating_sub(1).max(1));
-    let forest = Forest::build(&mesh, &raw.cells, cell_dims, &raw.groups, raw.n_groups);
+    let forest = leaf_forest(&mesh, &raw.cells, field.dims, &raw.groups, raw.n_groups);
     Surface {
         mesh,
         vertex_edges: raw.edges,
@@ -154,6 +153,29 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
         forest,
         grid,
     }
+}
+
+/// The forest over blocks of [`tree::LEAF_BLOCK`]³ marching-cubes cells:
+/// layer = block layer, row = block row, leaf = block.
+fn leaf_forest(
+    mesh: &TriMesh,
+    cells: &[u32],
+    dims: [usize; 3],
+    groups: &[u32],
+    n_groups: usize,
+) -> Forest {
+    let b = tree::LEAF_BLOCK;
+    let cd = dims.map(|d| d.saturating_sub(1).max(1));
+    let bd = cd.map(|c| c.div_ceil(b));
+    let blocks: Vec<u32> = cells
+        .par_iter()
+        .map(|&c| {
+            let c = c as usize;
+            let (x, y, z) = (c % cd[0], (c / cd[0]) % cd[1], c / (cd[0] * cd[1]));
+            (x / b + bd[0] * (y / b + bd[1] * (z / b))) as u32
+        })
+        .collect();
+    Forest::build(mesh, &blocks, bd, groups, n_groups)
 }
 
 /// Per-group accumulators.

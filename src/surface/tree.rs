@@ -17,6 +17,15 @@ use rayon::prelude::*;
 use super::cpu::UnionFind;
 use crate::TriMesh;
 
+/// Edge of a leaf block in marching-cubes cells. The seed's leaf is one
+/// voxel cell (≈ 2 triangles); a leaf of 4³ cells (≈ 30 triangles on a
+/// surface) makes the tree ~50× smaller and the cut query several times
+/// faster, while keeping the same layer → row → cell structure.
+pub const LEAF_BLOCK: usize = 4;
+
+/// Target triangles per leaf of a virtual grid ([`Forest::from_mesh`]).
+pub const LEAF_TRIANGLES: usize = 32;
+
 /// Axis-aligned box; empty when `min > max`. Serialises as
 /// `{"min": [x, y, z], "max": [x, y, z]}`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -268,7 +277,7 @@ impl Forest {
 
     /// A forest for any mesh: groups = vertex-connected components
     /// (numbered by first triangle), cells of a virtual grid over the mesh's
-    /// bounding box with about two triangles per occupied cell, each
+    /// bounding box with about [`LEAF_TRIANGLES`] triangles per occupied cell, each
     /// triangle in the cell of its centroid. Returns the forest and the
     /// per-triangle group ids.
     pub fn from_mesh(mesh: &TriMesh) -> (Forest, Vec<u32>, usize) {
@@ -277,7 +286,7 @@ impl Forest {
             return (Forest::default(), groups, n_groups);
         };
         let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
-        let target = (mesh.n_triangles() as f64 / 2.0).max(1.0);
+        let target = (mesh.n_triangles() as f64 / LEAF_TRIANGLES as f64).max(1.0);
         // Cell edge h with (extent/h)^2 ≈ target (surfaces fill ~ a 2-D set).
         let area = f64::from(extent.x * extent.y + extent.y * extent.z + extent.z * extent.x);
         let h = ((area / target).sqrt() as f32).max(extent.max_element() / 1024.0);
@@ -322,26 +331,37 @@ impl Forest {
     }
 }
 
-/// Triangle ids sorted by (group, cell, id). Marching-cubes output is in
-/// cell order already, so a stable counting sort by group suffices there.
+/// Stable counting sort of `items` by `key(item) < n_keys`.
+fn counting_sort(items: &[u32], n_keys: usize, key: impl Fn(u32) -> usize) -> Vec<u32> {
+    let mut start = vec![0u32; n_keys + 1];
+    for &t in items {
+        start[key(t) + 1] += 1;
+    }
+    for k in 0..n_keys {
+        start[k + 1] += start[k];
+    }
+    let mut out = vec![0u32; items.len()];
+    for &t in items {
+        let k = key(t);
+        out[start[k] as usize] = t;
+        start[k] += 1;
+    }
+    out
+}
+
+/// Triangle ids sorted by (group, cell, id): two stable counting sorts
+/// (cell, then group) when the cell keys are few enough, else a sort.
 fn order_by_group_and_cell(cells: &[u32], groups: &[u32], n_groups: usize) -> Vec<u32> {
     let n = cells.len();
+    let ids: Vec<u32> = (0..n as u32).collect();
+    let n_keys = cells.iter().copied().max().map_or(0, |m| m as usize + 1);
     if cells.windows(2).all(|w| w[0] <= w[1]) {
-        let mut start = vec![0u32; n_groups + 1];
-        for &g in groups {
-            start[g as usize + 1] += 1;
-        }
-        for g in 0..n_groups {
-            start[g + 1] += start[g];
-        }
-        let mut out = vec![0u32; n];
-        for (t, &g) in groups.iter().enumerate() {
-            out[start[g as usize] as usize] = t as u32;
-            start[g as usize] += 1;
-        }
-        out
+        counting_sort(&ids, n_groups, |t| groups[t as usize] as usize)
+    } else if n_keys <= 4 * n + (1 << 20) {
+        let by_cell = counting_sort(&ids, n_keys, |t| cells[t as usize] as usize);
+        counting_sort(&by_cell, n_groups, |t| groups[t as usize] as usize)
     } else {
-        let mut out: Vec<u32> = (0..n as u32).collect();
+        let mut out = ids;
         out.par_sort_unstable_by_key(|&t| {
             (
                 u64::from(groups[t as usize]) << 32 | u64::from(cells[t as usize]),

@@ -98,6 +98,25 @@ fn main() {
             let _ = locate_full_scan(mesh, k);
         }
     });
+    // The tree walk is single-threaded; the same scan on one thread too.
+    let scan_locate_1t = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map(|pool| {
+            pool.install(|| {
+                time(&|| {
+                    for k in &knives {
+                        let _ = locate_full_scan(mesh, k);
+                    }
+                })
+            })
+        })
+        .unwrap_or(f64::NAN);
+    eprintln!(
+        "cut/locate: one-thread scan {:.2} ms per knife ({:.1}x the tree)",
+        scan_locate_1t * 1e3 / knives.len() as f64,
+        scan_locate_1t / tree_locate
+    );
     let cap = CutOptions { cap: true };
     let tree_cut = time(&|| {
         for k in &knives {
@@ -138,34 +157,30 @@ fn main() {
     group.throughput(Throughput::Elements((m * knives.len()) as u64));
     group.bench_function("locate_tree", |b| {
         b.iter(|| {
-            knives
-                .iter()
-                .map(|k| locate(mesh, &surf.forest, k).map(|l| l.points.len()))
-                .count()
+            for k in &knives {
+                std::hint::black_box(locate(mesh, &surf.forest, k).ok());
+            }
         })
     });
     group.bench_function("locate_scan", |b| {
         b.iter(|| {
-            knives
-                .iter()
-                .map(|k| locate_full_scan(mesh, k).map(|l| l.points.len()))
-                .count()
+            for k in &knives {
+                std::hint::black_box(locate_full_scan(mesh, k).ok());
+            }
         })
     });
     group.bench_function("capped_tree", |b| {
         b.iter(|| {
-            knives
-                .iter()
-                .map(|k| cut(mesh, &surf.forest, k, &cap).map(|r| r.pieces.len()))
-                .count()
+            for k in &knives {
+                std::hint::black_box(cut(mesh, &surf.forest, k, &cap).ok());
+            }
         })
     });
     group.bench_function("capped_scan", |b| {
         b.iter(|| {
-            knives
-                .iter()
-                .map(|k| cut_full_scan(mesh, k, &cap).map(|r| r.pieces.len()))
-                .count()
+            for k in &knives {
+                std::hint::black_box(cut_full_scan(mesh, k, &cap).ok());
+            }
         })
     });
     group.finish();

@@ -379,7 +379,7 @@ fn mesh_crossing(a: DVec3, b: DVec3, mesh: &TriMesh, forest: &Forest, m: f64) ->
             hits.push((s, normal.dot(d) > 0.0));
         }
     }
-    if hits.len() % 2 == 0 {
+    if hits.len().is_multiple_of(2) {
         return None;
     }
     hits.sort_by(|x, y| x.0.total_cmp(&y.0));

@@ -306,8 +306,21 @@ fn crossed_flags(mesh: &TriMesh, tris: &[u32], k: &PreparedKnife<'_>) -> Vec<boo
         let (lo, hi) = if a < b { (a, b) } else { (b, a) };
         k.crossing(p[lo as usize], p[hi as usize]).is_some()
     };
+    let analytic = !matches!(k.kind, Kind::Mesh { .. });
     let test = |&t: &u32| {
         let [a, b, c] = mesh.triangles[t as usize];
+        // Analytic knives cross an edge only where the side changes: three
+        // side values decide most triangles without any edge work.
+        if analytic {
+            let neg = |v: u32| {
+                k.side_value(p[v as usize].as_dvec3())
+                    .is_some_and(|f| f < 0.0)
+            };
+            let (na, nb, nc) = (neg(a), neg(b), neg(c));
+            if na == nb && nb == nc {
+                return false;
+            }
+        }
         edge(a, b) || edge(b, c) || edge(c, a)
     };
     // Small candidate sets (the tree's usual case) are not worth a fork.

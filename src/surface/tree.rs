@@ -8,8 +8,9 @@
 //! level, children as index spans), which is how the cut walks it.
 //!
 //! Marching-cubes surfaces use the real cell grid (each triangle remembers
-//! its cell, recorded in the same pass that makes it); any other mesh (a
-//! file, a triangulated knife) gets a virtual grid over its bounding box.
+//! its cell, recorded in the same pass that makes it), grouped into leaf
+//! blocks of [`LEAF_BLOCK`]³ cells; any other mesh (a file, a triangulated
+//! knife) gets a virtual grid over its bounding box.
 
 use glam::Vec3;
 use rayon::prelude::*;

@@ -74,6 +74,12 @@ registry! {
     SpringChebyshev => "spring_chebyshev",
     /// Max |v|² and max window change of a relaxation, as u32 keys.
     TissueReduceMax => "tissue_reduce_max",
+    /// Marching cubes: per-point vertex and triangle counts, summed per block.
+    McClassify => "mc_classify",
+    /// Marching cubes: welded vertices at scanned offsets, per-point first vertex id.
+    McVertices => "mc_vertices",
+    /// Marching cubes: triangles of each cell at scanned offsets.
+    McTriangles => "mc_triangles",
 }
 
 registry! {

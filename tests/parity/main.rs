@@ -7,6 +7,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod mc_surface;
 
 mod bounds_reduce;
 mod exclusive_scan;

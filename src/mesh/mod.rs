@@ -113,9 +113,13 @@ impl TriMesh {
 /// renumbered in first-use order; scalar fields follow their vertices.
 pub fn split_by_label(mesh: &TriMesh, labels: &[u32]) -> Vec<TriMesh> {
     let n = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
-    let mut parts: Vec<(TriMesh, Vec<u32>)> = (0..n)
-        .map(|_| {
-            let part = TriMesh {
+    let by_label = Csr::from_pairs(n, labels.iter().enumerate().map(|(t, &l)| (l, t as u32)));
+    // `stamp[v] == k + 1`: vertex v already has id `local[v]` in part k.
+    let mut stamp = vec![0u32; mesh.n_vertices()];
+    let mut local = vec![0u32; mesh.n_vertices()];
+    (0..n)
+        .map(|k| {
+            let mut part = TriMesh {
                 scalars: mesh
                     .scalars
                     .iter()
@@ -126,27 +130,24 @@ pub fn split_by_label(mesh: &TriMesh, labels: &[u32]) -> Vec<TriMesh> {
                     .collect(),
                 ..TriMesh::default()
             };
-            (part, Vec::new())
-        })
-        .collect();
-    let mut local = vec![u32::MAX; mesh.n_vertices()];
-    for (tri, &label) in mesh.triangles.iter().zip(labels) {
-        let (part, used) = &mut parts[label as usize];
-        let t = tri.map(|v| {
-            let slot = &mut local[v as usize];
-            if *slot == u32::MAX || used.get(*slot as usize) != Some(&v) {
-                *slot = part.positions.len() as u32;
-                used.push(v);
-                part.positions.push(mesh.positions[v as usize]);
-                for (dst, src) in part.scalars.iter_mut().zip(&mesh.scalars) {
-                    dst.values.push(src.values[v as usize]);
-                }
+            for &t in by_label.row(k) {
+                let tri = mesh.triangles[t as usize].map(|v| {
+                    let v = v as usize;
+                    if stamp[v] != k as u32 + 1 {
+                        stamp[v] = k as u32 + 1;
+                        local[v] = part.positions.len() as u32;
+                        part.positions.push(mesh.positions[v]);
+                        for (dst, src) in part.scalars.iter_mut().zip(&mesh.scalars) {
+                            dst.values.push(src.values[v]);
+                        }
+                    }
+                    local[v]
+                });
+                part.triangles.push(tri);
             }
-            *slot
-        });
-        part.triangles.push(t);
-    }
-    parts.into_iter().map(|(p, _)| p).collect()
+            part
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@
 pub mod cli;
 pub mod error;
 pub mod gpu;
+pub mod hscan;
 pub mod io;
 pub mod mesh;
 pub mod normals;

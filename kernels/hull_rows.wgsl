@@ -48,14 +48,16 @@ fn row_span(y: i64, z: i64) -> vec4<i32> {
     var open = true;
     for (var f = 0u; f < params.n_faces; f++) {
         let face = faces[f];
+        // Sign tests on the i32 component: with naga 30 on Mesa lavapipe,
+        // `i64(n) > 0li` came out true for n = −1 (the parity tests caught it).
         let a = i64(face.normal.x);
         let r = offset_of(face) - i64(face.normal.y) * y - i64(face.normal.z) * z;
-        if a == 0li {
+        if face.normal.x == 0 {
             if r < 0li {
                 return EMPTY;
             }
             open = open && r > 0li;
-        } else if a > 0li {
+        } else if face.normal.x > 0 {
             let v = a * i64(2 * hi_c + 1);
             if v < r {
                 continue;

@@ -34,7 +34,7 @@ use crate::volume::analysis::label_6_connected;
 use crate::{Error, Result};
 
 /// The class of a ZKH (Def. CA/CO/TU).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub enum ZkhClass {
     /// No incident face (Def. CA, "Hohlraum").
     Cavity,

@@ -10,5 +10,6 @@ mod common;
 
 mod bounds_reduce;
 mod exclusive_scan;
+mod hull_scan;
 mod range_reduce;
 mod vertex_normals;

@@ -56,82 +56,115 @@ pub fn hull_rows(faces: &[HalfSpace], bbox: &VoxelBox) -> RowSpans {
 
 /// Per-row intervals on the lattice of points `2·(origin + local) + parity`
 /// (parity 1: voxel centres, 0: cell corners), `dims[1]·dims[2]` rows.
+///
+/// The faces are split once by the sign of `n_x`, and per z layer reduced
+/// to `[a, b, d − c·z]`, so a row costs two products per face. Splitting
+/// changes only the order in which faces are met; the spans are exact
+/// minima/maxima, the same in any order (and the same as the kernel's).
 pub(crate) fn lattice_rows(
     faces: &[HalfSpace],
     origin: [i64; 3],
     dims: [usize; 3],
     parity: i64,
 ) -> Vec<RowSpan> {
-    let ny = dims[1];
-    (0..dims[1] * dims[2])
-        .into_par_iter()
-        .map(|row| {
-            let y = 2 * (origin[1] + (row % ny) as i64) + parity;
-            let z = 2 * (origin[2] + (row / ny) as i64) + parity;
-            row_span(faces, origin[0], dims[0] as i64, y, z, parity)
-        })
-        .collect()
+    let [nx, ny, nz] = dims;
+    let mut spans = vec![EMPTY_SPAN; ny * nz];
+    if nx == 0 || ny == 0 {
+        return spans;
+    }
+    let by_sign = |sign: i64| -> Vec<HalfSpace> {
+        faces
+            .iter()
+            .filter(|f| f.normal[0].signum() == sign)
+            .copied()
+            .collect()
+    };
+    let (pos, neg, zero) = (by_sign(1), by_sign(-1), by_sign(0));
+    spans.par_chunks_mut(ny).enumerate().for_each(|(k, layer)| {
+        let z = 2 * (origin[2] + k as i64) + parity;
+        let at_z = |fs: &[HalfSpace]| -> Vec<[i64; 3]> {
+            fs.iter()
+                .map(|f| [f.normal[0], f.normal[1], f.offset - f.normal[2] * z])
+                .collect()
+        };
+        let layer_faces = LayerFaces {
+            pos: at_z(&pos),
+            neg: at_z(&neg),
+            zero: at_z(&zero),
+        };
+        for (j, span) in layer.iter_mut().enumerate() {
+            let y = 2 * (origin[1] + j as i64) + parity;
+            *span = row_span(&layer_faces, origin[0], nx as i64, y, parity);
+        }
+    });
+    spans
 }
 
-/// The span of one row at combinatorial `(y, z)`: points `x = 2i + parity`
-/// for global indices `i` in `ox .. ox + nx`.
+/// The faces of one z layer as `[a, b, t]` with `t = d − c·z`, by the sign
+/// of `a`.
+struct LayerFaces {
+    pos: Vec<[i64; 3]>,
+    neg: Vec<[i64; 3]>,
+    zero: Vec<[i64; 3]>,
+}
+
+/// The span of one row at combinatorial `y` of a layer: points
+/// `x = 2i + parity` for global indices `i` in `ox .. ox + nx` (`nx ≥ 1`).
 ///
-/// Per face `a·x ≤ r` with `r = d − b·y − c·z`. For `a > 0` the closed bound
-/// is `i ≤ ⌊(r − a·parity) / 2a⌋`, the open one one less when the division
-/// is exact; for `a < 0` symmetrically `i ≥ ⌈(−r − m·parity) / 2m⌉`, `m = −a`;
-/// for `a = 0` the face keeps all (`r > 0`), only the closed interval
-/// (`r = 0`) or nothing (`r < 0`). A face that cannot tighten the current
-/// interval (checked with one product at its end) is skipped without
-/// dividing; the result is the same min/max in any face order.
-fn row_span(faces: &[HalfSpace], ox: i64, nx: i64, y: i64, z: i64, parity: i64) -> RowSpan {
-    if nx == 0 {
-        return EMPTY_SPAN;
-    }
+/// Per face `a·x ≤ r` with `r = t − b·y = d − b·y − c·z`. For `a > 0` the
+/// closed bound is `i ≤ ⌊(r − a·parity) / 2a⌋`, the open one one less when
+/// the division is exact; for `a < 0` symmetrically
+/// `i ≥ ⌈(−r − m·parity) / 2m⌉`, `m = −a`; for `a = 0` the face keeps all
+/// (`r > 0`), only the closed interval (`r = 0`) or nothing (`r < 0`). A
+/// face that cannot tighten the current interval (checked with one product
+/// at its end) is skipped without dividing.
+fn row_span(faces: &LayerFaces, ox: i64, nx: i64, y: i64, parity: i64) -> RowSpan {
     let (mut lo_c, mut hi_c) = (ox, ox + nx - 1);
     let (mut lo_o, mut hi_o) = (lo_c, hi_c);
     let mut open = true;
-    for f in faces {
-        let [a, b, c] = f.normal;
-        let r = f.offset - b * y - c * z;
-        if a == 0 {
-            if r < 0 {
-                return EMPTY_SPAN;
-            }
-            open &= r > 0;
-        } else if a > 0 {
-            let v = a * (2 * hi_c + parity);
-            if v < r {
-                continue;
-            }
-            if v == r {
-                hi_o = hi_o.min(hi_c - 1);
-                continue;
-            }
-            let (num, den) = (r - a * parity, 2 * a);
-            let q = num.div_euclid(den);
-            if q < lo_c {
-                return EMPTY_SPAN;
-            }
-            hi_c = q;
-            hi_o = hi_o.min(if q * den == num { q - 1 } else { q });
-        } else {
-            let v = a * (2 * lo_c + parity);
-            if v < r {
-                continue;
-            }
-            if v == r {
-                lo_o = lo_o.max(lo_c + 1);
-                continue;
-            }
-            let m = -a;
-            let (num, den) = (-r - m * parity, 2 * m);
-            let q = -(-num).div_euclid(den);
-            if q > hi_c {
-                return EMPTY_SPAN;
-            }
-            lo_c = q;
-            lo_o = lo_o.max(if q * den == num { q + 1 } else { q });
+    for &[_, b, t] in &faces.zero {
+        let r = t - b * y;
+        if r < 0 {
+            return EMPTY_SPAN;
         }
+        open &= r > 0;
+    }
+    for &[a, b, t] in &faces.pos {
+        let r = t - b * y;
+        let v = a * (2 * hi_c + parity);
+        if v < r {
+            continue;
+        }
+        if v == r {
+            hi_o = hi_o.min(hi_c - 1);
+            continue;
+        }
+        let (num, den) = (r - a * parity, 2 * a);
+        let q = num.div_euclid(den);
+        if q < lo_c {
+            return EMPTY_SPAN;
+        }
+        hi_c = q;
+        hi_o = hi_o.min(if q * den == num { q - 1 } else { q });
+    }
+    for &[a, b, t] in &faces.neg {
+        let r = t - b * y;
+        let v = a * (2 * lo_c + parity);
+        if v < r {
+            continue;
+        }
+        if v == r {
+            lo_o = lo_o.max(lo_c + 1);
+            continue;
+        }
+        let m = -a;
+        let (num, den) = (-r - m * parity, 2 * m);
+        let q = -(-num).div_euclid(den);
+        if q > hi_c {
+            return EMPTY_SPAN;
+        }
+        lo_c = q;
+        lo_o = lo_o.max(if q * den == num { q + 1 } else { q });
     }
     finish_span(ox, lo_c, hi_c, lo_o, hi_o, open)
 }

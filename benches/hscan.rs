@@ -1,12 +1,13 @@
 //! Inside-hull scan benchmarks (SPEC §4.3): a ball of radius r voxels in an
-//! n³ box (r = 100 in 256³, r = 200 in 512³), enclosed by its tangent planes
-//! in the 1154 primitive integer directions with components in −5..=5 (many
-//! faces: many faces, as hulls of big digital balls have). Groups:
+//! n³ box (r = 100 in 256³, r = 200 in 512³), enclosed by its 1154 tangent
+//! planes in the primitive integer directions with components in −5..=5
+//! (many faces, as hulls of big digital balls have). Groups, in voxels/s:
 //! `hull_scan/cpu_rows` (row spans), `hull_scan/cpu_classify` (spans + side
 //! codes: the "512³ in under 1 s" target), `hull_scan/cpu_brute` (every
-//! voxel × every face), `hull_scan/gpu_rows_{int64,i32x2}` and
-//! `hull_scan/gpu_brute_{int64,i32x2}` (upload + dispatch + readback), all
-//! in voxels/s. `CHISEL_BENCH_QUICK=1`: 64³ and 128³ boxes, few samples.
+//! voxel × every face; 128³ and below), `hull_scan/gpu_rows_{int64,i32x2}`
+//! and `hull_scan/gpu_brute_{int64,i32x2}` (upload + dispatch + readback;
+//! brute force only up to 64³ on software adapters).
+//! `CHISEL_BENCH_QUICK=1`: 64³ and 128³ boxes, few samples.
 
 use std::hint::black_box;
 use std::time::Duration;

@@ -11,7 +11,7 @@ use crate::Result;
 
 /// The side code of every voxel of `bbox` (rayon over z layers).
 pub fn classify(faces: &[HalfSpace], bbox: &VoxelBox) -> Result<Classification> {
-    let n = bbox.len()?;
+    let n = bbox.n_voxels()?;
     let [nx, ny, _] = bbox.dims;
     let mut sides = vec![0u8; n];
     if n > 0 {

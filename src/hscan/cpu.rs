@@ -29,7 +29,7 @@ pub fn point_side(faces: &[HalfSpace], p: [i64; 3]) -> Side {
 /// Brute-force scan: the side of every voxel centre of `bbox` (mirror of
 /// `hull_scan.wgsl`; rayon over z layers).
 pub fn hull_scan(faces: &[HalfSpace], bbox: &VoxelBox) -> Result<Classification> {
-    let n = bbox.len()?;
+    let n = bbox.n_voxels()?;
     let [nx, ny, _] = bbox.dims;
     let mut sides = vec![0u8; n];
     if n > 0 {

@@ -208,7 +208,7 @@ impl HullScanInput {
     /// Side codes of every voxel with `arithmetic`'s brute-force kernel,
     /// slab by slab.
     pub fn scan(&self, gpu: &Gpu, arithmetic: Arithmetic) -> Result<Classification> {
-        let n = self.bbox.len()?;
+        let n = self.bbox.n_voxels()?;
         let [nx, ny, nz] = self.bbox.dims;
         let mut sides = Vec::with_capacity(n);
         if n > 0 {

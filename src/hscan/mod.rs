@@ -93,7 +93,7 @@ pub struct VoxelBox {
 
 impl VoxelBox {
     /// Number of voxels (errors when it overflows `usize`).
-    pub fn len(&self) -> Result<usize> {
+    pub fn n_voxels(&self) -> Result<usize> {
         self.dims
             .iter()
             .try_fold(1usize, |acc, &d| acc.checked_mul(d))
@@ -141,7 +141,7 @@ impl Side {
 pub struct Classification {
     /// The box scanned.
     pub bbox: VoxelBox,
-    /// `bbox.len()` side codes.
+    /// `bbox.n_voxels()` side codes.
     pub sides: Vec<u8>,
 }
 
@@ -185,7 +185,7 @@ pub struct RowSpans {
 impl RowSpans {
     /// Expands the spans into one side code per voxel (rayon over z layers).
     pub fn to_classification(&self) -> Result<Classification> {
-        let n = self.bbox.len()?;
+        let n = self.bbox.n_voxels()?;
         let [nx, ny, _] = self.bbox.dims;
         let mut sides = vec![Side::Outside as u8; n];
         if n > 0 {
@@ -220,7 +220,7 @@ fn fill(row: &mut [u8], lo: i32, hi: i32, side: Side) {
 /// (bounds in the module docs) with [`Error::InvalidInput`] naming the
 /// offending value.
 pub fn check_range(half_spaces: &[HalfSpace], bbox: &VoxelBox) -> Result<()> {
-    bbox.len()?;
+    bbox.n_voxels()?;
     for (f, h) in half_spaces.iter().enumerate() {
         if let Some(c) = h.normal.iter().find(|c| c.abs() > MAX_NORMAL) {
             return Err(Error::InvalidInput(format!(

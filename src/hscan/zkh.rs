@@ -102,7 +102,7 @@ pub fn analyse(
 ) -> Result<ZkhAnalysis> {
     let bbox = classification.bbox;
     check_range(faces, &bbox)?;
-    let n = bbox.len()?;
+    let n = bbox.n_voxels()?;
     if object.len() != n || classification.sides.len() != n {
         return Err(Error::InvalidInput(format!(
             "zkh: {} object flags and {} side codes for a box of {n} voxels",

@@ -272,7 +272,7 @@ pub fn random_half_spaces(rng: &mut Rng, n: usize, bbox: &VoxelBox, k: i64) -> V
     (0..n)
         .map(|_| {
             let mut normal = [rng.range(-k, k), rng.range(-k, k), rng.range(-k, k)];
-            if rng.next() % 4 == 0 {
+            if rng.next().is_multiple_of(4) {
                 normal[(rng.next() % 3) as usize] = 0;
             }
             let p: [i64; 3] = std::array::from_fn(|a| {

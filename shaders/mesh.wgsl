@@ -82,7 +82,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     }
     var base = BASE_GREY;
     if camera.use_scalars != 0u {
-        if in.t >= 0.0 {
+        // Valid coordinates are in [0, 1], "no value" is −1; compare against
+        // −0.5 because interpolating exact zeros can round to −1e-10.
+        if in.t >= -0.5 {
             base = colormap_at(in.t);
         } else {
             base = NO_VALUE_GREY;

@@ -17,6 +17,7 @@
 //! `tests/parity/` proves they agree.
 
 pub mod cli;
+pub mod cut;
 pub mod error;
 pub mod gpu;
 pub mod hscan;
@@ -28,6 +29,8 @@ pub mod phantom;
 pub mod reduce;
 pub mod render;
 pub mod scan;
+pub mod surface;
+pub mod tissue;
 pub mod volume;
 
 pub use error::{Error, Position, Result};

@@ -458,3 +458,38 @@ fn fran_front_view_faces_the_face() {
     let axes = coverage(&render_image(&gpu, &mesh, &o).unwrap(), 0, 0, 128, 128);
     assert!(auto > axes + 0.05, "auto {auto} vs axes {axes}");
 }
+
+/// Regression: a field that is 0 almost everywhere with a few tiny positive
+/// values (a relaxed mesh's displacement far from the move) drew grey
+/// "no value" hairlines where interpolated zeros rounded below 0.
+#[test]
+fn near_zero_scalars_draw_no_hairlines() {
+    let Some(gpu) = common::gpu() else { return };
+    let base = common::icosphere(3);
+    let n = base.n_vertices();
+    let field = |tiny: f32| {
+        let mut m = base.clone();
+        let values = (0..n)
+            .map(|i| {
+                if i == 0 {
+                    1.0
+                } else if i % 3 == 0 {
+                    tiny
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        m.scalars.push(ScalarField {
+            name: "d".into(),
+            values,
+        });
+        m
+    };
+    let mut o = opts(160, &[View::Front, View::Back]);
+    o.scalars = Some("d".into());
+    let a = render_image(&gpu, &field(1e-12), &o).unwrap();
+    let b = render_image(&gpu, &field(0.0), &o).unwrap();
+    let diff = max_channel_diff(&a, &b);
+    assert!(diff <= 1, "near-zero values change the image by {diff}/255");
+}

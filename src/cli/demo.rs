@@ -1,8 +1,10 @@
 //! `chisel demo`: the main job on embedded generated data.
 //!
-//! Today: a head phantom's skin → vertex normals and bounds on the GPU, each
-//! checked against its CPU mirror → the mesh with a GPU-derived scalar field,
-//! a preview PNG and a JSON report in the output folder.
+//! A head phantom (skin over a skull whose mandible is a separate
+//! fragment) → layered spring network (seed 000 ch. 4) → the jaw-advance
+//! plan relaxed on the GPU → the same plan on the CPU mirror for a parity
+//! check → relaxed skin with per-vertex displacement, before/after preview
+//! and a JSON report in the output folder.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -10,9 +12,11 @@ use std::time::Instant;
 use serde_json::json;
 
 use super::Global;
-use crate::mesh::{ScalarField, TriMesh};
-use crate::parity::{Backend, compare_vec};
-use crate::render::{RenderOptions, View};
+use super::relax::{Job, before_mesh, run_job, write_preview};
+use crate::parity::Backend;
+use crate::render::View;
+use crate::tissue::phantom::{HeadPhantom, head_phantom};
+use crate::tissue::{NetworkParams, RelaxOptions, Solver, SpringNetwork};
 
 /// Arguments of `chisel demo`.
 #[derive(Debug, clap::Args)]
@@ -20,40 +24,39 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(short, long, default_value = "chisel-demo")]
     out: PathBuf,
-    /// Phantom resolution: latitude rings (longitude segments = 2×).
-    #[arg(long, default_value_t = 160)]
-    rings: u32,
+    /// Phantom resolution (latitude bands of the skin, ≥ 8).
+    #[arg(long, default_value_t = 24)]
+    resolution: usize,
+    /// Solver for the GPU run.
+    #[arg(long, default_value = "explicit")]
+    solver: Solver,
     /// Print the report as JSON on stdout too.
     #[arg(long)]
     json: bool,
 }
 
-/// Angle (degrees) between each vertex normal and the radial direction from
-/// the centre: 0 on the smooth skull, large on the nose, chin and sockets.
-fn normal_deviation(mesh: &TriMesh, normals: &[[f32; 4]]) -> Vec<f32> {
-    mesh.positions
-        .iter()
-        .zip(normals)
-        .map(|(p, n)| {
-            let radial = p.normalize_or_zero();
-            let n = glam::Vec3::new(n[0], n[1], n[2]);
-            radial.dot(n).clamp(-1.0, 1.0).acos().to_degrees()
-        })
-        .collect()
-}
-
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| crate::Error::io(&args.out, e))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| crate::Error::io(&args.out, e))?;
     let bar = global.progress(5, "demo");
-    let mut stages = serde_json::Map::new();
+    let mut timings = serde_json::Map::new();
     let mut stage = |name: &str, t: Instant| {
-        stages.insert(name.into(), json!(t.elapsed().as_secs_f64()));
+        timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
     };
 
     let t = Instant::now();
-    let mut skin = crate::phantom::head_skin(args.rings, 2 * args.rings)?;
-    stage("phantom", t);
+    let phantom = head_phantom(args.resolution)?;
+    let params = NetworkParams {
+        origin: Some(phantom.origin.to_array()),
+        ..Default::default()
+    };
+    let network = SpringNetwork::build(&phantom.skin, Some(&phantom.skull), &params)?;
+    let job = Job {
+        skin: phantom.skin.clone(),
+        network,
+        plan: HeadPhantom::demo_plan()?,
+        fragments: phantom.fragments(),
+    };
+    stage("build", t);
     bar.inc(1);
 
     let t = Instant::now();
@@ -61,41 +64,42 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     stage("gpu_open", t);
     bar.inc(1);
 
-    let t = Instant::now();
-    let gpu_normals = crate::normals::vertex_normals(&skin, Backend::Gpu(&gpu))?;
-    stage("vertex_normals_gpu", t);
-    let t = Instant::now();
-    let cpu_normals = crate::normals::vertex_normals(&skin, Backend::Cpu)?;
-    stage("vertex_normals_cpu", t);
-    let normals_parity = compare_vec("vertex_normals/phantom", &cpu_normals, &gpu_normals, crate::normals::cpu::TOL);
-    let max_dev = cpu_normals
-        .iter()
-        .zip(&gpu_normals)
-        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
-        .fold(0.0f32, f32::max);
-    bar.inc(1);
-
-    let t = Instant::now();
-    let gpu_bounds = crate::reduce::mesh_bounds(&skin, Backend::Gpu(&gpu))?;
-    stage("bounds_reduce_gpu", t);
-    let cpu_bounds = crate::reduce::mesh_bounds(&skin, Backend::Cpu)?;
-    bar.inc(1);
-
-    let t = Instant::now();
-    skin.scalars.push(ScalarField {
-        name: "normal_deviation_deg".into(),
-        values: normal_deviation(&skin, &gpu_normals),
-    });
-    let mesh_path = args.out.join("phantom_skin.ply");
-    crate::io::write_mesh(&mesh_path, &skin)?;
-    let preview_path = args.out.join("preview.png");
-    let opts = RenderOptions {
-        views: vec![View::Front, View::Right, View::Top, View::Iso],
-        scalars: Some("normal_deviation_deg".into()),
-        title: Some("chisel demo: head phantom, GPU vertex normals".into()),
+    let opts = RelaxOptions {
+        solver: args.solver,
         ..Default::default()
     };
-    crate::render::render_png(&gpu, &skin, &opts, &preview_path)?;
+    let t = Instant::now();
+    let gpu_report = run_job(global, &job, &opts, Backend::Gpu(&gpu))?;
+    stage("relax_gpu", t);
+    bar.inc(1);
+    let t = Instant::now();
+    let cpu_report = run_job(global, &job, &opts, Backend::Cpu)?;
+    stage("relax_cpu_mirror", t);
+    bar.inc(1);
+    let max_gpu_cpu = gpu_report
+        .epidermis
+        .iter()
+        .zip(&cpu_report.epidermis)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0f32, f32::max);
+    let same_status =
+        gpu_report.status == cpu_report.status && gpu_report.iterations == cpu_report.iterations;
+
+    let t = Instant::now();
+    let relaxed = gpu_report.skin_mesh(&job.network);
+    let mesh_path = args.out.join("relaxed_skin.ply");
+    crate::io::write_mesh(&mesh_path, &relaxed)?;
+    let skull_path = args.out.join("skull.ply");
+    crate::io::write_mesh(&skull_path, &phantom.skull)?;
+    let preview_path = args.out.join("before_after.png");
+    write_preview(
+        &gpu,
+        &before_mesh(&job.skin),
+        &relaxed,
+        vec![View::Front, View::Right],
+        "chisel demo: jaw advance 6 mm, tissue relaxed on the GPU (mm)".into(),
+        &preview_path,
+    )?;
     stage("write_outputs", t);
     bar.inc(1);
     bar.finish_and_clear();
@@ -105,28 +109,27 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "adapter": gpu.describe(),
         "features": gpu.features,
         "phantom": {
-            "kind": "head_skin",
-            "rings": args.rings,
-            "vertices": skin.n_vertices(),
-            "triangles": skin.n_triangles(),
+            "resolution": args.resolution,
+            "skin_vertices": phantom.skin.n_vertices(),
+            "skin_triangles": phantom.skin.n_triangles(),
+            "skull_vertices": phantom.skull.n_vertices(),
+            "jaw_vertices": phantom.jaw_vertices.len(),
         },
+        "network": {
+            "nodes": job.network.n_nodes(),
+            "free_nodes": job.network.n_free,
+            "springs": job.network.springs.len(),
+            "springs_per_class": job.network.class_counts(),
+        },
+        "relax_gpu": gpu_report,
         "parity": {
-            "vertex_normals": {
-                "tolerance_abs": crate::normals::cpu::TOL.abs,
-                "max_abs_difference": max_dev,
-                "status": match &normals_parity { Ok(()) => "match".to_string(), Err(m) => m.to_string() },
-            },
-            "bounds_reduce": {
-                "gpu": gpu_bounds,
-                "cpu": cpu_bounds,
-                "status": if gpu_bounds == cpu_bounds { "exact match" } else { "MISMATCH" },
-            },
+            "cpu_status": cpu_report.status,
+            "cpu_iterations": cpu_report.iterations,
+            "same_status_and_iterations": same_status,
+            "max_epidermis_distance": max_gpu_cpu,
         },
-        "outputs": {
-            "mesh": mesh_path,
-            "preview": preview_path,
-        },
-        "timings_s": stages,
+        "outputs": { "mesh": mesh_path, "skull": skull_path, "preview": preview_path },
+        "timings_s": timings,
     });
     let report_path = args.out.join("report.json");
     super::report::write_json(&report_path, &report)?;
@@ -134,15 +137,24 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     }
     global.note(format!(
-        "demo: {} vertices, normals {} (max |Δ| {max_dev:.2e}), bounds {}; wrote {}, {}, {}",
-        skin.n_vertices(),
-        if normals_parity.is_ok() { "match CPU" } else { "DIFFER from CPU" },
-        if gpu_bounds == cpu_bounds { "exact" } else { "DIFFER" },
-        mesh_path.display(),
-        preview_path.display(),
-        report_path.display()
+        "demo: {} nodes, GPU {:?} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
+         CPU mirror {} (max |Δ| {:.2e} mm); wrote {}",
+        job.network.n_nodes(),
+        gpu_report.status,
+        gpu_report.iterations,
+        gpu_report.seconds,
+        gpu_report.max_displacement,
+        if same_status { "agrees" } else { "DIFFERS" },
+        max_gpu_cpu,
+        args.out.display()
     ));
-    normals_parity?;
-    anyhow::ensure!(gpu_bounds == cpu_bounds, "bounds_reduce: GPU {gpu_bounds:?} != CPU {cpu_bounds:?}");
+    anyhow::ensure!(
+        same_status,
+        "GPU and CPU mirror ended differently: {:?}/{} vs {:?}/{}",
+        gpu_report.status,
+        gpu_report.iterations,
+        cpu_report.status,
+        cpu_report.iterations
+    );
     Ok(())
 }

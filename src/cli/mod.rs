@@ -9,6 +9,7 @@
 mod convert;
 mod demo;
 mod info;
+mod relax;
 mod render;
 mod report;
 mod stats;
@@ -57,6 +58,8 @@ enum Command {
     Stats(stats::Args),
     /// Convert between mesh formats (vtk, ply, obj, stl, byu) or volume formats.
     Convert(convert::Args),
+    /// Relax the soft tissue over the bone after a surgery plan (spring network, GPU or CPU).
+    Relax(relax::Args),
     /// Render a mesh to a PNG preview (shaded, views, wireframe, scalar colour map).
     Render(render::Args),
     /// The main job on embedded generated data: phantom → GPU kernels → previews + report.
@@ -107,6 +110,7 @@ pub fn main() -> ExitCode {
         Command::Info(a) => info::run(&cli.global, a),
         Command::Stats(a) => stats::run(&cli.global, a),
         Command::Convert(a) => convert::run(&cli.global, a),
+        Command::Relax(a) => relax::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),
         Command::Demo(a) => demo::run(&cli.global, a),
     };

@@ -68,6 +68,18 @@ registry! {
     ExclusiveScanBlocks => "exclusive_scan_blocks",
     /// Adds scanned block totals back to every element of its block.
     ExclusiveScanAdd => "exclusive_scan_add",
+    /// One damped semi-implicit Euler step of the tissue spring network (eq. 4.4–4.7).
+    SpringStep => "spring_step",
+    /// One stationary Chebyshev step toward the tissue network's equilibrium.
+    SpringChebyshev => "spring_chebyshev",
+    /// Max |v|² and max window change of a relaxation, as u32 keys.
+    TissueReduceMax => "tissue_reduce_max",
+    /// Marching cubes: per-point vertex and triangle counts, summed per block.
+    McClassify => "mc_classify",
+    /// Marching cubes: welded vertices at scanned offsets, per-point first vertex id.
+    McVertices => "mc_vertices",
+    /// Marching cubes: triangles of each cell at scanned offsets.
+    McTriangles => "mc_triangles",
     /// Inside/on/outside of every voxel against every hull face, exact i64.
     HullScan => "hull_scan" needs SHADER_INT64,
     /// Inside/on/outside of every voxel, exact emulated 64-bit (portable).

@@ -7,9 +7,13 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod mc_surface;
 
 mod bounds_reduce;
 mod exclusive_scan;
 mod hull_scan;
 mod range_reduce;
+mod spring_chebyshev;
+mod spring_step;
+mod tissue_reduce_max;
 mod vertex_normals;

@@ -1,0 +1,188 @@
+//! Cutting a ≥ 1M-triangle surface: sequences of plane and sphere knives
+//! through the B+ tree forest against a plain scan of every triangle, in
+//! the same run (locate phase, and the whole cut with caps).
+//!
+//! `CHISEL_BENCH_QUICK=1`: a ~100k-triangle surface and few samples.
+
+use std::time::{Duration, Instant};
+
+use chisel::Backend;
+use chisel::cut::{CutOptions, Knife, cut, cut_full_scan, locate, locate_full_scan};
+use chisel::surface::{IsoSpec, McOptions, marching_cubes};
+use chisel::volume::{Volume, VolumeData};
+use criterion::{Criterion, Throughput};
+use glam::DVec3;
+
+fn quick() -> bool {
+    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
+}
+
+/// A hollow, slightly bumpy ball (bone-like shell) sampled on n³.
+fn shell(n: usize) -> Volume {
+    let c = (n as f32 - 1.0) / 2.0;
+    let (r0, r1) = (0.38 * n as f32, 0.46 * n as f32);
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let (dx, dy, dz) = (x as f32 - c, y as f32 - c, z as f32 - c);
+                let d = (dx * dx + dy * dy + dz * dz).sqrt()
+                    + 1.5 * (dx * 0.2).sin() * (dy * 0.2).cos();
+                data.push((d - r0).min(r1 - d));
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).expect("shell dims")
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    c = if quick() {
+        c.sample_size(10)
+            .warm_up_time(Duration::from_millis(200))
+            .measurement_time(Duration::from_secs(1))
+    } else {
+        c.sample_size(20).measurement_time(Duration::from_secs(5))
+    };
+    let n = if quick() { 110 } else { 340 };
+    let surf = marching_cubes(
+        &shell(n),
+        IsoSpec::Level(0.0),
+        &McOptions { close_border: true },
+        Backend::Cpu,
+    )
+    .expect("marching cubes");
+    let mesh = &surf.mesh;
+    let m = mesh.triangles.len();
+    let ctr = DVec3::splat((n as f64 - 1.0) / 2.0);
+    let r = 0.42 * n as f64;
+    let mut knives: Vec<Knife> = (0..8)
+        .map(|i| Knife::Plane {
+            point: ctr + DVec3::new(0.0, 0.0, (i as f64 - 3.5) * 0.1 * r),
+            normal: DVec3::new(0.1 * i as f64, 0.2, 1.0),
+        })
+        .collect();
+    knives.extend((0..4).map(|i| Knife::Sphere {
+        centre: ctr
+            + DVec3::new(
+                r * (0.3 * i as f64).cos(),
+                r * (0.3 * i as f64).sin(),
+                0.3 * r,
+            ),
+        radius: 0.25 * r,
+    }));
+    eprintln!(
+        "cut: surface of {m} triangles, {} groups, {} knives",
+        surf.groups.len(),
+        knives.len()
+    );
+    // Ratio lines (median of runs), then criterion's own figures.
+    let time = |f: &dyn Fn()| {
+        let mut t: Vec<f64> = (0..5)
+            .map(|_| {
+                let s = Instant::now();
+                f();
+                s.elapsed().as_secs_f64()
+            })
+            .collect();
+        t.sort_by(f64::total_cmp);
+        t[2]
+    };
+    let tree_locate = time(&|| {
+        for k in &knives {
+            let _ = locate(mesh, &surf.forest, k);
+        }
+    });
+    let scan_locate = time(&|| {
+        for k in &knives {
+            let _ = locate_full_scan(mesh, k);
+        }
+    });
+    // The tree walk is single-threaded; the same scan on one thread too.
+    let scan_locate_1t = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map(|pool| {
+            pool.install(|| {
+                time(&|| {
+                    for k in &knives {
+                        let _ = locate_full_scan(mesh, k);
+                    }
+                })
+            })
+        })
+        .unwrap_or(f64::NAN);
+    eprintln!(
+        "cut/locate: one-thread scan {:.2} ms per knife ({:.1}x the tree)",
+        scan_locate_1t * 1e3 / knives.len() as f64,
+        scan_locate_1t / tree_locate
+    );
+    let cap = CutOptions { cap: true };
+    let tree_cut = time(&|| {
+        for k in &knives {
+            let _ = cut(mesh, &surf.forest, k, &cap);
+        }
+    });
+    let scan_cut = time(&|| {
+        for k in &knives {
+            let _ = cut_full_scan(mesh, k, &cap);
+        }
+    });
+    let mut visited = (0, 0, 0, 0);
+    for k in &knives {
+        if let Ok(l) = locate(mesh, &surf.forest, k) {
+            visited.0 += l.stats.nodes_visited;
+            visited.1 += l.stats.nodes_total;
+            visited.2 += l.stats.triangles_tested;
+            visited.3 += l.stats.triangles_total;
+        }
+    }
+    eprintln!(
+        "cut/locate: tree {:.2} ms vs scan {:.2} ms per knife ({:.1}x); nodes {}/{} triangles {}/{}",
+        tree_locate * 1e3 / knives.len() as f64,
+        scan_locate * 1e3 / knives.len() as f64,
+        scan_locate / tree_locate,
+        visited.0,
+        visited.1,
+        visited.2,
+        visited.3
+    );
+    eprintln!(
+        "cut/capped: tree {:.2} ms vs scan {:.2} ms per knife ({:.2}x; both assemble all pieces)",
+        tree_cut * 1e3 / knives.len() as f64,
+        scan_cut * 1e3 / knives.len() as f64,
+        scan_cut / tree_cut
+    );
+    let mut group = c.benchmark_group("cut");
+    group.throughput(Throughput::Elements((m * knives.len()) as u64));
+    group.bench_function("locate_tree", |b| {
+        b.iter(|| {
+            for k in &knives {
+                std::hint::black_box(locate(mesh, &surf.forest, k).ok());
+            }
+        })
+    });
+    group.bench_function("locate_scan", |b| {
+        b.iter(|| {
+            for k in &knives {
+                std::hint::black_box(locate_full_scan(mesh, k).ok());
+            }
+        })
+    });
+    group.bench_function("capped_tree", |b| {
+        b.iter(|| {
+            for k in &knives {
+                std::hint::black_box(cut(mesh, &surf.forest, k, &cap).ok());
+            }
+        })
+    });
+    group.bench_function("capped_scan", |b| {
+        b.iter(|| {
+            for k in &knives {
+                std::hint::black_box(cut_full_scan(mesh, k, &cap).ok());
+            }
+        })
+    });
+    group.finish();
+    c.final_summary();
+}

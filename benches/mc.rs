@@ -1,0 +1,125 @@
+//! Marching cubes: the CT head (500, 1150) and generated head-like phantoms
+//! (256³, 512³), CPU and GPU in the same run, voxels/s.
+//!
+//! `CHISEL_BENCH_QUICK=1`: few samples, phantoms of 64³/128³ (CI smoke run).
+
+use std::time::{Duration, Instant};
+
+use chisel::Backend;
+use chisel::gpu::Gpu;
+use chisel::surface::{IsoSpec, McOptions, marching_cubes};
+use chisel::volume::{Volume, VolumeData};
+use criterion::{Criterion, Throughput};
+
+fn quick() -> bool {
+    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
+}
+
+/// A CT-like head phantom (i16, "Hounsfield-ish" 0..2000): soft tissue
+/// ellipsoid ~1000, a bone shell ~1600 with a jaw, air 0, some texture.
+pub fn head_phantom(n: usize) -> Volume {
+    let c = (n as f32 - 1.0) / 2.0;
+    let s = 2.0 / n as f32;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [(x as f32 - c) * s, (y as f32 - c) * s, (z as f32 - c) * s];
+                let head = (p[0] / 0.8).powi(2) + (p[1] / 0.9).powi(2) + (p[2] / 0.95).powi(2);
+                let skull = (p[0] / 0.7).powi(2) + (p[1] / 0.8).powi(2) + (p[2] / 0.85).powi(2);
+                let jaw = (p[0] / 0.5).powi(2)
+                    + ((p[1] + 0.35) / 0.35).powi(2)
+                    + ((p[2] + 0.6) / 0.15).powi(2);
+                let texture = 40.0
+                    * ((x as f32 * 0.31).sin() + (y as f32 * 0.17).cos() + (z as f32 * 0.23).sin());
+                let mut v = 0.0;
+                if head < 1.0 {
+                    v = 1000.0 + texture;
+                }
+                if (0.82..1.0).contains(&skull) || (jaw < 1.0 && jaw > 0.5) {
+                    v = 1600.0 + texture;
+                }
+                data.push(v as i16);
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::I16(data)).expect("phantom dims")
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    if quick() {
+        c = c
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(200))
+            .measurement_time(Duration::from_secs(1));
+    } else {
+        c = c.sample_size(10).measurement_time(Duration::from_secs(10));
+    }
+    let gpu = Gpu::new().ok();
+    match &gpu {
+        Some(g) => eprintln!("adapter: {}", g.describe()),
+        None => eprintln!("adapter: none (GPU benches skipped)"),
+    }
+    let mut cases: Vec<(String, Volume, f32)> = Vec::new();
+    let head =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/headsq/quarter.nhdr");
+    if let Ok(v) = chisel::io::read_volume(&head) {
+        cases.push(("headsq_500".into(), v.clone(), 500.0));
+        cases.push(("headsq_1150".into(), v, 1150.0));
+    }
+    let sizes: &[usize] = if quick() { &[64, 128] } else { &[256, 512] };
+    for &n in sizes {
+        cases.push((format!("phantom_{n}_bone"), head_phantom(n), 1300.0));
+    }
+    let opts = McOptions { close_border: true };
+    let mut group = c.benchmark_group("mc");
+    for (name, vol, level) in &cases {
+        let voxels = vol.len() as u64;
+        group.throughput(Throughput::Elements(voxels));
+        let iso = IsoSpec::Level(*level);
+        let cpu_s = median(|| {
+            marching_cubes(vol, iso, &opts, Backend::Cpu).map(|s| s.mesh.triangles.len())
+        });
+        let tris = marching_cubes(vol, iso, &opts, Backend::Cpu)
+            .map(|s| s.mesh.triangles.len())
+            .unwrap_or(0);
+        eprintln!(
+            "mc/{name}: {voxels} voxels, {tris} triangles; cpu {:.1} ms = {:.1} M voxels/s",
+            cpu_s * 1e3,
+            voxels as f64 / cpu_s / 1e6
+        );
+        group.bench_function(format!("cpu/{name}"), |b| {
+            b.iter(|| marching_cubes(vol, iso, &opts, Backend::Cpu))
+        });
+        if let Some(g) = &gpu {
+            let gpu_s = median(|| {
+                marching_cubes(vol, iso, &opts, Backend::Gpu(g)).map(|s| s.mesh.triangles.len())
+            });
+            eprintln!(
+                "mc/{name}: gpu_end_to_end {:.1} ms = {:.1} M voxels/s (cpu/gpu {:.2})",
+                gpu_s * 1e3,
+                voxels as f64 / gpu_s / 1e6,
+                cpu_s / gpu_s
+            );
+            group.bench_function(format!("gpu_end_to_end/{name}"), |b| {
+                b.iter(|| marching_cubes(vol, iso, &opts, Backend::Gpu(g)))
+            });
+        }
+    }
+    group.finish();
+    c.final_summary();
+}
+
+/// Median wall time of a few runs, for the ratio line printed next to criterion's figures.
+fn median<T, E>(mut f: impl FnMut() -> Result<T, E>) -> f64 {
+    let runs = if quick() { 3 } else { 5 };
+    let mut t: Vec<f64> = (0..runs)
+        .filter_map(|_| {
+            let s = Instant::now();
+            f().ok().map(|_| s.elapsed().as_secs_f64())
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t.get(t.len() / 2).copied().unwrap_or(f64::NAN)
+}

@@ -1,0 +1,225 @@
+//! Tissue relaxation benchmarks (issue 3 §8).
+//!
+//! Networks: `fran_cut.vtk` and its scan grid refined by 8 and 13
+//! (6.6k, 408k and 1.07M nodes in three layers). For each: iterations per
+//! second of `spring_step` and `spring_chebyshev` on the CPU mirror (rayon,
+//! all cores) and resident on the GPU, in the same run; the bytes one
+//! iteration must move (compulsory traffic) and the effective bandwidth;
+//! then the time to equilibrium after one surgical increment (0.5 mm chin
+//! advance) for each solver and backend.
+//!
+//! `CHISEL_BENCH_QUICK=1`: the 6.6k network only, short measurements.
+//! `CHISEL_BENCH_TTE=0`: skip the time-to-equilibrium runs.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use chisel::Backend;
+use chisel::gpu::Gpu;
+use chisel::tissue::phantom::{FRAN_CHIN_ADVANCE_TOML, FRAN_GRID, refine_grid};
+use chisel::tissue::{
+    Fragments, NetworkParams, Plan, RelaxOptions, Simulation, Solver, SpringNetwork, relax,
+};
+use criterion::{Criterion, SamplingMode, Throughput};
+
+/// CPU seconds (user + system, all threads) this process has used, from
+/// `/proc/self/stat` (clock ticks of 1/100 s); `None` off Linux. The bench
+/// machine is shared, so next to wall-clock rates we report the rate 2
+/// idle cores would give: 2 / (CPU seconds per iteration).
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = stat.rsplit_once(')')?.1;
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+fn quick() -> bool {
+    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
+}
+
+fn networks() -> Vec<(String, SpringNetwork)> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/fran_cut.vtk");
+    let face = match chisel::io::read_mesh(&path) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!(
+                "relax bench: cannot read {}: {e}; nothing to do",
+                path.display()
+            );
+            return Vec::new();
+        }
+    };
+    let factors: &[usize] = if quick() { &[1] } else { &[1, 8, 13] };
+    factors
+        .iter()
+        .map(|&f| {
+            let mesh = refine_grid(&face, FRAN_GRID.0, FRAN_GRID.1, f).expect("fran_cut grid");
+            let t = Instant::now();
+            let net = SpringNetwork::build(&mesh, None, &NetworkParams::default()).expect("network");
+            let label = if net.n_nodes() >= 1_000_000 {
+                format!("{:.2}M", net.n_nodes() as f64 / 1e6)
+            } else {
+                format!("{:.1}k", net.n_nodes() as f64 / 1e3)
+            };
+            let springs: usize = net.class_counts()[..4].iter().sum();
+            eprintln!(
+                "network {label}: {} nodes, {} free, {springs} springs with a free end, {} CSR entries, built in {:.2} s",
+                net.n_nodes(),
+                net.n_free,
+                net.csr.entries.len(),
+                t.elapsed().as_secs_f64()
+            );
+            (label, net)
+        })
+        .collect()
+}
+
+/// One 0.5 mm increment of the chin advance (1/8 of the plan's 4 mm).
+fn one_increment(net: &SpringNetwork) -> chisel::tissue::ResolvedPlan {
+    let mut plan = Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").expect("plan");
+    let s = &mut plan.steps[0];
+    s.translate = s.translate.map(|c| c / s.increments as f32);
+    s.increments = 1;
+    plan.resolve(net, &Fragments::new()).expect("resolve")
+}
+
+fn moved_bone(net: &SpringNetwork) -> Vec<[f32; 4]> {
+    let plan = one_increment(net);
+    let mut bone = net.bone_rest().to_vec();
+    for (&k, t) in plan.steps[0]
+        .bone_vertices
+        .iter()
+        .zip(plan.steps[0].targets(1))
+    {
+        bone[k as usize] = t;
+    }
+    bone
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    let gpu = match Gpu::new() {
+        Ok(g) => {
+            eprintln!("adapter: {}", g.describe());
+            Some(g)
+        }
+        Err(e) => {
+            eprintln!("no GPU ({e}); CPU only");
+            None
+        }
+    };
+    eprintln!("cpu: {} rayon threads", rayon::current_num_threads());
+    let nets = networks();
+    let mut rates: Vec<(String, &'static str, &'static str, f64, f64, u64)> = Vec::new();
+    for (label, net) in &nets {
+        let bone = moved_bone(net);
+        for solver in [Solver::Explicit, Solver::Chebyshev] {
+            let kernel = match solver {
+                Solver::Explicit => "spring_step",
+                Solver::Chebyshev => "spring_chebyshev",
+            };
+            let mut group = c.benchmark_group(kernel);
+            group.sampling_mode(SamplingMode::Flat);
+            group.sample_size(10);
+            group.measurement_time(Duration::from_secs(if quick() { 2 } else { 6 }));
+            group.warm_up_time(Duration::from_millis(500));
+            group.throughput(Throughput::Elements(net.n_free as u64));
+            let opts = RelaxOptions {
+                solver,
+                ..RelaxOptions::default()
+            };
+            let mut backends: Vec<(&'static str, Backend<'_>)> = vec![("cpu", Backend::Cpu)];
+            if let Some(g) = &gpu {
+                backends.push(("gpu_resident", Backend::Gpu(g)));
+            }
+            for (name, backend) in backends {
+                let mut sim = Simulation::new(net, &opts, backend).expect("simulation");
+                sim.set_bone(&bone).expect("bone");
+                let mut total = Duration::ZERO;
+                let mut count = 0u64;
+                let cpu0 = cpu_seconds();
+                group.bench_function(format!("{name}/{label}"), |b| {
+                    b.iter_custom(|iters| {
+                        let t = Instant::now();
+                        sim.step(iters as u32).expect("step");
+                        let e = t.elapsed();
+                        total += e;
+                        count += iters;
+                        e
+                    })
+                });
+                let cpu = match (cpu0, cpu_seconds()) {
+                    (Some(a), Some(b)) if b > a => (b - a) / count.max(1) as f64,
+                    _ => f64::NAN,
+                };
+                rates.push((
+                    label.clone(),
+                    kernel,
+                    name,
+                    count as f64 / total.as_secs_f64().max(1e-12),
+                    2.0 / cpu,
+                    net.bytes_per_iteration(),
+                ));
+            }
+            group.finish();
+        }
+    }
+    eprintln!("\niterations per second (all timed iterations of the run):");
+    eprintln!(
+        "{:>8} {:>17} {:>13} {:>11} {:>14} {:>10} {:>10}",
+        "network", "kernel", "backend", "it/s wall", "it/s 2 cores*", "MB/iter", "GB/s wall"
+    );
+    for (label, kernel, backend, rate, idle, bytes) in &rates {
+        eprintln!(
+            "{label:>8} {kernel:>17} {backend:>13} {rate:>11.1} {idle:>14.1} {:>10.2} {:>10.2}",
+            *bytes as f64 / 1e6,
+            rate * *bytes as f64 / 1e9
+        );
+    }
+    eprintln!("(* 2 / CPU-seconds per iteration: what 2 otherwise idle cores would give)");
+    if std::env::var("CHISEL_BENCH_TTE").is_ok_and(|v| v == "0") {
+        c.final_summary();
+        return;
+    }
+    eprintln!(
+        "\ntime to equilibrium after one 0.5 mm chin increment (default ε = 1e-5 · diagonal):"
+    );
+    eprintln!(
+        "{:>8} {:>10} {:>6} {:>10} {:>10} {:>10} {:>12}",
+        "network", "solver", "backend", "status", "iters", "seconds", "setup s"
+    );
+    for (label, net) in &nets {
+        let plan = one_increment(net);
+        for solver in [Solver::Explicit, Solver::Chebyshev] {
+            // The spectrum estimate is a one-time network property: time it apart.
+            let t = Instant::now();
+            if solver == Solver::Chebyshev {
+                net.spectrum();
+            }
+            let setup = t.elapsed().as_secs_f64();
+            let opts = RelaxOptions {
+                solver,
+                max_iterations: 40_000,
+                ..RelaxOptions::default()
+            };
+            let mut backends: Vec<Backend<'_>> = vec![Backend::Cpu];
+            if let Some(g) = &gpu {
+                backends.push(Backend::Gpu(g));
+            }
+            for backend in backends {
+                let r = relax(net, &plan, &opts, backend).expect("relax");
+                eprintln!(
+                    "{label:>8} {:>10} {:>6} {:>10} {:>10} {:>10.3} {:>12.3}",
+                    solver.name(),
+                    backend.name(),
+                    format!("{:?}", r.status),
+                    r.iterations,
+                    r.seconds,
+                    setup
+                );
+            }
+        }
+    }
+    c.final_summary();
+}

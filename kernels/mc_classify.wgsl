@@ -1,0 +1,86 @@
+// mc_classify: marching-cubes classification — per sample point, how many
+// vertices (crossing +x/+y/+z grid edges) and triangles (table entry of the
+// cell whose origin it is) it produces; one sum per workgroup block.
+//
+// Dispatch: one invocation per point of `n_layers` point layers starting at
+// global layer `z_begin`; each layer is cut into `blocks_per_layer` blocks
+// of WG_SIZE points (a block never spans two layers), one workgroup per
+// block, 2-D grid past the per-dimension limit (shared/dispatch.wgsl).
+// Buffers:
+//   params:        grid dims, slab position, level (see Params)
+//   samples:       f32 samples of global layers z_first.., nx·ny per layer
+//                  (x fastest); must hold the layers z_begin ..= z_begin + n_layers
+//                  (the last one clipped at nz − 1)
+//   table:         257 case offsets, then 3 local edges per triangle
+//                  (surface::tables::CaseTable::flat)
+//   block_counts:  per block (vertices, triangles), out
+// Inside: sample ≥ level. Mirror: surface::cpu (number_points, emit_cells);
+// the host scans block_counts (exclusive) for mc_vertices/mc_triangles.
+
+struct Params {
+    nx: u32,
+    ny: u32,
+    nz: u32,
+    z_first: u32,
+    z_begin: u32,
+    n_layers: u32,
+    blocks_per_layer: u32,
+    level: f32,
+}
+
+const WG_SIZE: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> samples: array<f32>;
+@group(0) @binding(2) var<storage, read> table: array<u32>;
+@group(0) @binding(3) var<storage, read_write> block_counts: array<vec2<u32>>;
+
+var<workgroup> sh_v: array<u32, 256>;
+var<workgroup> sh_t: array<u32, 256>;
+
+fn inside(x: u32, y: u32, z: u32) -> u32 {
+    let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
+    return select(0u, 1u, v >= params.level);
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(local_invocation_id) lid: vec3<u32>,
+        @builtin(workgroup_id) wid: vec3<u32>,
+        @builtin(num_workgroups) n_groups: vec3<u32>) {
+    let w = wid.x + wid.y * n_groups.x;
+    let layer = w / params.blocks_per_layer;
+    let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
+    let n_layer = params.nx * params.ny;
+    var nv = 0u;
+    var nt = 0u;
+    if layer < params.n_layers && q < n_layer {
+        let x = q % params.nx;
+        let y = q / params.nx;
+        let z = params.z_begin + layer;
+        let m = inside(x, y, z);
+        if x + 1u < params.nx && inside(x + 1u, y, z) != m { nv += 1u; }
+        if y + 1u < params.ny && inside(x, y + 1u, z) != m { nv += 1u; }
+        if z + 1u < params.nz && inside(x, y, z + 1u) != m { nv += 1u; }
+        if x + 1u < params.nx && y + 1u < params.ny && z + 1u < params.nz {
+            // Corner c = dx + 2·dy + 4·dz is bit c of the case index.
+            var case_ix = 0u;
+            for (var c = 0u; c < 8u; c++) {
+                case_ix |= inside(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
+            }
+            nt = table[case_ix + 1u] - table[case_ix];
+        }
+    }
+    sh_v[lid.x] = nv;
+    sh_t[lid.x] = nt;
+    workgroupBarrier();
+    for (var stride = WG_SIZE / 2u; stride > 0u; stride >>= 1u) {
+        if lid.x < stride {
+            sh_v[lid.x] += sh_v[lid.x + stride];
+            sh_t[lid.x] += sh_t[lid.x + stride];
+        }
+        workgroupBarrier();
+    }
+    if lid.x == 0u && layer < params.n_layers {
+        block_counts[w] = vec2<u32>(sh_v[0], sh_t[0]);
+    }
+}

@@ -1,0 +1,114 @@
+// mc_triangles: marching-cubes triangles — each cell writes its case's
+// triangles (surface::tables, wound outward) at its scanned offset, so the
+// output is in cell order and, within a cell, in table order.
+//
+// Dispatch: one invocation per point of `n_layers` cell layers from global
+// layer `z_begin`; a point (x, y, z) stands for the cell whose lowest
+// corner it is (none when x = nx − 1 or y = ny − 1). Blocks of WG_SIZE
+// points per layer, numbered as in mc_classify.
+// Buffers:
+//   params:        grid dims, slab position, level, t_start (see Params)
+//   samples:       f32 samples of global layers z_first..
+//   table:         257 case offsets, then 3 local edges per triangle
+//   block_offsets: per block, exclusive scan of mc_classify's triangle counts
+//   vert_base:     first vertex id of each point of global layers
+//                  vb_first.. (mc_vertices output)
+//   triangles:     vec4<u32> out: xyz = vertex ids, w = linear cell index
+//                  x + (nx−1)·(y + (ny−1)·z); element = triangle id − t_start
+// Vertex of local edge e: owner point o (EDGE_OWNER[e] offset), axis e / 4,
+// id = vert_base[o] + number of crossing edges of o with a smaller axis.
+// Mirror: surface::cpu::emit_cells.
+
+struct Params {
+    nx: u32,
+    ny: u32,
+    nz: u32,
+    z_first: u32,
+    z_begin: u32,
+    n_layers: u32,
+    blocks_per_layer: u32,
+    vb_first: u32,
+    t_start: u32,
+    level: f32,
+}
+
+const WG_SIZE: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> samples: array<f32>;
+@group(0) @binding(2) var<storage, read> table: array<u32>;
+@group(0) @binding(3) var<storage, read> block_offsets: array<u32>;
+@group(0) @binding(4) var<storage, read> vert_base: array<u32>;
+@group(0) @binding(5) var<storage, read_write> triangles: array<vec4<u32>>;
+
+var<workgroup> sh_scan: array<u32, 256>;
+
+fn inside(x: u32, y: u32, z: u32) -> u32 {
+    let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
+    return select(0u, 1u, v >= params.level);
+}
+
+// Vertex id of the edge (point o, axis).
+fn vertex(o: vec3<u32>, axis: u32) -> u32 {
+    let m = inside(o.x, o.y, o.z);
+    var rank = 0u;
+    if axis > 0u && o.x + 1u < params.nx && inside(o.x + 1u, o.y, o.z) != m {
+        rank += 1u;
+    }
+    if axis > 1u && o.y + 1u < params.ny && inside(o.x, o.y + 1u, o.z) != m {
+        rank += 1u;
+    }
+    let n_layer = params.nx * params.ny;
+    return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.nx + o.x] + rank;
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(local_invocation_id) lid: vec3<u32>,
+        @builtin(workgroup_id) wid: vec3<u32>,
+        @builtin(num_workgroups) n_groups: vec3<u32>) {
+    var edge_owner = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 5u, 0u, 1u, 2u, 3u);
+    let w = wid.x + wid.y * n_groups.x;
+    let layer = w / params.blocks_per_layer;
+    let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
+    let n_layer = params.nx * params.ny;
+    let x = q % params.nx;
+    let y = q / params.nx;
+    let z = params.z_begin + layer;
+    let in_range = layer < params.n_layers && q < n_layer
+        && x + 1u < params.nx && y + 1u < params.ny;
+    var case_ix = 0u;
+    var nt = 0u;
+    if in_range {
+        for (var c = 0u; c < 8u; c++) {
+            case_ix |= inside(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
+        }
+        nt = table[case_ix + 1u] - table[case_ix];
+    }
+    sh_scan[lid.x] = nt;
+    workgroupBarrier();
+    for (var stride = 1u; stride < WG_SIZE; stride <<= 1u) {
+        var add = 0u;
+        if lid.x >= stride {
+            add = sh_scan[lid.x - stride];
+        }
+        workgroupBarrier();
+        sh_scan[lid.x] += add;
+        workgroupBarrier();
+    }
+    if nt == 0u {
+        return;
+    }
+    let out0 = block_offsets[w] + sh_scan[lid.x] - nt - params.t_start;
+    let cell = x + (params.nx - 1u) * (y + (params.ny - 1u) * z);
+    let first = table[case_ix];
+    for (var k = 0u; k < nt; k++) {
+        var v = vec3<u32>(0u);
+        for (var j = 0u; j < 3u; j++) {
+            let e = table[257u + 3u * (first + k) + j];
+            let c = edge_owner[e];
+            let o = vec3<u32>(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u));
+            v[j] = vertex(o, e / 4u);
+        }
+        triangles[out0 + k] = vec4<u32>(v, cell);
+    }
+}

@@ -1,0 +1,113 @@
+// mc_vertices: marching-cubes vertices — one vertex per crossing grid edge,
+// numbered in point order (axes x < y < z within a point), welded by
+// construction: the vertex of edge (point p, axis a) is
+// vert_base[p] + (number of crossing edges of p with axis < a).
+//
+// Dispatch: one invocation per point of `n_layers` point layers from global
+// layer `z_begin`, blocks of WG_SIZE points per layer as in mc_classify
+// (same block numbering, so block_offsets lines up with its counts).
+// Buffers:
+//   params:        grid dims, slab position, level, v_start (see Params)
+//   samples:       f32 samples of global layers z_first.. (nx·ny per layer)
+//   block_offsets: per block, exclusive scan of mc_classify's vertex counts
+//                  over the whole grid (host scan)
+//   vert_base:     n_layers·nx·ny u32 out, first vertex id of each point
+//   positions:     vec4<f32> out for the first `n_owned` layers:
+//                  xyz = position in grid index space, w = bitcast edge id
+//                  3·point + axis; element = vertex id − v_start
+// Interpolation (same f32 expression as the mirror):
+//   t = (level − a) / (b − a), a at p, b at p + e_axis; u[axis] = f32(p[axis]) + t.
+// Mirror: surface::cpu::number_points.
+
+struct Params {
+    nx: u32,
+    ny: u32,
+    nz: u32,
+    z_first: u32,
+    z_begin: u32,
+    n_layers: u32,
+    n_owned: u32,
+    blocks_per_layer: u32,
+    v_start: u32,
+    level: f32,
+}
+
+const WG_SIZE: u32 = 256u;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> samples: array<f32>;
+@group(0) @binding(2) var<storage, read> block_offsets: array<u32>;
+@group(0) @binding(3) var<storage, read_write> vert_base: array<u32>;
+@group(0) @binding(4) var<storage, read_write> positions: array<vec4<f32>>;
+
+var<workgroup> sh_scan: array<u32, 256>;
+
+fn sample(x: u32, y: u32, z: u32) -> f32 {
+    return samples[x + params.nx * (y + params.ny * (z - params.z_first))];
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(local_invocation_id) lid: vec3<u32>,
+        @builtin(workgroup_id) wid: vec3<u32>,
+        @builtin(num_workgroups) n_groups: vec3<u32>) {
+    let w = wid.x + wid.y * n_groups.x;
+    let layer = w / params.blocks_per_layer;
+    let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
+    let n_layer = params.nx * params.ny;
+    let in_range = layer < params.n_layers && q < n_layer;
+    let x = q % params.nx;
+    let y = q / params.nx;
+    let z = params.z_begin + layer;
+    // Far-end sample of each crossing edge; `crossing` bit a set for axis a.
+    var crossing = 0u;
+    var a = 0.0;
+    var far = vec3<f32>(0.0);
+    if in_range {
+        a = sample(x, y, z);
+        let m = a >= params.level;
+        if x + 1u < params.nx {
+            far.x = sample(x + 1u, y, z);
+            if (far.x >= params.level) != m { crossing |= 1u; }
+        }
+        if y + 1u < params.ny {
+            far.y = sample(x, y + 1u, z);
+            if (far.y >= params.level) != m { crossing |= 2u; }
+        }
+        if z + 1u < params.nz {
+            far.z = sample(x, y, z + 1u);
+            if (far.z >= params.level) != m { crossing |= 4u; }
+        }
+    }
+    let nv = countOneBits(crossing);
+    // Hillis–Steele inclusive scan over the block.
+    sh_scan[lid.x] = nv;
+    workgroupBarrier();
+    for (var stride = 1u; stride < WG_SIZE; stride <<= 1u) {
+        var add = 0u;
+        if lid.x >= stride {
+            add = sh_scan[lid.x - stride];
+        }
+        workgroupBarrier();
+        sh_scan[lid.x] += add;
+        workgroupBarrier();
+    }
+    if !in_range {
+        return;
+    }
+    let base = block_offsets[w] + sh_scan[lid.x] - nv;
+    vert_base[layer * n_layer + q] = base;
+    if layer >= params.n_owned {
+        return;
+    }
+    let point = q + n_layer * z;
+    var k = base - params.v_start;
+    for (var axis = 0u; axis < 3u; axis++) {
+        if (crossing & (1u << axis)) != 0u {
+            let t = (params.level - a) / (far[axis] - a);
+            var u = vec3<f32>(f32(x), f32(y), f32(z));
+            u[axis] += t;
+            positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));
+            k += 1u;
+        }
+    }
+}

@@ -1,0 +1,89 @@
+// spring_step: one damped semi-implicit Euler step of the layered tissue
+// spring network (seed 000 eq. 4.4–4.7) for every free node, by gather over
+// the CSR spring adjacency (no atomics: deterministic).
+//
+// Dispatch: one invocation per free node (epidermis, then subcutis), WG_SIZE
+// per workgroup, 2-D grid past the per-dimension limit (shared/dispatch).
+// Bone nodes are fixed (B_i = 0) and not dispatched; the host keeps their
+// positions equal in both position buffers.
+// Buffers:
+//   params:    n_free; use_forces (0/1); dt = Δt; damping = γ; gain unused;
+//              materials[16] = (c1, c2 − c1, knee strain, 0) per material
+//   offsets:   #free + 1 u32, CSR row starts into entries
+//   entries:   #entries vec2<u32>: x = neighbour id | material << 28,
+//              y = bits of the rest length l_ij (f32); rows sorted by id
+//   forces:    #free vec4<f32>, external force f_i in xyz (read when
+//              use_forces = 1)
+//   pos_in:    #nodes vec4<f32>, xyz = position x_i, w = B_i / m_i
+//   pos_out:   #nodes vec4<f32>, written for the free nodes only (w copied)
+//   vel:       #free vec4<f32>, xyz = velocity v_i, updated in place (each
+//              invocation reads and writes only its own node)
+// Per node i:  r_ij = x_i − x_j,
+//   g_i = Σ_j f(|r_ij| − l_ij) / |r_ij| · r_ij                     (eq. 4.4)
+//   with the biphasic law f(e) = c1 e + (c2 − c1) max(e − knee l, 0),
+//   a_i = (f_i − γ v_i − g_i) · B_i / m_i                           (eq. 4.5)
+//   v_i ← v_i + Δt a_i;  x_i ← x_i + Δt v_i                         (eq. 4.7)
+//   (velocity components below VELOCITY_FLUSH = 1e-30 are set to 0)
+// Mirror: tissue::cpu::spring_step (same operations in the same order).
+
+#import dispatch
+
+struct Params {
+    n_free: u32,
+    use_forces: u32,
+    dt: f32,
+    damping: f32,
+    gain: f32,
+    materials: array<vec4<f32>, 16>,
+}
+
+const WG_SIZE: u32 = 256u;
+const INDEX_MASK: u32 = 0x0fffffffu;
+const VELOCITY_FLUSH: f32 = 1e-30;
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> entries: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read> forces: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> pos_in: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> vel: array<vec4<f32>>;
+
+@compute @workgroup_size(256)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+        @builtin(num_workgroups) n_groups: vec3<u32>) {
+    let ix = linear_index(gid, n_groups, WG_SIZE);
+    if ix >= params.n_free {
+        return;
+    }
+    let p = pos_in[ix];
+    let x = p.xyz;
+    // eq. 4.4, summed in CSR order.
+    var g = vec3<f32>(0.0);
+    let end = offsets[ix + 1u];
+    for (var k = offsets[ix]; k < end; k++) {
+        let e = entries[k];
+        let m = params.materials[e.x >> 28u];
+        let l = bitcast<f32>(e.y);
+        let r = x - pos_in[e.x & INDEX_MASK].xyz;
+        let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
+        if len > 0.0 {
+            let ext = len - l;
+            let f = m.x * ext + m.y * max(ext - m.z * l, 0.0);
+            let s = f / len;
+            g = g + s * r;
+        }
+    }
+    var f_ext = vec3<f32>(0.0);
+    if params.use_forces != 0u {
+        f_ext = forces[ix].xyz;
+    }
+    let v = vel[ix].xyz;
+    let a = (f_ext - params.damping * v - g) * p.w;
+    let v_raw = v + params.dt * a;
+    // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
+    let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
+    let x_new = x + params.dt * v_new;
+    pos_out[ix] = vec4<f32>(x_new, p.w);
+    vel[ix] = vec4<f32>(v_new, 0.0);
+}

@@ -1,0 +1,292 @@
+//! Caps: closing a cut with the knife surface (beyond the seed).
+//!
+//! The cut segments, directed as the negative side's triangles use them
+//! and reversed, chain into loops. Loops are mapped to a plane (the knife
+//! plane; for a sphere a stereographic projection from the pole opposite
+//! the loops), where outer loops run counter-clockwise and holes clockwise;
+//! each outer loop with the holes it contains is triangulated by ear
+//! clipping after bridging the holes in. The same triangles close the
+//! negative pieces (as is) and the positive pieces (reversed), so the cap
+//! adds no volume: the pieces' volumes add up to the original's.
+//!
+//! Caps are flat between loop vertices (for a sphere, chords of it).
+
+use std::collections::HashMap;
+
+use glam::{DVec2, DVec3};
+
+/// Loops of cut vertices from directed segments `a → b` (as the negative
+/// side's triangles use them), each returned reversed (cap orientation).
+/// Vertices that do not close into a loop are counted as open.
+pub fn loops(segments: &[(u32, u32)]) -> (Vec<Vec<u32>>, usize) {
+    let mut succ: HashMap<u32, u32> = HashMap::with_capacity(segments.len());
+    let mut bad = std::collections::HashSet::new();
+    for &(a, b) in segments {
+        // Cap direction: b → a.
+        if succ.insert(b, a).is_some() {
+            bad.insert(b);
+        }
+    }
+    let mut out = Vec::new();
+    let mut open = 0;
+    let mut seen = std::collections::HashSet::new();
+    let mut starts: Vec<u32> = succ.keys().copied().collect();
+    starts.sort_unstable();
+    for s in starts {
+        if seen.contains(&s) {
+            continue;
+        }
+        let mut lp = vec![s];
+        seen.insert(s);
+        let mut v = s;
+        let closed = loop {
+            if bad.contains(&v) {
+                break false;
+            }
+            match succ.get(&v) {
+                None => break false,
+                Some(&w) if w == s => break true,
+                Some(&w) => {
+                    if !seen.insert(w) {
+                        break false;
+                    }
+                    lp.push(w);
+                    v = w;
+                }
+            }
+        };
+        if closed && lp.len() >= 3 {
+            out.push(lp);
+        } else {
+            open += 1;
+        }
+    }
+    (out, open)
+}
+
+/// Maps points to the cap plane.
+#[derive(Debug, Clone, Copy)]
+pub enum Projection {
+    /// Orthonormal `u, v` with `u × v` = the cap's outward normal for the
+    /// negative side.
+    Plane { origin: DVec3, u: DVec3, v: DVec3 },
+    /// Stereographic from the pole `c − r·d`, plane basis `u × v = d`.
+    Sphere {
+        c: DVec3,
+        r: f64,
+        d: DVec3,
+        u: DVec3,
+        v: DVec3,
+    },
+}
+
+/// Two unit vectors completing `n` to a right-handed frame (`u × v = n`).
+pub fn frame(n: DVec3) -> (DVec3, DVec3) {
+    let u = n.any_orthonormal_vector();
+    (u, n.cross(u))
+}
+
+impl Projection {
+    /// The 2-D image of `p`; `None` at the projection pole.
+    pub fn apply(&self, p: DVec3) -> Option<DVec2> {
+        match *self {
+            Projection::Plane { origin, u, v } => {
+                Some(DVec2::new(u.dot(p - origin), v.dot(p - origin)))
+            }
+            Projection::Sphere { c, r, d, u, v } => {
+                let w = (p - c) / r;
+                let den = 1.0 + w.dot(d);
+                (den > 1e-9).then(|| DVec2::new(w.dot(u) / den, w.dot(v) / den))
+            }
+        }
+    }
+}
+
+fn area2(pts: &[DVec2], lp: &[usize]) -> f64 {
+    let n = lp.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (pts[lp[i]], pts[lp[(i + 1) % n]]);
+            a.x * b.y - a.y * b.x
+        })
+        .sum()
+}
+
+fn inside_polygon(pts: &[DVec2], lp: &[usize], q: DVec2) -> bool {
+    let n = lp.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (pts[lp[i]], pts[lp[(i + 1) % n]]);
+        if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// Triangulates loops (indices into `pts`, cap orientation) into
+/// triangles of the same indices, counter-clockwise in the plane. Outer
+/// loops have positive area; every hole goes to the smallest outer loop
+/// containing it. Each loop edge ends up in exactly one triangle.
+pub fn triangulate(pts: &[DVec2], loops: &[Vec<usize>]) -> Vec<[usize; 3]> {
+    let areas: Vec<f64> = loops.iter().map(|l| area2(pts, l)).collect();
+    let outers: Vec<usize> = (0..loops.len()).filter(|&i| areas[i] > 0.0).collect();
+    let mut holes_of: Vec<Vec<usize>> = vec![Vec::new(); loops.len()];
+    let mut orphans = Vec::new();
+    for h in (0..loops.len()).filter(|&i| areas[i] <= 0.0) {
+        let q = pts[loops[h][0]];
+        let owner = outers
+            .iter()
+            .copied()
+            .filter(|&o| inside_polygon(pts, &loops[o], q))
+            .min_by(|&a, &b| areas[a].total_cmp(&areas[b]));
+        match owner {
+            Some(o) => holes_of[o].push(h),
+            None => orphans.push(h),
+        }
+    }
+    let mut tris = Vec::new();
+    for &o in &outers {
+        let mut poly = loops[o].clone();
+        let mut holes: Vec<usize> = holes_of[o].clone();
+        // Rightmost holes first (earcut order).
+        holes.sort_by(|&a, &b| {
+            let mx = |h: usize| loops[h].iter().map(|&i| pts[i].x).fold(f64::MIN, f64::max);
+            mx(b).total_cmp(&mx(a))
+        });
+        for h in holes {
+            poly = bridge(pts, &poly, &loops[h], loops);
+        }
+        ear_clip(pts, poly, &mut tris);
+    }
+    // A clockwise loop with no outer around it (degenerate projection):
+    // still close it, so every edge is used once.
+    for h in orphans {
+        ear_clip_any(pts, loops[h].clone(), &mut tris);
+    }
+    tris
+}
+
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(a, b, c), o(a, b, d), o(c, d, a), o(c, d, b));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// Splices `hole` into `poly` along a visible bridge from the hole's
+/// rightmost vertex to the nearest polygon vertex.
+fn bridge(pts: &[DVec2], poly: &[usize], hole: &[usize], all: &[Vec<usize>]) -> Vec<usize> {
+    let hm = (0..hole.len())
+        .max_by(|&a, &b| pts[hole[a]].x.total_cmp(&pts[hole[b]].x))
+        .unwrap_or(0);
+    let m = pts[hole[hm]];
+    let mut order: Vec<usize> = (0..poly.len()).collect();
+    order.sort_by(|&a, &b| {
+        (pts[poly[a]] - m)
+            .length_squared()
+            .total_cmp(&(pts[poly[b]] - m).length_squared())
+    });
+    let visible = |k: usize| {
+        let p = pts[poly[k]];
+        let crosses = |lp: &[usize]| {
+            (0..lp.len()).any(|i| segments_cross(m, p, pts[lp[i]], pts[lp[(i + 1) % lp.len()]]))
+        };
+        !crosses(poly) && !all.iter().any(|l| crosses(l))
+    };
+    let k = order
+        .iter()
+        .copied()
+        .find(|&k| visible(k))
+        .unwrap_or(order[0]);
+    let mut out = Vec::with_capacity(poly.len() + hole.len() + 2);
+    out.extend_from_slice(&poly[..=k]);
+    out.extend((0..=hole.len()).map(|i| hole[(hm + i) % hole.len()]));
+    out.extend_from_slice(&poly[k..]);
+    out
+}
+
+fn cross(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    (b - a).perp_dot(c - a)
+}
+
+fn in_triangle(a: DVec2, b: DVec2, c: DVec2, p: DVec2) -> bool {
+    cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+}
+
+/// Ear clipping of a counter-clockwise polygon (bridges allowed: repeated
+/// indices) over a linked ring, walking on after each clip (earcut's
+/// scheme, O(n²) typical). When a full turn finds no proper ear
+/// (degenerate input) the most convex vertex is clipped, so it always
+/// terminates with n − 2 triangles.
+fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
+    let n = poly.len();
+    if n < 3 {
+        return;
+    }
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let at = |i: usize| pts[poly[i]];
+    let mut remaining = n;
+    let mut i = 0;
+    let mut since = 0;
+    while remaining > 3 {
+        let (a, c) = (prev[i], next[i]);
+        let ear = cross(at(a), at(i), at(c)) > 0.0 && {
+            let (pa, pb, pc) = (at(a), at(i), at(c));
+            let mut j = next[c];
+            let mut blocked = false;
+            while j != a {
+                let q = at(j);
+                let reflex = cross(at(prev[j]), q, at(next[j])) <= 0.0;
+                if reflex && q != pa && q != pb && q != pc && in_triangle(pa, pb, pc, q) {
+                    blocked = true;
+                    break;
+                }
+                j = next[j];
+            }
+            !blocked
+        };
+        let clip = if ear {
+            Some(i)
+        } else {
+            since += 1;
+            (since >= remaining).then(|| {
+                let mut best = i;
+                let mut best_c = f64::NEG_INFINITY;
+                let mut j = i;
+                for _ in 0..remaining {
+                    let cj = cross(at(prev[j]), at(j), at(next[j]));
+                    if cj > best_c {
+                        best_c = cj;
+                        best = j;
+                    }
+                    j = next[j];
+                }
+                best
+            })
+        };
+        match clip {
+            Some(v) => {
+                let (a, c) = (prev[v], next[v]);
+                out.push([poly[a], poly[v], poly[c]]);
+                next[a] = c;
+                prev[c] = a;
+                remaining -= 1;
+                since = 0;
+                i = c;
+            }
+            None => i = next[i],
+        }
+    }
+    out.push([poly[prev[i]], poly[i], poly[next[i]]]);
+}
+
+/// Ear clipping of a loop of either orientation (keeps the loop's direction).
+fn ear_clip_any(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
+    if area2(pts, &poly) >= 0.0 {
+        ear_clip(pts, poly, out);
+    } else {
+        let flipped: Vec<DVec2> = pts.iter().map(|p| DVec2::new(p.x, -p.y)).collect();
+        ear_clip(&flipped, poly, out);
+    }
+}

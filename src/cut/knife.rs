@@ -1,0 +1,391 @@
+//! Knife geometry: which mesh edges a knife crosses, where, and which boxes
+//! it cannot touch (seed 004 §3.1 node classification).
+//!
+//! Every decision is a pure function of the edge's two endpoint positions,
+//! taken in canonical order (lower vertex id first), evaluated in f64. The
+//! tree query and the full scan call the same functions, so they agree
+//! exactly; box tests are conservative (a margin of 1e-9 of the scene
+//! scale), so a box declared clear never holds a crossed edge.
+
+use glam::{DVec3, Vec3};
+
+use crate::TriMesh;
+use crate::surface::{Aabb, Forest};
+
+/// A scalpel.
+#[derive(Debug, Clone)]
+pub enum Knife {
+    /// Infinite plane through `point`; the negative side is where
+    /// `normal·(p − point) < 0`.
+    Plane { point: DVec3, normal: DVec3 },
+    /// Bounded rectangle: centre, normal, in-plane axis `u` (made orthogonal
+    /// to the normal), half extents along `u` and `v = n × u`. Cuts only
+    /// where the plane crossing lies inside the rectangle.
+    Rect {
+        centre: DVec3,
+        normal: DVec3,
+        u_axis: DVec3,
+        half_extents: [f64; 2],
+    },
+    /// Sphere; the negative side is the inside.
+    Sphere { centre: DVec3, radius: f64 },
+    /// A triangulated knife (open sheet or closed), organised in its own
+    /// B+ tree forest when the cut runs. The negative side of a crossing is
+    /// behind the hit knife triangle (against its right-hand normal).
+    Mesh(TriMesh),
+}
+
+/// Which side of the knife.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    /// Behind the plane, inside the sphere, behind the knife triangles.
+    Negative,
+    /// In front of the plane, outside the sphere.
+    Positive,
+    /// A piece holding triangles of both sides (an open knife that does not
+    /// cut through).
+    Both,
+}
+
+/// A crossing of a mesh edge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Crossing {
+    /// Where the knife meets the edge (f64, rounded to f32 for the mesh).
+    pub point: DVec3,
+    /// Whether the edge's first endpoint (lower vertex id) is on the negative side.
+    pub first_negative: bool,
+}
+
+/// A knife ready for queries (normalised vectors, the mesh knife's forest).
+#[derive(Debug)]
+pub(crate) struct PreparedKnife<'a> {
+    pub kind: Kind<'a>,
+    margin: f64,
+}
+
+#[derive(Debug)]
+pub(crate) enum Kind<'a> {
+    Plane {
+        p: DVec3,
+        n: DVec3,
+    },
+    Rect {
+        p: DVec3,
+        n: DVec3,
+        u: DVec3,
+        v: DVec3,
+        h: [f64; 2],
+    },
+    Sphere {
+        c: DVec3,
+        r: f64,
+    },
+    Mesh {
+        mesh: &'a TriMesh,
+        forest: Forest,
+    },
+}
+
+fn check_finite(what: &str, v: DVec3) -> crate::Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(crate::Error::InvalidInput(format!(
+            "knife {what} {v} is not finite"
+        )))
+    }
+}
+
+fn unit(what: &str, v: DVec3) -> crate::Result<DVec3> {
+    check_finite(what, v)?;
+    v.try_normalize()
+        .ok_or_else(|| crate::Error::InvalidInput(format!("knife {what} has zero length")))
+}
+
+impl Knife {
+    /// Validates and prepares the knife; `scale` is the size of the scene
+    /// (for the conservative box margin).
+    pub(crate) fn prepare(&self, scale: f64) -> crate::Result<PreparedKnife<'_>> {
+        let margin = 1e-9 * scale.max(1e-30);
+        let kind = match self {
+            Knife::Plane { point, normal } => {
+                check_finite("point", *point)?;
+                Kind::Plane {
+                    p: *point,
+                    n: unit("normal", *normal)?,
+                }
+            }
+            Knife::Rect {
+                centre,
+                normal,
+                u_axis,
+                half_extents,
+            } => {
+                check_finite("centre", *centre)?;
+                let n = unit("normal", *normal)?;
+                let u = unit("u axis", *u_axis - n * u_axis.dot(n))?;
+                if half_extents.iter().any(|h| !h.is_finite() || *h <= 0.0) {
+                    return Err(crate::Error::InvalidInput(format!(
+                        "knife rectangle half extents {half_extents:?} must be positive"
+                    )));
+                }
+                Kind::Rect {
+                    p: *centre,
+                    n,
+                    u,
+                    v: n.cross(u),
+                    h: *half_extents,
+                }
+            }
+            Knife::Sphere { centre, radius } => {
+                check_finite("centre", *centre)?;
+                if !radius.is_finite() || *radius <= 0.0 {
+                    return Err(crate::Error::InvalidInput(format!(
+                        "knife sphere radius {radius} must be positive"
+                    )));
+                }
+                Kind::Sphere {
+                    c: *centre,
+                    r: *radius,
+                }
+            }
+            Knife::Mesh(mesh) => {
+                mesh.validate()?;
+                if mesh.triangles.is_empty() {
+                    return Err(crate::Error::InvalidInput(
+                        "knife mesh has no triangles".into(),
+                    ));
+                }
+                let (forest, _, _) = Forest::from_mesh(mesh);
+                Kind::Mesh { mesh, forest }
+            }
+        };
+        Ok(PreparedKnife { kind, margin })
+    }
+}
+
+impl PreparedKnife<'_> {
+    /// Signed side value of a point for the analytic knives (plane and
+    /// rectangle: signed distance; sphere: |p − c|² − r²); `None` for mesh knives.
+    pub fn side_value(&self, p: DVec3) -> Option<f64> {
+        match &self.kind {
+            Kind::Plane { p: o, n } | Kind::Rect { p: o, n, .. } => Some(n.dot(p - *o)),
+            Kind::Sphere { c, r } => Some((p - *c).length_squared() - r * r),
+            Kind::Mesh { .. } => None,
+        }
+    }
+
+    /// Whether the knife surface certainly misses every edge inside `b`.
+    pub fn box_is_clear(&self, b: &Aabb) -> bool {
+        let lo = b.min.as_dvec3();
+        let hi = b.max.as_dvec3();
+        let m = self.margin;
+        match &self.kind {
+            Kind::Plane { p, n } => plane_clear(lo, hi, *p, *n, m),
+            Kind::Rect { p, n, u, v, h } => {
+                if plane_clear(lo, hi, *p, *n, m) {
+                    return true;
+                }
+                let (u0, u1) = project(lo, hi, *p, *u);
+                let (v0, v1) = project(lo, hi, *p, *v);
+                u1 < -h[0] - m || u0 > h[0] + m || v1 < -h[1] - m || v0 > h[1] + m
+            }
+            Kind::Sphere { c, r } => {
+                let near = c.clamp(lo, hi);
+                let far = DVec3::new(
+                    if c.x - lo.x > hi.x - c.x { lo.x } else { hi.x },
+                    if c.y - lo.y > hi.y - c.y { lo.y } else { hi.y },
+                    if c.z - lo.z > hi.z - c.z { lo.z } else { hi.z },
+                );
+                let rr = r * r;
+                let slack = m * (2.0 * r + m);
+                (near - *c).length_squared() > rr + slack
+                    || (far - *c).length_squared() < rr - slack
+            }
+            Kind::Mesh { forest, .. } => {
+                let grown = grow(b, m);
+                !forest_touches(forest, &grown)
+            }
+        }
+    }
+
+    /// The crossing of edge `a → b` (endpoints in canonical order), if the
+    /// knife cuts it.
+    pub fn crossing(&self, a: Vec3, b: Vec3) -> Option<Crossing> {
+        let (a, b) = (a.as_dvec3(), b.as_dvec3());
+        match &self.kind {
+            Kind::Plane { p, n } => plane_crossing(a, b, *p, *n),
+            Kind::Rect { p, n, u, v, h } => plane_crossing(a, b, *p, *n).filter(|c| {
+                let d = c.point - *p;
+                d.dot(*u).abs() <= h[0] && d.dot(*v).abs() <= h[1]
+            }),
+            Kind::Sphere { c, r } => sphere_crossing(a, b, *c, *r),
+            Kind::Mesh { mesh, forest } => mesh_crossing(a, b, mesh, forest, self.margin),
+        }
+    }
+}
+
+fn grow(b: &Aabb, m: f64) -> Aabb {
+    let m = m as f32;
+    Aabb {
+        min: b.min - Vec3::splat(m),
+        max: b.max + Vec3::splat(m),
+    }
+}
+
+fn plane_clear(lo: DVec3, hi: DVec3, p: DVec3, n: DVec3, m: f64) -> bool {
+    let (d0, d1) = project(lo, hi, p, n);
+    d0 > m || d1 < -m
+}
+
+/// Range of `dir·(x − p)` over the box.
+fn project(lo: DVec3, hi: DVec3, p: DVec3, dir: DVec3) -> (f64, f64) {
+    let c = (lo + hi) * 0.5 - p;
+    let e = (hi - lo) * 0.5;
+    let mid = dir.dot(c);
+    let rad = dir.abs().dot(e);
+    (mid - rad, mid + rad)
+}
+
+fn plane_crossing(a: DVec3, b: DVec3, p: DVec3, n: DVec3) -> Option<Crossing> {
+    let fa = n.dot(a - p);
+    let fb = n.dot(b - p);
+    if (fa < 0.0) == (fb < 0.0) {
+        return None;
+    }
+    let t = (fa / (fa - fb)).clamp(0.0, 1.0);
+    Some(Crossing {
+        point: a + (b - a) * t,
+        first_negative: fa < 0.0,
+    })
+}
+
+fn sphere_crossing(a: DVec3, b: DVec3, c: DVec3, r: f64) -> Option<Crossing> {
+    let fa = (a - c).length_squared() - r * r;
+    let fb = (b - c).length_squared() - r * r;
+    if (fa < 0.0) == (fb < 0.0) {
+        return None;
+    }
+    // |a + t·d − c|² = r²: A t² + 2B t + C = 0 with exactly one root in [0, 1].
+    let d = b - a;
+    let qa = d.length_squared();
+    let qb = d.dot(a - c);
+    let disc = (qb * qb - qa * fa).max(0.0);
+    let s = disc.sqrt();
+    // The root where the sign changes: entering (fa > 0) takes the smaller.
+    let t = if fa > 0.0 {
+        // (−B − √D)/A written stably.
+        if qb <= 0.0 {
+            fa / (-qb + s)
+        } else {
+            (-qb - s) / qa
+        }
+    } else if qb >= 0.0 {
+        fa / (-qb - s)
+    } else {
+        (-qb + s) / qa
+    };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    Some(Crossing {
+        point: a + d * t,
+        first_negative: fa < 0.0,
+    })
+}
+
+/// Whether any knife triangle box of `forest` overlaps `b`.
+fn forest_touches(forest: &Forest, b: &Aabb) -> bool {
+    forest.groups.iter().any(|g| {
+        g.bbox.overlaps(b)
+            && forest.layers[g.layers.range()].iter().any(|l| {
+                l.bbox.overlaps(b)
+                    && forest.rows[l.rows.range()].iter().any(|r| {
+                        r.bbox.overlaps(b)
+                            && forest.cells[r.cells.range()]
+                                .iter()
+                                .any(|c| c.bbox.overlaps(b))
+                    })
+            })
+    })
+}
+
+/// Knife triangles whose boxes overlap `b`, via the knife's forest.
+fn knife_candidates(forest: &Forest, b: &Aabb, out: &mut Vec<u32>) {
+    for g in &forest.groups {
+        if !g.bbox.overlaps(b) {
+            continue;
+        }
+        for l in &forest.layers[g.layers.range()] {
+            if !l.bbox.overlaps(b) {
+                continue;
+            }
+            for r in &forest.rows[l.rows.range()] {
+                if !r.bbox.overlaps(b) {
+                    continue;
+                }
+                for c in &forest.cells[r.cells.range()] {
+                    if c.bbox.overlaps(b) {
+                        out.extend_from_slice(&forest.triangles[c.triangles.range()]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Segment a–b against the knife triangles: an odd number of hits is a
+/// crossing, placed at the hit nearest the segment's middle.
+fn mesh_crossing(a: DVec3, b: DVec3, mesh: &TriMesh, forest: &Forest, m: f64) -> Option<Crossing> {
+    let seg = grow(
+        &Aabb {
+            min: a.min(b).as_vec3(),
+            max: a.max(b).as_vec3(),
+        },
+        m,
+    );
+    let mut cand = Vec::new();
+    knife_candidates(forest, &seg, &mut cand);
+    let d = b - a;
+    let mut hits: Vec<(f64, bool)> = Vec::new();
+    for t in cand {
+        let [i, j, k] = mesh.triangles[t as usize];
+        let p = &mesh.positions;
+        let (v0, v1, v2) = (
+            p[i as usize].as_dvec3(),
+            p[j as usize].as_dvec3(),
+            p[k as usize].as_dvec3(),
+        );
+        // Möller–Trumbore with half-open barycentric rules so a hit on a
+        // shared knife edge counts once.
+        let e1 = v1 - v0;
+        let e2 = v2 - v0;
+        let pv = d.cross(e2);
+        let det = e1.dot(pv);
+        if det == 0.0 {
+            continue;
+        }
+        let inv = 1.0 / det;
+        let tv = a - v0;
+        let u = tv.dot(pv) * inv;
+        let qv = tv.cross(e1);
+        let v = d.dot(qv) * inv;
+        let s = e2.dot(qv) * inv;
+        if u >= 0.0 && v >= 0.0 && u + v < 1.0 && (0.0..1.0).contains(&s) {
+            let normal = e1.cross(e2);
+            hits.push((s, normal.dot(d) > 0.0));
+        }
+    }
+    if hits.len().is_multiple_of(2) {
+        return None;
+    }
+    hits.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let (s, a_behind) = hits[hits.len() / 2];
+    Some(Crossing {
+        point: a + d * s,
+        first_negative: a_behind,
+    })
+}

@@ -1,0 +1,685 @@
+//! Cutting surfaces with scalpels (SPEC §5.3, seed 004 §3).
+//!
+//! ```text
+//!  mesh + Forest ──locate (tree: expand only nodes the knife may touch)──┐
+//!  mesh ───────────locate_full_scan (every triangle)─────────────────────┤
+//!                                                                        ▼
+//!        Located: crossed triangles, cut points (identical either way)
+//!                                                                        ▼
+//!        assemble: exact split along the knife, regroup into connected
+//!                  pieces, optional caps ──▶ CutResult { pieces, stats }
+//! ```
+//!
+//! Node classes (seed §3.1), from the root of each group down: a node whose
+//! box the knife cannot touch is *clear* (class 1: one side, no expansion);
+//! a node the knife may touch is expanded; after its leaves are tested it
+//! is *separated* (class 2: straddled without a triangle hit) or
+//! *intersected* (class 3). The seed's interval tests on cell numbers
+//! become box tests in world space, which also serve knives that are not
+//! aligned with the grid.
+//!
+//! Splitting is exact along the knife: one cut vertex per crossed mesh edge
+//! (computed once per edge, from its lower-id end, so neighbours share it),
+//! on the plane, on the sphere, or on the knife triangle the edge pierces.
+//! A triangle with two crossed edges splits into three along the cut; one
+//! with one or three crossed edges (an open knife ending inside it) splits
+//! without separating, so the surface stays watertight. Pieces are the
+//! connected components after the cut: triangles join across original
+//! vertices and across cut vertices not separated by the cut.
+
+mod cap;
+mod knife;
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+
+pub use knife::{Crossing, Knife, Side};
+
+use crate::surface::{Forest, UnionFind};
+use crate::{Error, Result, TriMesh};
+use knife::{Kind, PreparedKnife};
+
+/// Options of [`cut`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CutOptions {
+    /// Close every piece with the knife surface (plane, rectangle, sphere),
+    /// so closed input gives closed pieces whose volumes add up.
+    pub cap: bool,
+}
+
+/// Seed §3.1 node classes counted over the visited nodes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct NodeClasses {
+    /// Knife cannot touch the box: one side, not expanded.
+    pub clear: usize,
+    /// Expanded, no triangle crossed.
+    pub separated: usize,
+    /// Expanded, holds crossed triangles.
+    pub intersected: usize,
+}
+
+/// What a cut did.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct CutStats {
+    /// Tree nodes whose box was classified (0 for a full scan).
+    pub nodes_visited: usize,
+    /// Tree nodes in the forest.
+    pub nodes_total: usize,
+    /// Classes of the visited nodes.
+    pub classes: NodeClasses,
+    /// Triangles whose edges were tested against the knife.
+    pub triangles_tested: usize,
+    /// Triangles of the input.
+    pub triangles_total: usize,
+    /// Triangles crossed by the knife (split).
+    pub triangles_split: usize,
+    /// Of those, split without separating (an open knife ends inside them).
+    pub triangles_partial: usize,
+    /// Cut vertices created (one per crossed edge).
+    pub cut_vertices: usize,
+    /// Closed cut loops capped.
+    pub loops_capped: usize,
+    /// Cut curves left open (not capped).
+    pub curves_open: usize,
+    /// Wall time of locating crossed triangles and cut points, seconds.
+    pub locate_seconds: f64,
+    /// Wall time of splitting, regrouping and capping, seconds.
+    pub assemble_seconds: f64,
+}
+
+/// Result of a cut.
+#[derive(Debug, Clone)]
+pub struct CutResult {
+    /// The pieces (connected components after the cut), each its own
+    /// indexed mesh; numbered by their first triangle in input order.
+    pub pieces: Vec<TriMesh>,
+    /// Side of each piece.
+    pub sides: Vec<Side>,
+    /// Counts and timings.
+    pub stats: CutStats,
+}
+
+/// Crossed triangles and cut points of one knife on one mesh.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Located {
+    /// Crossed triangles, ascending ids.
+    pub triangles: Vec<u32>,
+    /// Per crossed triangle, the cut vertex of each edge `(v_k, v_k+1)`
+    /// (index into `points`) or `u32::MAX`.
+    pub edge_cuts: Vec<[u32; 3]>,
+    /// Cut vertex positions (f32, as stored in the pieces).
+    pub points: Vec<Vec3>,
+    /// Per cut vertex, whether its edge's lower-id end is on the negative side.
+    pub lower_negative: Vec<bool>,
+    /// Per cut vertex, its edge `(lower id, higher id)`.
+    pub edges: Vec<(u32, u32)>,
+    /// Query counts.
+    pub stats: CutStats,
+}
+
+/// Cuts a surface organised in `forest` (from marching cubes or
+/// [`Forest::from_mesh`]) with `knife`, through the tree.
+pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
+    let t0 = Instant::now();
+    let prepared = knife.prepare(forest_scale(forest))?;
+    let mut located = locate_prepared(mesh, forest, &prepared);
+    located.stats.locate_seconds = t0.elapsed().as_secs_f64();
+    assemble(mesh, located, &prepared, opts)
+}
+
+/// Cuts any mesh: builds its forest first (virtual grid, see [`Forest::from_mesh`]).
+pub fn cut_mesh(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
+    mesh.validate()?;
+    let (forest, _, _) = Forest::from_mesh(mesh);
+    cut(mesh, &forest, knife, opts)
+}
+
+/// The same cut by a plain scan of every triangle (the comparison the
+/// tree is measured against); gives identical pieces.
+pub fn cut_full_scan(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
+    let t0 = Instant::now();
+    let prepared = knife.prepare(scene_scale(mesh))?;
+    let mut located = locate_scan_prepared(mesh, &prepared);
+    located.stats.locate_seconds = t0.elapsed().as_secs_f64();
+    assemble(mesh, located, &prepared, opts)
+}
+
+/// Several knives in sequence: each cuts every piece of the previous one.
+pub fn cut_sequence(mesh: &TriMesh, knives: &[Knife], opts: &CutOptions) -> Result<CutResult> {
+    let mut pieces = vec![mesh.clone()];
+    let mut sides = vec![Side::Both];
+    let mut stats = CutStats::default();
+    for k in knives {
+        let mut next = Vec::new();
+        let mut next_sides = Vec::new();
+        for p in &pieces {
+            let r = cut_mesh(p, k, opts)?;
+            add_stats(&mut stats, &r.stats);
+            next.extend(r.pieces);
+            next_sides.extend(r.sides);
+        }
+        pieces = next;
+        sides = next_sides;
+    }
+    Ok(CutResult {
+        pieces,
+        sides,
+        stats,
+    })
+}
+
+fn add_stats(a: &mut CutStats, b: &CutStats) {
+    a.nodes_visited += b.nodes_visited;
+    a.nodes_total += b.nodes_total;
+    a.classes.clear += b.classes.clear;
+    a.classes.separated += b.classes.separated;
+    a.classes.intersected += b.classes.intersected;
+    a.triangles_tested += b.triangles_tested;
+    a.triangles_total += b.triangles_total;
+    a.triangles_split += b.triangles_split;
+    a.triangles_partial += b.triangles_partial;
+    a.cut_vertices += b.cut_vertices;
+    a.loops_capped += b.loops_capped;
+    a.curves_open += b.curves_open;
+    a.locate_seconds += b.locate_seconds;
+    a.assemble_seconds += b.assemble_seconds;
+}
+
+/// Scene size from the group boxes (no pass over the vertices).
+fn forest_scale(forest: &Forest) -> f64 {
+    forest
+        .groups
+        .iter()
+        .map(|g| {
+            f64::from(
+                g.bbox
+                    .min
+                    .abs()
+                    .max(g.bbox.max.abs())
+                    .max_element()
+                    .max((g.bbox.max - g.bbox.min).max_element()),
+            )
+        })
+        .fold(1e-30, f64::max)
+}
+
+fn scene_scale(mesh: &TriMesh) -> f64 {
+    mesh.bounds().map_or(1.0, |(lo, hi)| {
+        f64::from(
+            lo.abs()
+                .max(hi.abs())
+                .max_element()
+                .max((hi - lo).max_element()),
+        )
+    })
+}
+
+/// Locates the cut through the tree (public for benchmarks and tests).
+pub fn locate(mesh: &TriMesh, forest: &Forest, knife: &Knife) -> Result<Located> {
+    let prepared = knife.prepare(forest_scale(forest))?;
+    Ok(locate_prepared(mesh, forest, &prepared))
+}
+
+/// Locates the cut by scanning every triangle (public for benchmarks and tests).
+pub fn locate_full_scan(mesh: &TriMesh, knife: &Knife) -> Result<Located> {
+    let prepared = knife.prepare(scene_scale(mesh))?;
+    Ok(locate_scan_prepared(mesh, &prepared))
+}
+
+fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Located {
+    let mut stats = CutStats {
+        nodes_total: forest.n_nodes(),
+        triangles_total: mesh.triangles.len(),
+        ..CutStats::default()
+    };
+    let mut tested: Vec<u32> = Vec::new();
+    // Per expanded node: where its leaves' tested triangles start, to class it later.
+    let mut expanded: Vec<(usize, usize)> = Vec::new();
+    let visit = |b: &crate::surface::Aabb, stats: &mut CutStats| {
+        stats.nodes_visited += 1;
+        let clear = k.box_is_clear(b);
+        if clear {
+            stats.classes.clear += 1;
+        }
+        !clear
+    };
+    for g in &forest.groups {
+        if !visit(&g.bbox, &mut stats) {
+            continue;
+        }
+        let g_start = tested.len();
+        for l in &forest.layers[g.layers.range()] {
+            if !visit(&l.bbox, &mut stats) {
+                continue;
+            }
+            let l_start = tested.len();
+            for r in &forest.rows[l.rows.range()] {
+                if !visit(&r.bbox, &mut stats) {
+                    continue;
+                }
+                let r_start = tested.len();
+                for c in &forest.cells[r.cells.range()] {
+                    if !visit(&c.bbox, &mut stats) {
+                        continue;
+                    }
+                    let c_start = tested.len();
+                    tested.extend_from_slice(&forest.triangles[c.triangles.range()]);
+                    expanded.push((c_start, tested.len()));
+                }
+                expanded.push((r_start, tested.len()));
+            }
+            expanded.push((l_start, tested.len()));
+        }
+        expanded.push((g_start, tested.len()));
+    }
+    stats.triangles_tested = tested.len();
+    let crossed_flags = crossed_flags(mesh, &tested, k);
+    // Class every expanded node by whether any of its tested triangles crossed.
+    let mut prefix = vec![0usize; tested.len() + 1];
+    for (i, &f) in crossed_flags.iter().enumerate() {
+        prefix[i + 1] = prefix[i] + usize::from(f);
+    }
+    for (s, e) in expanded {
+        if prefix[e] > prefix[s] {
+            stats.classes.intersected += 1;
+        } else {
+            stats.classes.separated += 1;
+        }
+    }
+    let mut crossed: Vec<u32> = tested
+        .iter()
+        .zip(&crossed_flags)
+        .filter(|(_, f)| **f)
+        .map(|(t, _)| *t)
+        .collect();
+    crossed.sort_unstable();
+    finish_locate(mesh, crossed, k, stats)
+}
+
+/// Whether each triangle has a crossed edge.
+fn crossed_flags(mesh: &TriMesh, tris: &[u32], k: &PreparedKnife<'_>) -> Vec<bool> {
+    let p = &mesh.positions;
+    let edge = |a: u32, b: u32| {
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        k.crossing(p[lo as usize], p[hi as usize]).is_some()
+    };
+    let analytic = !matches!(k.kind, Kind::Mesh { .. });
+    let test = |&t: &u32| {
+        let [a, b, c] = mesh.triangles[t as usize];
+        // Analytic knives cross an edge only where the side changes: three
+        // side values decide most triangles without any edge work.
+        if analytic {
+            let neg = |v: u32| {
+                k.side_value(p[v as usize].as_dvec3())
+                    .is_some_and(|f| f < 0.0)
+            };
+            let (na, nb, nc) = (neg(a), neg(b), neg(c));
+            if na == nb && nb == nc {
+                return false;
+            }
+        }
+        edge(a, b) || edge(b, c) || edge(c, a)
+    };
+    // Small candidate sets (the tree's usual case) are not worth a fork.
+    if tris.len() < 1 << 14 {
+        tris.iter().map(test).collect()
+    } else {
+        tris.par_iter().map(test).collect()
+    }
+}
+
+fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Located {
+    let stats = CutStats {
+        triangles_total: mesh.triangles.len(),
+        triangles_tested: mesh.triangles.len(),
+        ..CutStats::default()
+    };
+    let p = &mesh.positions;
+    let crossed: Vec<u32> = match &k.kind {
+        // Analytic knives: one side value per vertex, then only triangles
+        // with mixed signs can hold a crossed edge.
+        Kind::Plane { .. } | Kind::Rect { .. } | Kind::Sphere { .. } => {
+            let neg: Vec<bool> = p
+                .par_iter()
+                .map(|q| k.side_value(q.as_dvec3()).is_some_and(|f| f < 0.0))
+                .collect();
+            let mixed: Vec<u32> = (0..mesh.triangles.len() as u32)
+                .into_par_iter()
+                .filter(|&t| {
+                    let [a, b, c] = mesh.triangles[t as usize];
+                    let (na, nb, nc) = (neg[a as usize], neg[b as usize], neg[c as usize]);
+                    na != nb || nb != nc
+                })
+                .collect();
+            let flags = crossed_flags(mesh, &mixed, k);
+            mixed
+                .into_iter()
+                .zip(flags)
+                .filter(|(_, f)| *f)
+                .map(|(t, _)| t)
+                .collect()
+        }
+        Kind::Mesh { .. } => {
+            let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+            let flags = crossed_flags(mesh, &all, k);
+            all.into_iter()
+                .zip(flags)
+                .filter(|(_, f)| *f)
+                .map(|(t, _)| t)
+                .collect()
+        }
+    };
+    finish_locate(mesh, crossed, k, stats)
+}
+
+/// Cut vertices of the crossed triangles, numbered by first use in
+/// ascending triangle order (so tree and scan number them identically).
+fn finish_locate(
+    mesh: &TriMesh,
+    crossed: Vec<u32>,
+    k: &PreparedKnife<'_>,
+    mut stats: CutStats,
+) -> Located {
+    let p = &mesh.positions;
+    let mut ids: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut out = Located::default();
+    for &t in &crossed {
+        let tri = mesh.triangles[t as usize];
+        let mut cuts = [u32::MAX; 3];
+        for e in 0..3 {
+            let (a, b) = (tri[e], tri[(e + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            if let Some(&id) = ids.get(&key) {
+                cuts[e] = id;
+                continue;
+            }
+            if let Some(c) = k.crossing(p[key.0 as usize], p[key.1 as usize]) {
+                let id = out.points.len() as u32;
+                ids.insert(key, id);
+                out.points.push(c.point.as_vec3());
+                out.lower_negative.push(c.first_negative);
+                out.edges.push(key);
+                cuts[e] = id;
+            }
+        }
+        out.edge_cuts.push(cuts);
+    }
+    out.triangles = crossed;
+    stats.triangles_split = out.triangles.len();
+    stats.cut_vertices = out.points.len();
+    out.stats = stats;
+    out
+}
+
+/// A sub-triangle of the split, before regrouping.
+#[derive(Debug, Clone, Copy)]
+struct Sub {
+    /// Vertex ids: `< n_v` original, else `n_v + cut id`.
+    v: [u32; 3],
+    /// Side for sub-triangles of a separating split; `None` when glued.
+    side: Option<bool>,
+}
+
+/// Splits, regroups and caps (shared by the tree and the scan).
+fn assemble(
+    mesh: &TriMesh,
+    located: Located,
+    k: &PreparedKnife<'_>,
+    opts: &CutOptions,
+) -> Result<CutResult> {
+    let t0 = Instant::now();
+    if opts.cap && matches!(k.kind, Kind::Mesh { .. }) {
+        return Err(Error::InvalidInput(
+            "caps are made for plane, rectangle and sphere knives; a triangulated knife cuts without capping".into(),
+        ));
+    }
+    let n_v = mesh.positions.len() as u32;
+    let n_c = located.points.len() as u32;
+    let mut stats = located.stats.clone();
+    // Sub-triangles of each crossed triangle.
+    let mut subs: Vec<Vec<Sub>> = Vec::with_capacity(located.triangles.len());
+    let mut glued = vec![false; n_c as usize];
+    let mut segments: Vec<(u32, u32)> = Vec::new();
+    for (&t, cuts) in located.triangles.iter().zip(&located.edge_cuts) {
+        let tri = mesh.triangles[t as usize];
+        let n_cut = cuts.iter().filter(|&&c| c != u32::MAX).count();
+        let cv = |e: usize| n_v + cuts[e];
+        let mut s = Vec::with_capacity(4);
+        match n_cut {
+            2 => {
+                // Rotate so edges 0 (L→B) and 2 (C→L) are the crossed ones.
+                let r = (0..3)
+                    .find(|&r| cuts[r] != u32::MAX && cuts[(r + 2) % 3] != u32::MAX)
+                    .unwrap_or(0);
+                let (l, b, c) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
+                let (pp, qq) = (cv(r), cv((r + 2) % 3));
+                // Side of L from the first crossed edge's verdict.
+                let ce = cuts[r] as usize;
+                let l_is_lower = l < b;
+                let l_neg = located.lower_negative[ce] == l_is_lower;
+                s.push(Sub {
+                    v: [l, pp, qq],
+                    side: Some(l_neg),
+                });
+                s.push(Sub {
+                    v: [pp, b, c],
+                    side: Some(!l_neg),
+                });
+                s.push(Sub {
+                    v: [pp, c, qq],
+                    side: Some(!l_neg),
+                });
+                segments.push(if l_neg { (pp, qq) } else { (qq, pp) });
+            }
+            1 => {
+                stats.triangles_partial += 1;
+                let r = (0..3).find(|&r| cuts[r] != u32::MAX).unwrap_or(0);
+                let (x, y, z) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
+                glued[cuts[r] as usize] = true;
+                s.push(Sub {
+                    v: [x, cv(r), z],
+                    side: None,
+                });
+                s.push(Sub {
+                    v: [cv(r), y, z],
+                    side: None,
+                });
+            }
+            _ => {
+                stats.triangles_partial += 1;
+                let (pp, qq, rr) = (cv(0), cv(1), cv(2));
+                for c in cuts {
+                    glued[*c as usize] = true;
+                }
+                s.extend(
+                    [
+                        [tri[0], pp, rr],
+                        [pp, tri[1], qq],
+                        [rr, qq, tri[2]],
+                        [pp, qq, rr],
+                    ]
+                    .map(|v| Sub { v, side: None }),
+                );
+            }
+        }
+        subs.push(s);
+    }
+    // Vertex nodes: originals, then two copies per cut vertex (negative,
+    // positive); a glued cut vertex uses its negative copy on both sides.
+    let node = |v: u32, side: Option<bool>| -> u32 {
+        if v < n_v {
+            return v;
+        }
+        let c = v - n_v;
+        let positive = !glued[c as usize] && side == Some(false);
+        n_v + 2 * c + u32::from(positive)
+    };
+    // Caps.
+    let mut cap_tris: Vec<[u32; 3]> = Vec::new();
+    if opts.cap {
+        let (loops, open) = cap::loops(&segments);
+        stats.curves_open = open;
+        stats.loops_capped = loops.len();
+        if !loops.is_empty() {
+            cap_tris = make_caps(&loops, &located.points, n_v, k)?;
+        }
+    }
+    // Union-find over vertex nodes; every sub-triangle joins its vertices.
+    let n_nodes = (n_v + 2 * n_c) as usize;
+    let mut uf = UnionFind::with_len(n_nodes);
+    let mut crossed_iter = located.triangles.iter().zip(&subs).peekable();
+    // Output order: input triangles in id order (split ones replaced by
+    // their sub-triangles), then the negative caps, then the positive caps.
+    let mut out_tris: Vec<([u32; 3], Option<bool>)> =
+        Vec::with_capacity(mesh.triangles.len() + 3 * subs.len());
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        match crossed_iter.peek() {
+            Some((ct, s)) if **ct as usize == t => {
+                for sub in s.iter() {
+                    out_tris.push((sub.v, sub.side));
+                }
+                crossed_iter.next();
+            }
+            _ => out_tris.push((*tri, None)),
+        }
+    }
+    for &c in &cap_tris {
+        out_tris.push((c, Some(true)));
+    }
+    for &c in &cap_tris {
+        out_tris.push(([c[0], c[2], c[1]], Some(false)));
+    }
+    let keyed: Vec<[u32; 3]> = out_tris
+        .iter()
+        .map(|(v, s)| v.map(|x| node(x, *s)))
+        .collect();
+    // Cut vertices separate because each side uses its own copy; glued cut
+    // vertices have one copy and join both sides.
+    for k3 in &keyed {
+        uf.union(k3[0], k3[1]);
+        uf.union(k3[0], k3[2]);
+    }
+    // Pieces by first triangle; per piece its own vertex numbering.
+    // Every vertex node belongs to exactly one piece (all triangles using it
+    // were united), so one global node → local index table serves all pieces.
+    let mut piece_of_root = vec![u32::MAX; n_nodes];
+    let mut pieces: Vec<TriMesh> = Vec::new();
+    let mut piece_side: Vec<(bool, bool)> = Vec::new();
+    let mut local = vec![u32::MAX; n_nodes];
+    let position = |key: u32| -> Vec3 {
+        if key < n_v {
+            mesh.positions[key as usize]
+        } else {
+            located.points[((key - n_v) / 2) as usize]
+        }
+    };
+    let side_of = |tri: &[u32; 3], s: Option<bool>| -> Option<bool> {
+        s.or_else(|| match &k.kind {
+            Kind::Mesh { .. } => None,
+            _ => tri
+                .iter()
+                .find(|&&v| v < n_v)
+                .and_then(|&v| k.side_value(mesh.positions[v as usize].as_dvec3()))
+                .map(|f| f < 0.0),
+        })
+    };
+    for (i, k3) in keyed.iter().enumerate() {
+        let root = uf.find(k3[0]) as usize;
+        if piece_of_root[root] == u32::MAX {
+            piece_of_root[root] = pieces.len() as u32;
+            pieces.push(TriMesh::default());
+            piece_side.push((false, false));
+        }
+        let pi = piece_of_root[root] as usize;
+        // Glued sub-triangles (an open knife ends there) touch both sides;
+        // unsplit triangles of a mesh knife say nothing about their side.
+        let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
+        match side_of(&out_tris[i].0, out_tris[i].1) {
+            _ if glued_sub => piece_side[pi] = (true, true),
+            Some(true) => piece_side[pi].0 = true,
+            Some(false) => piece_side[pi].1 = true,
+            None => {}
+        }
+        let piece = &mut pieces[pi];
+        let tri = k3.map(|key| {
+            let slot = &mut local[key as usize];
+            if *slot == u32::MAX {
+                *slot = piece.positions.len() as u32;
+                piece.positions.push(position(key));
+            }
+            *slot
+        });
+        piece.triangles.push(tri);
+    }
+    let sides = piece_side
+        .iter()
+        .map(|&(n, p)| match (n, p) {
+            (true, false) => Side::Negative,
+            (false, true) => Side::Positive,
+            _ => Side::Both,
+        })
+        .collect();
+    stats.assemble_seconds = t0.elapsed().as_secs_f64();
+    Ok(CutResult {
+        pieces,
+        sides,
+        stats,
+    })
+}
+
+/// Cap triangles (vertex ids `n_v + cut id`, oriented for the negative side).
+fn make_caps(
+    loops: &[Vec<u32>],
+    points: &[Vec3],
+    n_v: u32,
+    k: &PreparedKnife<'_>,
+) -> Result<Vec<[u32; 3]>> {
+    let pos = |v: u32| points[(v - n_v) as usize].as_dvec3();
+    let projection = match &k.kind {
+        Kind::Plane { p, n } | Kind::Rect { p, n, .. } => {
+            let (u, v) = cap::frame(*n);
+            cap::Projection::Plane { origin: *p, u, v }
+        }
+        Kind::Sphere { c, r } => {
+            let mean: DVec3 = loops
+                .iter()
+                .flatten()
+                .map(|&v| (pos(v) - *c).normalize_or_zero())
+                .sum();
+            let d = mean.try_normalize().unwrap_or(DVec3::Z);
+            let (u, v) = cap::frame(d);
+            cap::Projection::Sphere {
+                c: *c,
+                r: *r,
+                d,
+                u,
+                v,
+            }
+        }
+        Kind::Mesh { .. } => return Ok(Vec::new()),
+    };
+    let mut pts = Vec::new();
+    let mut index_loops = Vec::with_capacity(loops.len());
+    let mut ids = Vec::new();
+    for lp in loops {
+        let mut il = Vec::with_capacity(lp.len());
+        for &v in lp {
+            let q = projection.apply(pos(v)).ok_or_else(|| {
+                Error::InvalidInput(
+                    "cap: the cut loops surround the whole sphere; cannot project them".into(),
+                )
+            })?;
+            il.push(pts.len());
+            pts.push(q);
+            ids.push(v);
+        }
+        index_loops.push(il);
+    }
+    Ok(cap::triangulate(&pts, &index_loops)
+        .into_iter()
+        .map(|t| t.map(|i| ids[i]))
+        .collect())
+}

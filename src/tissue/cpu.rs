@@ -1,0 +1,212 @@
+//! CPU mirrors of the tissue kernels: `kernels/spring_step.wgsl`,
+//! `kernels/spring_chebyshev.wgsl` and `kernels/tissue_reduce_max.wgsl`.
+//!
+//! Each mirror performs, per node, the same f32 operations in the same order
+//! as its kernel (CSR order of the springs, the same parenthesisation), and
+//! runs the nodes in parallel with rayon (each node writes only its own
+//! outputs, so the result does not depend on scheduling).
+
+use rayon::prelude::*;
+
+use super::network::SpringCsr;
+use crate::parity::Tolerance;
+
+/// Nodes per rayon task.
+const CHUNK: usize = 512;
+
+/// Velocity components below this magnitude are flushed to zero after each
+/// update (kernel and mirror alike): subnormal floats are 100× slower on
+/// CPUs (GPUs flush them anyway), and velocities this small move no
+/// coordinate of any mesh in any unit.
+pub const VELOCITY_FLUSH: f32 = 1e-30;
+
+/// Uniform parameters shared by the step kernels (`StepParams` in WGSL).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepParams {
+    /// Number of free nodes (the dispatch size).
+    pub n_free: u32,
+    /// Whether `forces` holds external forces (otherwise f_i = 0).
+    pub use_forces: bool,
+    /// `spring_step`: Δt. `spring_chebyshev`: the pseudo-time step h.
+    pub dt: f32,
+    /// `spring_step`: damping γ. `spring_chebyshev`: momentum β.
+    pub damping: f32,
+    /// `spring_chebyshev` only: gain α/h on the preconditioned residual.
+    pub gain: f32,
+    /// Material table rows `[c1, c2 − c1, knee, 0]`.
+    pub materials: [[f32; 4]; 16],
+}
+
+/// Parity tolerance of positions after N iterations of either step kernel,
+/// for a network of extent `diagonal` (mesh units).
+///
+/// Per node and iteration the kernel and this mirror may differ by FMA
+/// contraction and the GPU's division/sqrt rounding: a few ulp in each
+/// spring term, i.e. a relative error of ~8 ε_f32 in g_i, and half an ulp of
+/// the coordinates in each update. The damped update is non-expansive for a
+/// stable Δt, so differences add up at most linearly in N: we allow
+/// `N · 8 ε_f32 · diagonal` absolute, i.e. for N = 200 on fran_cut
+/// (diagonal ≈ 0.19 m) about 36 µm — far below any error a wrong kernel
+/// makes (a missing spring or wrong sign moves nodes by the bone
+/// displacement, millimetres), and the negative-control test shows a single
+/// corrupted coordinate is caught.
+pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
+    Tolerance {
+        abs: iterations.max(1) as f32 * 8.0 * f32::EPSILON * diagonal,
+        rel: 0.0,
+    }
+}
+
+/// Spring force sum g_i of eq. 4.4 for node `i` at `x`, in CSR order.
+#[inline(always)]
+fn gather(
+    x: [f32; 3],
+    row: &[[u32; 2]],
+    pos_in: &[[f32; 4]],
+    materials: &[[f32; 4]; 16],
+) -> [f32; 3] {
+    let mut g = [0.0f32; 3];
+    for &e in row {
+        let (j, m, l) = SpringCsr::unpack(e);
+        let q = pos_in[j];
+        let r = [x[0] - q[0], x[1] - q[1], x[2] - q[2]];
+        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        if len > 0.0 {
+            let mat = materials[m];
+            let ext = len - l;
+            // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
+            let f = mat[0] * ext + mat[1] * (ext - mat[2] * l).max(0.0);
+            let s = f / len;
+            g = [g[0] + s * r[0], g[1] + s * r[1], g[2] + s * r[2]];
+        }
+    }
+    g
+}
+
+#[inline(always)]
+fn flush(v: f32) -> f32 {
+    if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
+}
+
+/// Runs `update(i, x, w, g, v, f) -> (x', v')` over the free nodes.
+#[inline(always)]
+fn for_free_nodes(
+    p: &StepParams,
+    csr: &SpringCsr,
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    pos_out: &mut [[f32; 4]],
+    vel: &mut [[f32; 4]],
+    update: impl Fn([f32; 3], f32, [f32; 3], [f32; 3], [f32; 3]) -> ([f32; 3], [f32; 3]) + Sync,
+) {
+    let n = p.n_free as usize;
+    pos_out[..n]
+        .par_chunks_mut(CHUNK)
+        .zip(vel[..n].par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(c, (po, ve))| {
+            for (k, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
+                let i = c * CHUNK + k;
+                let p_i = pos_in[i];
+                let x = [p_i[0], p_i[1], p_i[2]];
+                let row = &csr.entries[csr.offsets[i] as usize..csr.offsets[i + 1] as usize];
+                let g = gather(x, row, pos_in, &p.materials);
+                let f = if p.use_forces {
+                    let f = forces[i];
+                    [f[0], f[1], f[2]]
+                } else {
+                    [0.0; 3]
+                };
+                let (x2, v2) = update(x, p_i[3], g, [v[0], v[1], v[2]], f);
+                *out = [x2[0], x2[1], x2[2], p_i[3]];
+                *v = [v2[0], v2[1], v2[2], 0.0];
+            }
+        });
+}
+
+/// Mirror of `spring_step.wgsl`: one semi-implicit Euler step (eq. 4.4–4.7)
+/// of every free node. `pos_in`/`pos_out`: #nodes `[x, y, z, w]` with
+/// `w = B_i / m_i`; only the first `n_free` of `pos_out` are written (the
+/// caller keeps the fixed nodes equal in both buffers). `vel`: #free
+/// `[vx, vy, vz, 0]`, updated in place. `forces`: #free external forces
+/// (read only when `use_forces`).
+pub fn spring_step(
+    p: &StepParams,
+    csr: &SpringCsr,
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    pos_out: &mut [[f32; 4]],
+    vel: &mut [[f32; 4]],
+) {
+    let (dt, gamma) = (p.dt, p.damping);
+    for_free_nodes(p, csr, forces, pos_in, pos_out, vel, |x, w, g, v, f| {
+        let mut x2 = [0.0f32; 3];
+        let mut v2 = [0.0f32; 3];
+        for k in 0..3 {
+            // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; x += Δt v.
+            let a = (f[k] - gamma * v[k] - g[k]) * w;
+            v2[k] = flush(v[k] + dt * a);
+            x2[k] = x[k] + dt * v2[k];
+        }
+        (x2, v2)
+    });
+}
+
+/// Mirror of `spring_chebyshev.wgsl`: one stationary Chebyshev (second-order
+/// Richardson) step on the Jacobi-preconditioned equilibrium equations.
+/// Same buffers as [`spring_step`], but `w = 1 / D_i` (the nodal stiffness)
+/// and `v` holds the last update divided by h.
+pub fn spring_chebyshev(
+    p: &StepParams,
+    csr: &SpringCsr,
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    pos_out: &mut [[f32; 4]],
+    vel: &mut [[f32; 4]],
+) {
+    let (h, beta, gain) = (p.dt, p.damping, p.gain);
+    for_free_nodes(p, csr, forces, pos_in, pos_out, vel, |x, w, g, v, f| {
+        let mut x2 = [0.0f32; 3];
+        let mut v2 = [0.0f32; 3];
+        for k in 0..3 {
+            let r = (f[k] - g[k]) * w;
+            v2[k] = flush(beta * v[k] + gain * r);
+            x2[k] = x[k] + h * v2[k];
+        }
+        (x2, v2)
+    });
+}
+
+/// Order-preserving key of a non-negative float: its bits without the sign
+/// (any NaN or infinity maps above every finite value).
+#[inline(always)]
+pub fn max_key(x: f32) -> u32 {
+    x.to_bits() & 0x7fff_ffff
+}
+
+/// Mirror of `tissue_reduce_max.wgsl`: `[max_i key(|v_i|²), max_i
+/// key(|x_i − s_i|²)]` over the first `n` nodes (`vel`, `pos`, `snapshot`
+/// each hold at least `n`). Max is exact whatever the reduction tree; the
+/// kernel may differ only in the rounding of each squared length (FMA
+/// contraction), by ≤ 2 ulp.
+pub fn tissue_reduce_max(
+    n: usize,
+    vel: &[[f32; 4]],
+    pos: &[[f32; 4]],
+    snapshot: &[[f32; 4]],
+) -> [u32; 2] {
+    let sq = |d: [f32; 3]| max_key(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    vel[..n]
+        .par_chunks(4 * CHUNK)
+        .zip(pos[..n].par_chunks(4 * CHUNK))
+        .zip(snapshot[..n].par_chunks(4 * CHUNK))
+        .map(|((v, p), s)| {
+            let mut keys = [0u32; 2];
+            for ((v, p), s) in v.iter().zip(p).zip(s) {
+                keys[0] = keys[0].max(sq([v[0], v[1], v[2]]));
+                keys[1] = keys[1].max(sq([p[0] - s[0], p[1] - s[1], p[2] - s[2]]));
+            }
+            keys
+        })
+        .reduce(|| [0, 0], |a, b| [a[0].max(b[0]), a[1].max(b[1])])
+}

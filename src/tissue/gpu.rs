@@ -1,0 +1,433 @@
+//! GPU passes of the tissue kernels: `spring_step` / `spring_chebyshev`
+//! (one dispatch per iteration, double-buffered positions, many iterations
+//! recorded per submission) and `tissue_reduce_max` (two-stage tree
+//! reduction). Only the two convergence keys (8 bytes) are read back per
+//! check; the state stays on the device until the end.
+
+use bytemuck::Zeroable;
+use glam::Vec4;
+
+use super::cpu::StepParams;
+use super::network::{SpringCsr, SpringNetwork};
+use super::relax::{Probe, Setup, Solver, Stepper};
+use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::{Error, Result};
+
+const WG_SIZE: u32 = 256;
+/// Workgroups of the first reduction stage (≤ WG_SIZE so one workgroup
+/// finishes the second stage).
+const REDUCE_GROUPS: u32 = 256;
+/// Most iterations recorded into one command buffer.
+const MAX_PER_SUBMIT: u32 = 512;
+
+/// `Params` of `spring_step.wgsl` / `spring_chebyshev.wgsl` (same layout).
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct StepUniform {
+    pub n_free: u32,
+    pub use_forces: u32,
+    pub dt: f32,
+    pub damping: f32,
+    pub gain: f32,
+    pub materials: [Vec4; 16],
+}
+
+impl From<&StepParams> for StepUniform {
+    fn from(p: &StepParams) -> Self {
+        StepUniform {
+            n_free: p.n_free,
+            use_forces: u32::from(p.use_forces),
+            dt: p.dt,
+            damping: p.damping,
+            gain: p.gain,
+            materials: p.materials.map(Vec4::from_array),
+        }
+    }
+}
+
+/// `Params` of `tissue_reduce_max.wgsl`.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct ReduceUniform {
+    pub n: u32,
+    pub mode: u32,
+}
+
+fn kernel_of(solver: Solver) -> Kernel {
+    match solver {
+        Solver::Explicit => Kernel::SpringStep,
+        Solver::Chebyshev => Kernel::SpringChebyshev,
+    }
+}
+
+/// Buffers only the bind groups reference (kept alive with them).
+type KeepAlive = (
+    UniformBuffer<StepUniform>,
+    GpuArray<u32>,
+    GpuArray<[u32; 2]>,
+    GpuArray<[f32; 4]>,
+    GpuArray<[u32; 2]>,
+    [UniformBuffer<ReduceUniform>; 2],
+);
+
+/// Free-node positions and velocities after one step.
+pub type StepOutput = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+
+/// A relaxation state resident on the GPU.
+#[derive(Debug)]
+pub struct GpuStepper<'g> {
+    gpu: &'g Gpu,
+    kernel: Kernel,
+    n_free: u32,
+    n_reduce_groups: u32,
+    pos: [GpuArray<[f32; 4]>; 2],
+    vel: GpuArray<[f32; 4]>,
+    snap: GpuArray<[f32; 4]>,
+    result: GpuArray<[u32; 2]>,
+    staging: wgpu::Buffer,
+    step_pipeline: std::sync::Arc<wgpu::ComputePipeline>,
+    reduce_pipeline: std::sync::Arc<wgpu::ComputePipeline>,
+    /// `[0]`: pos[0] → pos[1]; `[1]`: pos[1] → pos[0].
+    step_bind: [wgpu::BindGroup; 2],
+    /// First reduction stage reading pos[cur].
+    reduce_bind: [wgpu::BindGroup; 2],
+    reduce_final: wgpu::BindGroup,
+    cur: usize,
+    // Kept alive for the bind groups.
+    _buffers: KeepAlive,
+}
+
+impl<'g> GpuStepper<'g> {
+    /// Uploads the network and initial state of `setup`. The second
+    /// position buffer's free part starts as NaN sentinels: the first
+    /// iteration must overwrite every free node.
+    pub(crate) fn new(gpu: &'g Gpu, net: &SpringNetwork, setup: &Setup) -> Result<Self> {
+        Self::from_parts(
+            gpu,
+            kernel_of(setup.solver),
+            &setup.params,
+            &net.csr,
+            &setup.forces,
+            &setup.positions,
+            &vec![[0.0; 4]; net.n_free],
+        )
+    }
+
+    fn from_parts(
+        gpu: &'g Gpu,
+        kernel: Kernel,
+        params: &StepParams,
+        csr: &SpringCsr,
+        forces: &[[f32; 4]],
+        positions: &[[f32; 4]],
+        velocities: &[[f32; 4]],
+    ) -> Result<Self> {
+        let n_free = params.n_free;
+        let nf = n_free as usize;
+        if csr.offsets.len() != nf + 1 || velocities.len() != nf || forces.len() != nf {
+            return Err(Error::InvalidInput(format!(
+                "tissue GPU state: {} offsets, {} velocities, {} forces for {nf} free nodes",
+                csr.offsets.len(),
+                velocities.len(),
+                forces.len()
+            )));
+        }
+        let uniform = UniformBuffer::new(gpu, "spring_step.params", &StepUniform::from(params))?;
+        let offsets = GpuArray::from_slice(gpu, "spring_step.offsets", &csr.offsets)?;
+        let entries = GpuArray::from_slice(gpu, "spring_step.entries", &csr.entries)?;
+        let forces = GpuArray::from_slice(gpu, "spring_step.forces", forces)?;
+        let mut second = positions.to_vec();
+        second[..nf].fill([f32::NAN; 4]);
+        let pos = [
+            GpuArray::from_slice(gpu, "spring_step.pos_a", positions)?,
+            GpuArray::from_slice(gpu, "spring_step.pos_b", &second)?,
+        ];
+        let vel = GpuArray::from_slice(gpu, "spring_step.vel", velocities)?;
+        let snap = GpuArray::from_slice(gpu, "tissue_reduce_max.snap", &positions[..nf])?;
+        let n_reduce_groups = n_free.div_ceil(WG_SIZE).clamp(1, REDUCE_GROUPS);
+        let partials = GpuArray::filled(
+            gpu,
+            "tissue_reduce_max.partials",
+            n_reduce_groups as usize,
+            [0u32; 2],
+        )?;
+        let result = GpuArray::filled(gpu, "tissue_reduce_max.result", 1, [u32::MAX; 2])?;
+        let reduce_params = [
+            UniformBuffer::new(
+                gpu,
+                "tissue_reduce_max.params0",
+                &ReduceUniform { n: n_free, mode: 0 },
+            )?,
+            UniformBuffer::new(
+                gpu,
+                "tissue_reduce_max.params1",
+                &ReduceUniform {
+                    n: n_reduce_groups,
+                    mode: 1,
+                },
+            )?,
+        ];
+        let staging = gpu.scoped("tissue_reduce_max.staging", || {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("chisel.tissue_reduce_max.staging"),
+                size: 8,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })?;
+        let step_pipeline = gpu.pipeline(kernel)?;
+        let reduce_pipeline = gpu.pipeline(Kernel::TissueReduceMax)?;
+        let step_bind_for = |src: usize| {
+            gpu.bind(
+                kernel,
+                &step_pipeline,
+                &[
+                    uniform.binding(),
+                    offsets.binding(),
+                    entries.binding(),
+                    forces.binding(),
+                    pos[src].binding(),
+                    pos[1 - src].binding(),
+                    vel.binding(),
+                ],
+            )
+        };
+        let step_bind = [step_bind_for(0)?, step_bind_for(1)?];
+        let reduce_bind_for = |cur: usize| {
+            gpu.bind(
+                Kernel::TissueReduceMax,
+                &reduce_pipeline,
+                &[
+                    reduce_params[0].binding(),
+                    vel.binding(),
+                    pos[cur].binding(),
+                    snap.binding(),
+                    result.binding(),
+                    partials.binding(),
+                ],
+            )
+        };
+        let reduce_bind = [reduce_bind_for(0)?, reduce_bind_for(1)?];
+        let reduce_final = gpu.bind(
+            Kernel::TissueReduceMax,
+            &reduce_pipeline,
+            &[
+                reduce_params[1].binding(),
+                vel.binding(),
+                pos[0].binding(),
+                snap.binding(),
+                partials.binding(),
+                result.binding(),
+            ],
+        )?;
+        Ok(GpuStepper {
+            gpu,
+            kernel,
+            n_free,
+            n_reduce_groups,
+            pos,
+            vel,
+            snap,
+            result,
+            staging,
+            step_pipeline,
+            reduce_pipeline,
+            step_bind,
+            reduce_bind,
+            reduce_final,
+            cur: 0,
+            _buffers: (uniform, offsets, entries, forces, partials, reduce_params),
+        })
+    }
+
+    fn record_steps(&mut self, encoder: &mut wgpu::CommandEncoder, n: u32) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(&self.kernel.label()),
+            timestamp_writes: None,
+        });
+        for _ in 0..n {
+            self.gpu.dispatch(
+                &mut pass,
+                &self.step_pipeline,
+                &self.step_bind[self.cur],
+                self.n_free,
+                WG_SIZE,
+            );
+            self.cur ^= 1;
+        }
+    }
+
+    fn record_reduce(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("chisel.tissue_reduce_max"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.reduce_pipeline);
+        pass.set_bind_group(0, &self.reduce_bind[self.cur], &[]);
+        pass.dispatch_workgroups(self.n_reduce_groups, 1, 1);
+        pass.set_bind_group(0, &self.reduce_final, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+
+    fn read_result(&self, mut encoder: wgpu::CommandEncoder) -> Result<[u32; 2]> {
+        encoder.copy_buffer_to_buffer(&self.result.buffer, 0, &self.staging, 0, 8);
+        self.gpu.submit_and_wait(encoder)?;
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.staging.map_async(wgpu::MapMode::Read, 0..8, move |r| {
+            let _ = tx.send(r);
+        });
+        let failed = |message: String| Error::Readback {
+            label: "chisel.tissue_reduce_max.result".into(),
+            message,
+        };
+        self.gpu
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map_err(|e| failed(e.to_string()))?;
+        self.gpu.check_lost()?;
+        rx.recv()
+            .map_err(|_| failed("map callback never ran".into()))?
+            .map_err(|e| failed(e.to_string()))?;
+        let keys = {
+            let view = self
+                .staging
+                .get_mapped_range(0..8)
+                .map_err(|e| failed(e.to_string()))?;
+            let k: [u32; 2] = bytemuck::pod_read_unaligned(&view);
+            k
+        };
+        self.staging.unmap();
+        Ok(keys)
+    }
+
+    fn copy_to_snapshot(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_buffer(
+            &self.pos[self.cur].buffer,
+            0,
+            &self.snap.buffer,
+            0,
+            self.snap.byte_len(),
+        );
+    }
+}
+
+impl Stepper for GpuStepper<'_> {
+    fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
+        let data: Vec<[f32; 4]> = bone.iter().map(|b| [b[0], b[1], b[2], 0.0]).collect();
+        if data.is_empty() {
+            return Ok(());
+        }
+        let offset = self.n_free as u64 * 16;
+        for p in &self.pos {
+            if offset + data.len() as u64 * 16 > p.byte_len() {
+                return Err(Error::InvalidInput(format!(
+                    "{} bone positions do not fit the GPU state",
+                    data.len()
+                )));
+            }
+            self.gpu
+                .queue
+                .write_buffer(&p.buffer, offset, bytemuck::cast_slice(&data));
+        }
+        Ok(())
+    }
+
+    fn reset_velocities(&mut self) -> Result<()> {
+        let mut encoder = self.gpu.encoder("spring_step.reset");
+        encoder.clear_buffer(&self.vel.buffer, 0, None);
+        self.gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    fn snapshot(&mut self) -> Result<()> {
+        let mut encoder = self.gpu.encoder("tissue_reduce_max.snapshot");
+        self.copy_to_snapshot(&mut encoder);
+        self.gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    fn advance(&mut self, n: u32, window: bool) -> Result<Probe> {
+        let mut left = n;
+        while left > MAX_PER_SUBMIT {
+            let mut encoder = self.gpu.encoder(self.kernel.name());
+            self.record_steps(&mut encoder, MAX_PER_SUBMIT);
+            self.gpu.queue.submit([encoder.finish()]);
+            left -= MAX_PER_SUBMIT;
+        }
+        let mut encoder = self.gpu.encoder(self.kernel.name());
+        self.record_steps(&mut encoder, left);
+        self.record_reduce(&mut encoder);
+        if window {
+            self.copy_to_snapshot(&mut encoder);
+        }
+        let keys = self.read_result(encoder)?;
+        Ok(Probe { keys })
+    }
+
+    fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
+        self.pos[self.cur].read(self.gpu)
+    }
+}
+
+/// One dispatch of `spring_step` (or `spring_chebyshev` for
+/// `Solver::Chebyshev`) on explicit inputs, for parity tests: returns the
+/// free part of `pos_out` (NaN where the kernel did not write) and the
+/// updated velocities.
+pub fn step_once(
+    gpu: &Gpu,
+    solver: Solver,
+    params: &StepParams,
+    csr: &SpringCsr,
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    vel: &[[f32; 4]],
+) -> Result<StepOutput> {
+    let mut s = GpuStepper::from_parts(gpu, kernel_of(solver), params, csr, forces, pos_in, vel)?;
+    let mut encoder = gpu.encoder(s.kernel.name());
+    s.record_steps(&mut encoder, 1);
+    gpu.submit_and_wait(encoder)?;
+    let pos = s.pos[s.cur].read(gpu)?;
+    Ok((pos[..s.n_free as usize].to_vec(), s.vel.read(gpu)?))
+}
+
+/// `tissue_reduce_max` on explicit inputs (#n each), for parity tests.
+pub fn tissue_reduce_max(
+    gpu: &Gpu,
+    vel: &[[f32; 4]],
+    pos: &[[f32; 4]],
+    snapshot: &[[f32; 4]],
+) -> Result<[u32; 2]> {
+    let n = vel.len();
+    if pos.len() != n || snapshot.len() != n {
+        return Err(Error::InvalidInput(
+            "tissue_reduce_max: vel, pos and snapshot differ in length".into(),
+        ));
+    }
+    let params = StepParams {
+        n_free: u32::try_from(n)
+            .map_err(|_| Error::InvalidInput("tissue_reduce_max: too many nodes".into()))?,
+        use_forces: false,
+        dt: 0.0,
+        damping: 0.0,
+        gain: 0.0,
+        materials: [[0.0; 4]; 16],
+    };
+    let csr = SpringCsr {
+        offsets: vec![0; n + 1],
+        entries: Vec::new(),
+    };
+    let s = GpuStepper::from_parts(
+        gpu,
+        Kernel::SpringStep,
+        &params,
+        &csr,
+        &vec![<[f32; 4]>::zeroed(); n],
+        pos,
+        vel,
+    )?;
+    s.snap.write(gpu, snapshot)?;
+    let mut encoder = gpu.encoder("tissue_reduce_max");
+    s.record_reduce(&mut encoder);
+    s.read_result(encoder)
+}

@@ -1,0 +1,40 @@
+//! Layered spring model of facial soft tissue (seed 000 ch. 4, §5.2.1,
+//! App. B; SPEC §1): network construction over the skull, surgery plans,
+//! relaxation on the CPU mirror or the GPU, and an accelerated equilibrium
+//! solver.
+//!
+//! ```text
+//! TriMesh (epidermis) [+ TriMesh (bone)] ──SpringNetwork::build──▶ SpringNetwork
+//!     (layers, 5 spring classes, eq. 4.1 k-d tree links, CSR on the host)
+//! Plan (TOML/JSON) ──Plan::resolve(network, fragments)──▶ ResolvedPlan
+//! relax(network, plan, options, Backend) ──▶ RelaxReport
+//!     per increment: bone targets → K iterations of spring_step /
+//!     spring_chebyshev → tissue_reduce_max → 8-byte readback → stop test
+//! ```
+//!
+//! Kernels and mirrors (one name each):
+//! `kernels/spring_step.wgsl` ↔ [`cpu::spring_step`] (eq. 4.4–4.7),
+//! `kernels/spring_chebyshev.wgsl` ↔ [`cpu::spring_chebyshev`],
+//! `kernels/tissue_reduce_max.wgsl` ↔ [`cpu::tissue_reduce_max`];
+//! [`oracle`] is the independent f64 reference.
+
+pub mod chebyshev;
+pub mod cpu;
+pub mod explicit;
+pub mod gpu;
+mod kdtree;
+pub mod network;
+pub mod oracle;
+pub mod phantom;
+pub mod plan;
+pub mod relax;
+
+pub use network::{
+    Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
+    default_origin,
+};
+pub use plan::{Fragments, Iterations, Plan, ResolvedPlan, Rotation, Selector, Step};
+pub use relax::{
+    IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,
+    iterate, relax,
+};

@@ -1,0 +1,471 @@
+//! Surgery plans (SPEC §1.3; seed 000 §5.2.1 and App. B).
+//!
+//! A plan is a list of steps. Each step selects bone vertices, gives a total
+//! rigid motion (translation, optionally a rotation about a point), a
+//! repetition count k (the motion is applied in k equal increments) and, per
+//! increment, a fixed iteration count or `converge`. TOML:
+//!
+//! ```toml
+//! name = "chin advance"
+//!
+//! [[step]]
+//! name = "chin"
+//! select = { half_space = { point = [0.0, -0.165, 0.0], normal = [0.0, -1.0, 0.0] } }
+//! translate = [0.0034, 0.0, -0.0022]   # total, mesh units
+//! increments = 10                      # k
+//! iterations = "converge"              # or a number per increment
+//! ```
+//!
+//! Selectors: `sphere = { center, radius }`, `box = { min, max }`,
+//! `half_space = { point, normal }` (keeps `(x − point)·normal ≥ 0`),
+//! `vertices = [ids]` (bone-layer vertex ids) and `fragment = "name"`
+//! (bone vertex ids supplied by the caller, e.g. from `cut`).
+//! Unknown keys are errors. Selections are made on the bone layer as it
+//! stands when the step starts (after the earlier steps' moves).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::{DQuat, DVec3, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::network::SpringNetwork;
+use crate::{Error, Position, Result};
+
+/// Bone vertex ids of named fragments (e.g. the jaw cut off by `cut`),
+/// resolved by [`Selector::Fragment`].
+pub type Fragments = BTreeMap<String, Vec<u32>>;
+
+/// Which points a step (or a stiffness region) applies to.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Selector {
+    /// Points with `|x − center| ≤ radius`.
+    Sphere { center: [f32; 3], radius: f32 },
+    /// Points with `min ≤ x ≤ max` componentwise.
+    Box { min: [f32; 3], max: [f32; 3] },
+    /// Points with `(x − point) · normal ≥ 0`.
+    HalfSpace { point: [f32; 3], normal: [f32; 3] },
+    /// Explicit bone-layer vertex ids.
+    Vertices(Vec<u32>),
+    /// The bone vertices of a named fragment (see [`Fragments`]).
+    Fragment(String),
+}
+
+fn finite3(v: &[f32; 3]) -> bool {
+    v.iter().all(|c| c.is_finite())
+}
+
+impl Selector {
+    /// Checks the parameters (finite vectors, positive radius, ordered box,
+    /// non-zero normal, non-empty id list); `what` names the owner in errors.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
+        match self {
+            Selector::Sphere { center, radius } => {
+                if !finite3(center) || !radius.is_finite() || *radius <= 0.0 {
+                    return bad(format!(
+                        "sphere needs a finite centre and a radius > 0, got centre {center:?}, radius {radius}"
+                    ));
+                }
+            }
+            Selector::Box { min, max } => {
+                if !finite3(min) || !finite3(max) || (0..3).any(|a| min[a] > max[a]) {
+                    return bad(format!(
+                        "box needs finite corners with min ≤ max, got min {min:?}, max {max:?}"
+                    ));
+                }
+            }
+            Selector::HalfSpace { point, normal } => {
+                if !finite3(point) || !finite3(normal) || Vec3::from_array(*normal).length() == 0.0
+                {
+                    return bad(format!(
+                        "half_space needs a finite point and a non-zero finite normal, got point {point:?}, normal {normal:?}"
+                    ));
+                }
+            }
+            Selector::Vertices(ids) => {
+                if ids.is_empty() {
+                    return bad("empty selection: `vertices` lists no id".into());
+                }
+            }
+            Selector::Fragment(name) => {
+                if name.is_empty() {
+                    return bad("fragment name is empty".into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the geometric selector contains `p` (`None` for id-based ones).
+    pub fn contains(&self, p: Vec3) -> Option<bool> {
+        match self {
+            Selector::Sphere { center, radius } => {
+                Some(p.distance(Vec3::from_array(*center)) <= *radius)
+            }
+            Selector::Box { min, max } => {
+                Some(p.cmpge(Vec3::from_array(*min)).all() && p.cmple(Vec3::from_array(*max)).all())
+            }
+            Selector::HalfSpace { point, normal } => {
+                Some((p - Vec3::from_array(*point)).dot(Vec3::from_array(*normal)) >= 0.0)
+            }
+            Selector::Vertices(_) | Selector::Fragment(_) => None,
+        }
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            Selector::Sphere { center, radius } => format!("sphere {center:?} r {radius}"),
+            Selector::Box { min, max } => format!("box {min:?}..{max:?}"),
+            Selector::HalfSpace { point, normal } => {
+                format!("half_space through {point:?} normal {normal:?}")
+            }
+            Selector::Vertices(ids) => format!("{} vertex ids", ids.len()),
+            Selector::Fragment(name) => format!("fragment `{name}`"),
+        }
+    }
+}
+
+/// A rigid rotation about a point, applied before the translation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Rotation axis (any non-zero length).
+    pub axis: [f32; 3],
+    /// Total angle in degrees (right-hand rule about `axis`).
+    pub degrees: f32,
+    /// The fixed point of the rotation.
+    pub center: [f32; 3],
+}
+
+/// Iterations per increment: a fixed count, or until a stop criterion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "IterationsRepr", into = "IterationsRepr")]
+pub enum Iterations {
+    /// Exactly this many iterations (the seed's Table 2 uses 1).
+    Fixed(u32),
+    /// Until converged / stalled / diverged / the iteration limit.
+    Converge,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(untagged)]
+enum IterationsRepr {
+    Count(u32),
+    Word(String),
+}
+
+impl TryFrom<IterationsRepr> for Iterations {
+    type Error = String;
+    fn try_from(r: IterationsRepr) -> Result<Self, String> {
+        match r {
+            IterationsRepr::Count(n) => Ok(Iterations::Fixed(n)),
+            IterationsRepr::Word(w) if w == "converge" => Ok(Iterations::Converge),
+            IterationsRepr::Word(w) => Err(format!(
+                "`iterations` must be a count or \"converge\", found \"{w}\""
+            )),
+        }
+    }
+}
+
+impl From<Iterations> for IterationsRepr {
+    fn from(i: Iterations) -> Self {
+        match i {
+            Iterations::Fixed(n) => IterationsRepr::Count(n),
+            Iterations::Converge => IterationsRepr::Word("converge".into()),
+        }
+    }
+}
+
+fn one() -> u32 {
+    1
+}
+
+fn converge() -> Iterations {
+    Iterations::Converge
+}
+
+/// One processing step of the seed's algorithm (§5.2.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Step {
+    /// Label for reports (default `step <n>`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Which bone vertices move.
+    pub select: Selector,
+    /// Total translation, mesh units (default 0).
+    #[serde(default)]
+    pub translate: [f32; 3],
+    /// Optional total rotation, applied before the translation.
+    #[serde(default)]
+    pub rotate: Option<Rotation>,
+    /// k: the motion is applied in this many equal increments (≥ 1).
+    #[serde(default = "one")]
+    pub increments: u32,
+    /// Per increment: a count (≥ 1) or `"converge"` (default).
+    #[serde(default = "converge")]
+    pub iterations: Iterations,
+    /// Zero all velocities before each increment of this step (default:
+    /// velocities carry over between increments and steps).
+    #[serde(default)]
+    pub reset_velocities: bool,
+}
+
+/// A surgery plan: steps applied in order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    /// Label for reports.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The steps (`[[step]]` in TOML, `"steps"` or `"step"` in JSON).
+    #[serde(rename = "step", alias = "steps")]
+    pub steps: Vec<Step>,
+}
+
+/// Line (1-based) of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+impl Plan {
+    /// Parses and validates a TOML plan; `origin` names the source in errors.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Plan> {
+        let plan: Plan = toml::from_str(text).map_err(|e| {
+            let at = e
+                .span()
+                .map_or(Position::Whole, |s| Position::Line(line_of(text, s.start)));
+            Error::format(origin, at, "a surgery plan", e.message().to_string())
+        })?;
+        plan.validate()?;
+        Ok(plan)
+    }
+
+    /// Parses and validates a JSON plan; `origin` names the source in errors.
+    pub fn from_json_str(text: &str, origin: &str) -> Result<Plan> {
+        let plan: Plan = serde_json::from_str(text).map_err(|e| {
+            Error::format(
+                origin,
+                Position::Line(e.line()),
+                "a surgery plan",
+                e.to_string(),
+            )
+        })?;
+        plan.validate()?;
+        Ok(plan)
+    }
+
+    /// Reads a plan file: `.json` is JSON, anything else TOML.
+    pub fn from_path(path: &Path) -> Result<Plan> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let origin = path.display().to_string();
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"))
+        {
+            Plan::from_json_str(&text, &origin)
+        } else {
+            Plan::from_toml_str(&text, &origin)
+        }
+    }
+
+    /// The display name of step `i` (0-based).
+    pub fn step_name(&self, i: usize) -> String {
+        self.steps[i]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("step {}", i + 1))
+    }
+
+    /// Checks everything that does not need the network: at least one step,
+    /// k ≥ 1, fixed counts ≥ 1, finite vectors, valid selectors and axes.
+    pub fn validate(&self) -> Result<()> {
+        if self.steps.is_empty() {
+            return Err(Error::InvalidInput("plan has no steps".into()));
+        }
+        for (i, s) in self.steps.iter().enumerate() {
+            let what = format!("plan step {} `{}`", i + 1, self.step_name(i));
+            let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
+            s.select.validate(&what)?;
+            if s.increments == 0 {
+                return bad("increments (k) must be ≥ 1, got k = 0".into());
+            }
+            if s.iterations == Iterations::Fixed(0) {
+                return bad("iterations must be ≥ 1 or \"converge\", got 0".into());
+            }
+            if !finite3(&s.translate) {
+                return bad(format!("translate is not finite: {:?}", s.translate));
+            }
+            if let Some(r) = &s.rotate
+                && (!finite3(&r.axis)
+                    || !finite3(&r.center)
+                    || !r.degrees.is_finite()
+                    || Vec3::from_array(r.axis).length() == 0.0)
+            {
+                return bad(format!(
+                    "rotate needs a finite non-zero axis, finite centre and angle, got {r:?}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Resolves every step's selection on the bone layer of `network`
+    /// (in step order, each on the bone as moved by the steps before it).
+    /// Errors name the step: empty selection, vertex ids outside the bone
+    /// layer, unknown fragments.
+    pub fn resolve(&self, network: &SpringNetwork, fragments: &Fragments) -> Result<ResolvedPlan> {
+        self.validate()?;
+        let n_bone = network.n_bone();
+        if n_bone == 0 {
+            return Err(Error::InvalidInput(
+                "the network has no bone layer to move".into(),
+            ));
+        }
+        let mut bone: Vec<DVec3> = network
+            .bone_rest()
+            .iter()
+            .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect();
+        let mut steps = Vec::with_capacity(self.steps.len());
+        for (i, s) in self.steps.iter().enumerate() {
+            let name = self.step_name(i);
+            let what = format!("plan step {} `{name}`", i + 1);
+            let ids = select(&s.select, &bone, fragments, &what)?;
+            let start: Vec<DVec3> = ids.iter().map(|&k| bone[k as usize]).collect();
+            let motion = Motion::new(s);
+            for (&k, &p) in ids.iter().zip(&start) {
+                bone[k as usize] = motion.apply(p, 1.0);
+            }
+            steps.push(ResolvedStep {
+                name,
+                bone_vertices: ids,
+                start,
+                motion,
+                increments: s.increments,
+                iterations: s.iterations,
+                reset_velocities: s.reset_velocities,
+            });
+        }
+        Ok(ResolvedPlan {
+            name: self.name.clone(),
+            steps,
+        })
+    }
+}
+
+fn select(sel: &Selector, bone: &[DVec3], fragments: &Fragments, what: &str) -> Result<Vec<u32>> {
+    let n = bone.len();
+    let checked = |ids: &[u32]| -> Result<Vec<u32>> {
+        if let Some(&bad) = ids.iter().find(|&&k| k as usize >= n) {
+            return Err(Error::InvalidInput(format!(
+                "{what}: vertex id {bad} is outside the bone layer ({n} bone vertices, ids 0..{})",
+                n - 1
+            )));
+        }
+        let mut v = ids.to_vec();
+        v.sort_unstable();
+        v.dedup();
+        Ok(v)
+    };
+    let ids: Vec<u32> = match sel {
+        Selector::Vertices(ids) => checked(ids)?,
+        Selector::Fragment(name) => checked(fragments.get(name).ok_or_else(|| {
+            Error::InvalidInput(format!(
+                "{what}: unknown fragment `{name}` (known: [{}])",
+                fragments.keys().cloned().collect::<Vec<_>>().join(", ")
+            ))
+        })?)?,
+        _ => (0..n as u32)
+            .filter(|&k| sel.contains(bone[k as usize].as_vec3()) == Some(true))
+            .collect(),
+    };
+    if ids.is_empty() {
+        let (lo, hi) = bone.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        return Err(Error::InvalidInput(format!(
+            "{what}: empty selection: {} selects no bone vertex (the bone layer spans {:?}..{:?})",
+            sel.describe(),
+            lo.as_vec3().to_array(),
+            hi.as_vec3().to_array()
+        )));
+    }
+    Ok(ids)
+}
+
+/// A rigid motion `x ↦ R(t·θ)(x − c) + c + t·translate` for progress `t ∈ [0, 1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    translate: DVec3,
+    rotation: Option<(DVec3, f64, DVec3)>,
+}
+
+impl Motion {
+    fn new(s: &Step) -> Self {
+        let v = |a: [f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+        Motion {
+            translate: v(s.translate),
+            rotation: s.rotate.as_ref().map(|r| {
+                (
+                    v(r.axis).normalize(),
+                    (r.degrees as f64).to_radians(),
+                    v(r.center),
+                )
+            }),
+        }
+    }
+
+    /// Where `p` is after fraction `t` of the motion.
+    pub fn apply(&self, p: DVec3, t: f64) -> DVec3 {
+        let rotated = match self.rotation {
+            Some((axis, angle, c)) => DQuat::from_axis_angle(axis, angle * t) * (p - c) + c,
+            None => p,
+        };
+        rotated + self.translate * t
+    }
+}
+
+/// A step with its selection resolved to bone vertex ids.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResolvedStep {
+    pub name: String,
+    /// Selected bone-layer vertex ids (sorted, unique, non-empty).
+    pub bone_vertices: Vec<u32>,
+    /// Their positions when the step starts.
+    start: Vec<DVec3>,
+    motion: Motion,
+    pub increments: u32,
+    pub iterations: Iterations,
+    pub reset_velocities: bool,
+}
+
+impl ResolvedStep {
+    /// Target positions of the selected bone vertices after increment `j`
+    /// (1-based, `j ≤ increments`), computed from the step's start in f64 so
+    /// increments do not accumulate rounding.
+    pub fn targets(&self, j: u32) -> Vec<[f32; 4]> {
+        let t = j as f64 / self.increments as f64;
+        self.start
+            .iter()
+            .map(|&p| {
+                let q = self.motion.apply(p, t);
+                [q.x as f32, q.y as f32, q.z as f32, 0.0]
+            })
+            .collect()
+    }
+}
+
+/// A plan whose selections were resolved on one network.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResolvedPlan {
+    pub name: Option<String>,
+    pub steps: Vec<ResolvedStep>,
+}

@@ -1,0 +1,399 @@
+//! Scalpel cuts: closed pieces, conserved volume, tree = full scan, the
+//! tree visits fewer nodes and triangles than exist (counts, never time).
+
+mod common;
+
+use std::collections::HashMap;
+
+use chisel::cut::{CutOptions, CutResult, Knife, Side, cut, cut_full_scan, cut_mesh, cut_sequence};
+use chisel::surface::{IsoSpec, McOptions, Surface, marching_cubes};
+use chisel::volume::{Volume, VolumeData};
+use chisel::{Backend, TriMesh};
+use glam::DVec3;
+
+const CAP: CutOptions = CutOptions { cap: true };
+
+/// Signed volume by the divergence theorem (f64, about `r`).
+fn volume(m: &TriMesh, r: DVec3) -> f64 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize].as_dvec3() - r);
+            a.dot(b.cross(c))
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
+/// Every edge used exactly twice, in opposite directions.
+fn assert_closed(m: &TriMesh, what: &str) {
+    let mut d: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &m.triangles {
+        for k in 0..3 {
+            *d.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    for (&(a, b), &n) in &d {
+        assert_eq!(n, 1, "{what}: directed edge {a}->{b} used {n} times");
+        assert!(d.contains_key(&(b, a)), "{what}: edge {a}-{b} open");
+    }
+}
+
+/// Closed pieces whose volumes add up to the original within `rel`.
+fn assert_conserved(orig: &TriMesh, r: &CutResult, rel: f64, what: &str) {
+    let c = orig
+        .bounds()
+        .map_or(DVec3::ZERO, |(lo, hi)| ((lo + hi) * 0.5).as_dvec3());
+    let v0 = volume(orig, c);
+    let mut sum = 0.0;
+    for (i, p) in r.pieces.iter().enumerate() {
+        assert_closed(p, &format!("{what} piece {i}"));
+        sum += volume(p, c);
+    }
+    assert!(
+        (sum - v0).abs() <= rel * v0.abs(),
+        "{what}: pieces {sum} vs original {v0} (rel {:e})",
+        (sum - v0).abs() / v0.abs()
+    );
+}
+
+fn same_result(a: &CutResult, b: &CutResult) {
+    assert_eq!(a.pieces, b.pieces, "tree and full scan differ");
+    assert_eq!(a.sides, b.sides);
+    assert_eq!(a.stats.triangles_split, b.stats.triangles_split);
+    assert_eq!(a.stats.cut_vertices, b.stats.cut_vertices);
+}
+
+fn ball_volume(n: usize, r: f64) -> Volume {
+    let c = (n as f64 - 1.0) / 2.0;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let d = ((x as f64 - c).powi(2) + (y as f64 - c).powi(2) + (z as f64 - c).powi(2))
+                    .sqrt();
+                data.push((r - d) as f32);
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
+}
+
+/// A hollow ball (shell between radii r0 < r1): cuts give annular caps.
+fn shell_volume(n: usize, r0: f64, r1: f64) -> Volume {
+    let c = (n as f64 - 1.0) / 2.0;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let d = ((x as f64 - c).powi(2) + (y as f64 - c).powi(2) + (z as f64 - c).powi(2))
+                    .sqrt();
+                data.push(((d - r0).min(r1 - d)) as f32);
+            }
+        }
+    }
+    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
+}
+
+fn mc(vol: &Volume) -> Surface {
+    marching_cubes(
+        vol,
+        IsoSpec::Level(0.0),
+        &McOptions { close_border: true },
+        Backend::Cpu,
+    )
+    .unwrap()
+}
+
+fn plane(p: [f64; 3], n: [f64; 3]) -> Knife {
+    Knife::Plane {
+        point: DVec3::from_array(p),
+        normal: DVec3::from_array(n),
+    }
+}
+
+#[test]
+fn plane_cut_of_a_ball_gives_two_closed_halves() {
+    let s = mc(&ball_volume(40, 14.0));
+    let k = plane([19.5, 19.5, 19.3], [0.2, 0.1, 1.0]);
+    let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_eq!(r.sides, vec![Side::Negative, Side::Positive]);
+    assert_eq!(r.stats.loops_capped, 1);
+    assert_eq!(r.stats.curves_open, 0);
+    assert_conserved(&s.mesh, &r, 1e-6, "ball/plane");
+    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    // Sub-linear: the tree visits fewer nodes and tests fewer triangles.
+    assert!(
+        r.stats.triangles_tested * 4 < r.stats.triangles_total,
+        "{:?}",
+        r.stats
+    );
+    assert!(r.stats.nodes_visited < r.stats.nodes_total, "{:?}", r.stats);
+    assert!(r.stats.classes.clear > 0 && r.stats.classes.intersected > 0);
+}
+
+#[test]
+fn uncapped_cut_leaves_open_pieces_with_the_cut_as_boundary() {
+    let s = mc(&ball_volume(30, 10.0));
+    let k = plane([14.5, 14.5, 14.5], [0.0, 0.0, 1.0]);
+    let r = cut(&s.mesh, &s.forest, &k, &CutOptions::default()).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_eq!(r.stats.loops_capped, 0);
+    for p in &r.pieces {
+        let mut d: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in &p.triangles {
+            for k in 0..3 {
+                *d.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        let open: Vec<_> = d
+            .keys()
+            .filter(|&&(a, b)| !d.contains_key(&(b, a)))
+            .collect();
+        assert!(!open.is_empty());
+        for &&(a, b) in &open {
+            for v in [a, b] {
+                let z = p.positions[v as usize].z;
+                assert!(
+                    (z - 14.5).abs() < 1e-4,
+                    "open edge off the plane at z = {z}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn hollow_shell_cut_gets_annular_caps() {
+    let s = mc(&shell_volume(44, 9.0, 16.0));
+    assert_eq!(s.groups.len(), 2, "outer shell and cavity");
+    let k = plane([21.5, 21.5, 22.0], [0.0, 1.0, 0.3]);
+    let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+    assert_eq!(
+        r.pieces.len(),
+        2,
+        "each half is one solid with its annular cap"
+    );
+    assert_eq!(r.stats.loops_capped, 2);
+    assert_conserved(&s.mesh, &r, 1e-6, "shell/plane");
+    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+}
+
+#[test]
+fn sphere_cut_takes_a_bite() {
+    let s = mc(&ball_volume(40, 14.0));
+    let k = Knife::Sphere {
+        centre: DVec3::new(19.5, 19.5, 31.0),
+        radius: 8.0,
+    };
+    let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert!(r.sides.contains(&Side::Negative) && r.sides.contains(&Side::Positive));
+    assert_conserved(&s.mesh, &r, 1e-6, "ball/sphere");
+    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    assert!(
+        r.stats.triangles_tested * 2 < r.stats.triangles_total,
+        "{:?}",
+        r.stats
+    );
+}
+
+#[test]
+fn rectangle_that_cuts_through_equals_the_plane_and_partial_one_keeps_one_piece() {
+    let s = mc(&ball_volume(30, 10.0));
+    let n = [0.0, 0.3, 1.0];
+    let p = [14.5, 14.5, 15.0];
+    let big = Knife::Rect {
+        centre: DVec3::from_array(p),
+        normal: DVec3::from_array(n),
+        u_axis: DVec3::X,
+        half_extents: [50.0, 50.0],
+    };
+    let a = cut(&s.mesh, &s.forest, &big, &CAP).unwrap();
+    let b = cut(&s.mesh, &s.forest, &plane(p, n), &CAP).unwrap();
+    assert_eq!(a.pieces, b.pieces);
+    // A small rectangle makes a slit: still one watertight piece.
+    let small = Knife::Rect {
+        centre: DVec3::new(14.5, 14.5, 14.5),
+        normal: DVec3::Z,
+        u_axis: DVec3::X,
+        half_extents: [4.0, 30.0],
+    };
+    let r = cut(&s.mesh, &s.forest, &small, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 1);
+    assert_eq!(r.sides, vec![Side::Both]);
+    assert!(r.stats.triangles_partial > 0 && r.stats.curves_open > 0);
+    assert_eq!(r.stats.loops_capped, 0, "an open slit is not capped");
+    // The slit opens the surface: its open edges lie in the plane z = 14.5
+    // inside the rectangle; every other edge is used twice.
+    let p = &r.pieces[0];
+    let mut d: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &p.triangles {
+        for k in 0..3 {
+            *d.entry((t[k], t[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    let mut open = 0;
+    for &(a, b) in d.keys() {
+        if !d.contains_key(&(b, a)) {
+            open += 1;
+            for v in [a, b] {
+                let q = p.positions[v as usize];
+                assert!(
+                    (q.z - 14.5).abs() < 1e-4 && (q.x - 14.5).abs() <= 4.0 + 1e-4,
+                    "{q}"
+                );
+            }
+        }
+    }
+    assert!(open > 0);
+    same_result(&r, &cut_full_scan(&s.mesh, &small, &CAP).unwrap());
+}
+
+#[test]
+fn triangulated_knife_cuts_like_the_plane_it_samples() {
+    let s = mc(&ball_volume(30, 10.0));
+    // A large square knife in the plane z = 14.3, as two triangles.
+    let z = 14.3f32;
+    let knife = TriMesh::new(
+        vec![
+            glam::Vec3::new(-10.0, -10.0, z),
+            glam::Vec3::new(40.0, -10.0, z),
+            glam::Vec3::new(40.0, 40.0, z),
+            glam::Vec3::new(-10.0, 40.0, z),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    )
+    .unwrap();
+    let r = cut(
+        &s.mesh,
+        &s.forest,
+        &Knife::Mesh(knife.clone()),
+        &CutOptions::default(),
+    )
+    .unwrap();
+    let p = cut(
+        &s.mesh,
+        &s.forest,
+        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
+        &CutOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_eq!(r.stats.triangles_split, p.stats.triangles_split);
+    assert_eq!(r.sides, p.sides);
+    for (a, b) in r.pieces.iter().zip(&p.pieces) {
+        assert_eq!(a.triangles, b.triangles);
+        for (x, y) in a.positions.iter().zip(&b.positions) {
+            assert!((*x - *y).abs().max_element() < 1e-4);
+        }
+    }
+    same_result(
+        &r,
+        &cut_full_scan(&s.mesh, &Knife::Mesh(knife.clone()), &CutOptions::default()).unwrap(),
+    );
+    assert!(
+        cut(&s.mesh, &s.forest, &Knife::Mesh(knife), &CAP).is_err(),
+        "no caps for mesh knives"
+    );
+}
+
+#[test]
+fn cuts_of_plain_meshes_and_sequences() {
+    let ico = common::icosphere(4);
+    let r = cut_mesh(&ico, &plane([0.1, 0.0, 0.0], [1.0, 0.2, 0.0]), &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_conserved(&ico, &r, 1e-6, "icosphere/plane");
+    let knives = [
+        plane([0.0, 0.0, 0.1], [0.0, 0.0, 1.0]),
+        plane([0.05, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        Knife::Sphere {
+            centre: DVec3::new(0.0, 0.9, 0.0),
+            radius: 0.4,
+        },
+    ];
+    let r = cut_sequence(&ico, &knives, &CAP).unwrap();
+    assert_eq!(
+        r.pieces.len(),
+        8,
+        "four quarters, each bitten once by the sphere at y = 0.9"
+    );
+    assert_conserved(&ico, &r, 1e-6, "icosphere/sequence");
+}
+
+#[test]
+fn a_knife_missing_the_mesh_changes_nothing() {
+    let s = mc(&ball_volume(24, 8.0));
+    let r = cut(
+        &s.mesh,
+        &s.forest,
+        &plane([0.0, 0.0, 100.0], [0.0, 0.0, 1.0]),
+        &CAP,
+    )
+    .unwrap();
+    assert_eq!(r.pieces.len(), 1);
+    assert_eq!(r.pieces[0].triangles.len(), s.mesh.triangles.len());
+    assert_eq!(r.stats.triangles_tested, 0);
+    assert_eq!(r.stats.nodes_visited, s.forest.groups.len());
+}
+
+#[test]
+fn bad_knives_are_errors() {
+    let s = mc(&ball_volume(16, 5.0));
+    for k in [
+        plane([0.0; 3], [0.0; 3]),
+        plane([f64::NAN, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        Knife::Sphere {
+            centre: DVec3::ZERO,
+            radius: -1.0,
+        },
+        Knife::Mesh(TriMesh::default()),
+    ] {
+        assert!(cut(&s.mesh, &s.forest, &k, &CAP).is_err(), "{k:?}");
+    }
+}
+
+#[test]
+fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
+    let Some(vol) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    let s = marching_cubes(
+        &vol,
+        IsoSpec::Level(1150.0),
+        &McOptions { close_border: true },
+        Backend::Cpu,
+    )
+    .unwrap();
+    let (lo, hi) = s.mesh.bounds().unwrap();
+    let mid = ((lo + hi) * 0.5).as_dvec3();
+    // A jaw-like cut below the middle of the head, tilted.
+    let p = Knife::Plane {
+        point: mid + DVec3::new(0.0, 0.0, 25.0),
+        normal: DVec3::new(0.0, 0.3, 1.0),
+    };
+    let r = cut(&s.mesh, &s.forest, &p, &CAP).unwrap();
+    assert!(r.pieces.len() >= 2);
+    assert_conserved(&s.mesh, &r, 1e-6, "headsq/plane");
+    same_result(&r, &cut_full_scan(&s.mesh, &p, &CAP).unwrap());
+    assert!(
+        r.stats.triangles_tested * 3 < r.stats.triangles_total,
+        "{:?}",
+        r.stats
+    );
+    assert!(
+        r.stats.nodes_visited * 2 < r.stats.nodes_total,
+        "{:?}",
+        r.stats
+    );
+    let sph = Knife::Sphere {
+        centre: mid + DVec3::new(0.0, -40.0, -20.0),
+        radius: 35.0,
+    };
+    let r = cut(&s.mesh, &s.forest, &sph, &CAP).unwrap();
+    assert!(r.pieces.len() >= 2);
+    assert_conserved(&s.mesh, &r, 1e-6, "headsq/sphere");
+    same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
+    eprintln!("headsq sphere cut: {:?}", r.stats);
+}

@@ -1,0 +1,225 @@
+//! Parity of marching cubes (`mc_classify`, `mc_vertices`, `mc_triangles`)
+//! against the CPU mirror `surface::cpu`.
+//!
+//! Exact comparison: both sides compute `t = (level − a) / (b − a)` and
+//! `u[axis] = f32(p[axis]) + t` with the same f32 operations (one IEEE
+//! division, one addition — nothing to contract into an FMA), and the world
+//! transform runs on the host for both. Vertex positions are therefore
+//! compared bit for bit, keyed by grid edge id; the triangle set is
+//! compared as sorted triples of grid edge ids (rotated to start at the
+//! smallest), and also in output order, with cells and groups. An adapter
+//! whose division is not correctly rounded (WGSL allows 2.5 ulp) would fail
+//! the position check and nothing else.
+
+use std::collections::BTreeMap;
+
+use chisel::Backend;
+use chisel::gpu::{Gpu, GpuOptions};
+use chisel::parity::{Mismatch, Tolerance, compare_exact, compare_vec, find_sentinel};
+use chisel::surface::{self, Field, IsoSpec, McOptions, Surface};
+use chisel::volume::{Volume, VolumeData};
+
+use crate::common;
+
+fn xorshift(seed: u64) -> impl FnMut() -> u64 {
+    let mut s = seed.max(1);
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
+    }
+}
+
+fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
+    let mut next = xorshift(seed);
+    let data: Vec<i16> = (0..dims.iter().product::<usize>())
+        .map(|_| (next() % 2000) as i16)
+        .collect();
+    Volume::new(
+        dims,
+        [0.7, 1.1, 1.3],
+        [-3.0, 2.0, 5.0],
+        VolumeData::I16(data),
+    )
+    .unwrap()
+}
+
+/// Triangles as sorted, rotation-normalised triples of grid edge ids.
+fn canonical_triangles(s: &Surface) -> Vec<[u64; 3]> {
+    let mut out: Vec<[u64; 3]> = s
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let e = t.map(|v| s.vertex_edges[v as usize]);
+            let k = (0..3).min_by_key(|&k| e[k]).unwrap_or(0);
+            [e[k], e[(k + 1) % 3], e[(k + 2) % 3]]
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
+/// Positions keyed by grid edge id, in edge order.
+fn positions_by_edge(s: &Surface) -> Vec<[f32; 3]> {
+    let by: BTreeMap<u64, [f32; 3]> = s
+        .vertex_edges
+        .iter()
+        .zip(&s.mesh.positions)
+        .map(|(&k, p)| (k, p.to_array()))
+        .collect();
+    by.into_values().collect()
+}
+
+fn compare(what: &str, cpu: &Surface, gpu: &Surface) -> Result<(), Mismatch> {
+    let mut e_cpu = cpu.vertex_edges.clone();
+    let mut e_gpu = gpu.vertex_edges.clone();
+    e_cpu.sort_unstable();
+    e_gpu.sort_unstable();
+    compare_exact(&format!("{what}: vertex edge ids"), &e_cpu, &e_gpu)?;
+    compare_vec(
+        &format!("{what}: positions by edge"),
+        &positions_by_edge(cpu),
+        &positions_by_edge(gpu),
+        Tolerance::EXACT,
+    )?;
+    compare_exact(
+        &format!("{what}: triangle set"),
+        &canonical_triangles(cpu),
+        &canonical_triangles(gpu),
+    )?;
+    compare_exact(
+        &format!("{what}: triangles in order"),
+        &cpu.mesh.triangles,
+        &gpu.mesh.triangles,
+    )?;
+    compare_exact(
+        &format!("{what}: cells"),
+        &cpu.triangle_cells,
+        &gpu.triangle_cells,
+    )?;
+    compare_exact(
+        &format!("{what}: groups"),
+        &cpu.triangle_groups,
+        &gpu.triangle_groups,
+    )?;
+    let euler = |s: &Surface| s.groups.iter().map(|g| g.euler).collect::<Vec<_>>();
+    compare_exact(&format!("{what}: group χ"), &euler(cpu), &euler(gpu))?;
+    Ok(())
+}
+
+fn check(gpu: &Gpu, what: &str, vol: &Volume, iso: IsoSpec, close: bool) {
+    let opts = McOptions {
+        close_border: close,
+    };
+    let c = surface::marching_cubes(vol, iso, &opts, Backend::Cpu).unwrap();
+    let g = surface::marching_cubes(vol, iso, &opts, Backend::Gpu(gpu)).unwrap();
+    assert!(
+        !c.mesh.triangles.is_empty(),
+        "{what}: empty surface proves nothing"
+    );
+    compare(what, &c, &g).unwrap_or_else(|m| panic!("{m}"));
+}
+
+#[test]
+fn mc_random_volumes() {
+    let Some(gpu) = common::gpu() else { return };
+    for seed in 1..=4u64 {
+        let vol = random_volume(seed, [23, 17, 11]);
+        for close in [false, true] {
+            check(
+                &gpu,
+                &format!("random {seed} close {close}"),
+                &vol,
+                IsoSpec::Level(1000.5),
+                close,
+            );
+        }
+    }
+}
+
+#[test]
+fn mc_labels() {
+    let Some(gpu) = common::gpu() else { return };
+    let mut next = xorshift(9);
+    let data: Vec<u8> = (0..30 * 20 * 10).map(|_| (next() % 4) as u8).collect();
+    let vol = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
+    check(&gpu, "labels", &vol, IsoSpec::Label(2.0), true);
+}
+
+/// A binding cap of 64 KiB forces many classify slabs and one-or-two-layer
+/// emission slabs (the triangles of one layer take most of a binding).
+#[test]
+fn mc_slabs_match_single_pass() {
+    let Some(small) = Gpu::with_options(GpuOptions {
+        max_binding_bytes: Some(64 << 10),
+        ..GpuOptions::default()
+    })
+    .ok() else {
+        return;
+    };
+    let vol = random_volume(5, [40, 30, 60]);
+    let field = Field::new(&vol, IsoSpec::Level(1000.5), true).unwrap();
+    let layer_bytes = (field.dims[0] * field.dims[1] * 4) as u64;
+    let total = layer_bytes * field.dims[2] as u64;
+    assert!(
+        total > 4 * small.max_binding_bytes(),
+        "cap must force slabs"
+    );
+    check(&small, "slabs", &vol, IsoSpec::Level(1000.5), true);
+}
+
+#[test]
+fn mc_headsq() {
+    let Some(gpu) = common::gpu() else { return };
+    let Some(vol) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    for level in [500.0, 1150.0] {
+        check(
+            &gpu,
+            &format!("headsq {level}"),
+            &vol,
+            IsoSpec::Level(level),
+            true,
+        );
+    }
+}
+
+#[test]
+fn mc_sentinels_and_negative_control() {
+    let Some(gpu) = common::gpu() else { return };
+    let vol = random_volume(3, [20, 18, 16]);
+    let iso = IsoSpec::Level(1000.5);
+    let field = Field::new(&vol, iso, true).unwrap();
+    let raw = surface::gpu::marching_cubes_raw(&gpu, &field).unwrap();
+    assert!(!raw.triangles.is_empty());
+    assert_eq!(find_sentinel(&raw.triangles, [u32::MAX; 4]), None);
+    assert!(
+        raw.positions
+            .iter()
+            .all(|p| p[..3].iter().all(|c| c.is_finite()))
+    );
+    let cpu = surface::marching_cubes(&vol, iso, &McOptions { close_border: true }, Backend::Cpu)
+        .unwrap();
+    let ok = surface::finish(&field, surface::gpu::assemble(raw.clone()));
+    compare("unchanged", &cpu, &ok).unwrap();
+    // One position off by one ulp.
+    let mut bad = raw.clone();
+    bad.positions[7][1] = f32::from_bits(bad.positions[7][1].to_bits() + 1);
+    let s = surface::finish(&field, surface::gpu::assemble(bad));
+    assert!(
+        compare("one ulp", &cpu, &s).is_err(),
+        "comparator missed a 1-ulp position"
+    );
+    // Two vertices of one triangle swapped (orientation flip).
+    let mut bad = raw;
+    let t = bad.triangles.len() / 2;
+    bad.triangles[t].swap(0, 1);
+    let s = surface::finish(&field, surface::gpu::assemble(bad));
+    assert!(
+        compare("flipped", &cpu, &s).is_err(),
+        "comparator missed a flipped triangle"
+    );
+}

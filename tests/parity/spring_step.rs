@@ -1,0 +1,260 @@
+//! Parity of `kernels/spring_step.wgsl` with `tissue::cpu::spring_step`
+//! (explicit solver), plus the shared tissue fixtures of the other tissue
+//! parity modules.
+//!
+//! Tolerance: `tissue::cpu::position_tolerance(N, diagonal)` =
+//! N · 8 ε_f32 · diagonal on positions after N iterations (see its docs);
+//! stop statuses and iteration counts must match exactly.
+
+use chisel::Backend;
+use chisel::gpu::Gpu;
+use chisel::parity::{Tolerance, compare_exact, compare_vec, find_sentinel};
+use chisel::tissue::cpu::{self, StepParams};
+use chisel::tissue::phantom::FRAN_CHIN_ADVANCE_TOML;
+use chisel::tissue::{
+    Fragments, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, gpu as tissue_gpu,
+    iterate, relax,
+};
+use glam::Vec3;
+
+use crate::common;
+
+/// Named network fixtures: synthetic (icosphere, grid patch) and fran_cut.
+pub fn networks() -> Vec<(&'static str, SpringNetwork)> {
+    let mut out = vec![
+        (
+            "icosphere(3)",
+            SpringNetwork::build(&common::icosphere(3), None, &NetworkParams::default()).unwrap(),
+        ),
+        (
+            "grid 30x20",
+            SpringNetwork::build(&grid_patch(30, 20), None, &NetworkParams::default()).unwrap(),
+        ),
+    ];
+    if let Some(face) = common::real_mesh("fran_cut.vtk") {
+        out.push((
+            "fran_cut",
+            SpringNetwork::build(&face, None, &NetworkParams::default()).unwrap(),
+        ));
+    }
+    out
+}
+
+/// A gently curved `nx × ny` patch (spacing 1).
+pub fn grid_patch(nx: usize, ny: usize) -> chisel::TriMesh {
+    let mut p = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let (x, y) = (i as f32, j as f32);
+            p.push(Vec3::new(x, y, 0.02 * (x - nx as f32 / 2.0).powi(2)));
+        }
+    }
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut t = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    chisel::TriMesh::new(p, t).unwrap()
+}
+
+/// The bone layer with its upper third moved by 3 % of the network size
+/// along +x+z: a surgical increment that sets the whole network moving.
+pub fn moved_bone(net: &SpringNetwork) -> Vec<[f32; 4]> {
+    let d = 0.03 * net.diagonal();
+    let bone = net.bone_rest();
+    let ys: Vec<f32> = bone.iter().map(|b| b[1]).collect();
+    let cut = ys.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+        - (ys.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+            - ys.iter().copied().fold(f32::INFINITY, f32::min))
+            / 3.0;
+    bone.iter()
+        .map(|&b| {
+            if b[1] >= cut {
+                [b[0] + d, b[1], b[2] + d, 0.0]
+            } else {
+                b
+            }
+        })
+        .collect()
+}
+
+/// Positions after `n` iterations on both backends agree within the
+/// derived bound; a corrupted GPU coordinate is caught (negative control);
+/// the NaN-prefilled second position buffer leaves no sentinel behind.
+pub fn check_iterations(gpu: &Gpu, solver: Solver, n: u32) {
+    for (name, net) in networks() {
+        let bone = moved_bone(&net);
+        let opts = RelaxOptions {
+            solver,
+            ..RelaxOptions::default()
+        };
+        let a = iterate(&net, &bone, &opts, n, Backend::Cpu).unwrap();
+        let b = iterate(&net, &bone, &opts, n, Backend::Gpu(gpu)).unwrap();
+        assert_eq!(
+            find_sentinel(&b, [f32::NAN; 4]),
+            None,
+            "{name}: sentinel survived"
+        );
+        let tol = cpu::position_tolerance(n, net.diagonal());
+        let what = format!("{} {name} after {n} iterations", solver.name());
+        compare_vec(&what, &a, &b, tol).unwrap_or_else(|m| panic!("{m}"));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).fold(0.0, f32::max))
+            .fold(0.0, f32::max);
+        eprintln!("{what}: max |cpu − gpu| = {worst:e} (bound {:e})", tol.abs);
+        // The comparison is not vacuous: the network moved far more than tol.
+        let moved = (0..net.n_free)
+            .map(|i| Vec3::from_slice(&a[i][..3]).distance(Vec3::from_slice(&net.rest[i][..3])))
+            .fold(0.0, f32::max);
+        assert!(
+            moved > 100.0 * tol.abs,
+            "{what}: moved {moved} vs tol {}",
+            tol.abs
+        );
+        // Negative control: one coordinate off by 10 tolerances must fail.
+        let mut bad = b.clone();
+        let k = net.n_free / 2;
+        bad[k][1] += 10.0 * tol.abs;
+        let m = compare_vec(&what, &a, &bad, tol).expect_err("corrupted output must be caught");
+        assert_eq!(m.index, k);
+    }
+}
+
+/// Per-increment statuses and iteration counts of a converge plan are
+/// identical on both backends, and the final positions agree.
+pub fn check_stop_status(gpu: &Gpu, solver: Solver) {
+    for (name, net) in networks() {
+        let plan = if name == "fran_cut" {
+            Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").unwrap()
+        } else {
+            let b = net.bone_rest();
+            Plan::from_toml_str(
+                &format!(
+                    "[[step]]\nselect = {{ sphere = {{ center = [{}, {}, {}], radius = {} }} }}\n\
+                     translate = [{}, 0, 0]\nincrements = 2\n",
+                    b[0][0],
+                    b[0][1],
+                    b[0][2],
+                    0.3 * net.diagonal(),
+                    0.02 * net.diagonal()
+                ),
+                "p",
+            )
+            .unwrap()
+        }
+        .resolve(&net, &Fragments::new())
+        .unwrap();
+        let opts = RelaxOptions {
+            solver,
+            ..RelaxOptions::default()
+        };
+        let a = relax(&net, &plan, &opts, Backend::Cpu).unwrap();
+        let b = relax(&net, &plan, &opts, Backend::Gpu(gpu)).unwrap();
+        let summary = |r: &chisel::tissue::RelaxReport| -> Vec<(String, u64)> {
+            r.steps
+                .iter()
+                .flat_map(|s| s.increments.iter())
+                .map(|i| (format!("{:?}", i.status), i.iterations))
+                .collect()
+        };
+        let what = format!("{} {name} stop status", solver.name());
+        compare_exact(&what, &summary(&a), &summary(&b)).unwrap_or_else(|m| panic!("{m}"));
+        let tol = cpu::position_tolerance(a.iterations as u32, net.diagonal());
+        compare_vec(&what, &a.positions, &b.positions, tol).unwrap_or_else(|m| panic!("{m}"));
+    }
+}
+
+/// One dispatch on perturbed inputs: positions and velocities of every
+/// free node match, the sentinel-filled output is fully written.
+pub fn check_single_step(gpu: &Gpu, solver: Solver) {
+    for (name, net) in networks() {
+        let opts = RelaxOptions {
+            solver,
+            external_forces: Some(
+                (0..net.n_free)
+                    .map(|i| Vec3::new(0.0, 0.01 * ((i % 7) as f32 - 3.0), 0.0))
+                    .collect(),
+            ),
+            ..RelaxOptions::default()
+        };
+        let dt = chisel::tissue::explicit::choose_dt(&net, None, false).unwrap();
+        let mut pos = iterate(&net, &moved_bone(&net), &opts, 3, Backend::Cpu).unwrap();
+        let diag = net.diagonal();
+        for (i, p) in pos.iter_mut().enumerate().take(net.n_free) {
+            p[0] += 1e-3 * diag * ((i * 31 % 17) as f32 / 17.0 - 0.5);
+        }
+        let vel: Vec<[f32; 4]> = (0..net.n_free)
+            .map(|i| [1e-3 * diag * ((i % 5) as f32 - 2.0), 0.0, 1e-3 * diag, 0.0])
+            .collect();
+        let forces: Vec<[f32; 4]> = opts
+            .external_forces
+            .as_ref()
+            .unwrap()
+            .iter()
+            .map(|f| [f.x, f.y, f.z, 0.0])
+            .collect();
+        let mut materials = [[0.0f32; 4]; 16];
+        for (row, m) in materials.iter_mut().zip(&net.materials) {
+            *row = m.table_row();
+        }
+        let params = StepParams {
+            n_free: net.n_free as u32,
+            use_forces: true,
+            dt,
+            damping: if solver == Solver::Explicit {
+                0.5
+            } else {
+                0.95
+            },
+            gain: 2.0 / dt,
+            materials,
+        };
+        let mut cpu_pos = pos.clone();
+        let mut cpu_vel = vel.clone();
+        let kernel = match solver {
+            Solver::Explicit => cpu::spring_step,
+            Solver::Chebyshev => cpu::spring_chebyshev,
+        };
+        kernel(&params, &net.csr, &forces, &pos, &mut cpu_pos, &mut cpu_vel);
+        let (gpu_pos, gpu_vel) =
+            tissue_gpu::step_once(gpu, solver, &params, &net.csr, &forces, &pos, &vel).unwrap();
+        assert_eq!(find_sentinel(&gpu_pos, [f32::NAN; 4]), None, "{name}");
+        let what = format!("{} {name} one step", solver.name());
+        compare_vec(
+            &what,
+            &cpu_pos[..net.n_free],
+            &gpu_pos,
+            cpu::position_tolerance(1, diag),
+        )
+        .unwrap_or_else(|m| panic!("{m}"));
+        // Velocities: position tolerance per unit step, relative to h.
+        let vtol = Tolerance {
+            abs: cpu::position_tolerance(1, diag).abs / dt,
+            rel: 0.0,
+        };
+        compare_vec(&what, &cpu_vel, &gpu_vel, vtol).unwrap_or_else(|m| panic!("{m}"));
+    }
+}
+
+#[test]
+fn spring_step_single_dispatch() {
+    let Some(gpu) = common::gpu() else { return };
+    check_single_step(&gpu, Solver::Explicit);
+}
+
+#[test]
+fn spring_step_after_n_iterations() {
+    let Some(gpu) = common::gpu() else { return };
+    check_iterations(&gpu, Solver::Explicit, 201);
+}
+
+#[test]
+fn spring_step_stop_status() {
+    let Some(gpu) = common::gpu() else { return };
+    check_stop_status(&gpu, Solver::Explicit);
+}

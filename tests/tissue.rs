@@ -1,0 +1,765 @@
+//! Tissue model: network construction, plans and their validation, Δt
+//! policy, the f64 oracle against analytic cases, the CPU mirror against the
+//! oracle, stop criteria, and the accelerated solver's equilibrium.
+
+mod common;
+
+use chisel::Backend;
+use chisel::mesh::TriMesh;
+use chisel::tissue::network::unique_edges;
+use chisel::tissue::oracle::{self, OracleState};
+use chisel::tissue::phantom::{self, FRAN_GRID};
+use chisel::tissue::{
+    Fragments, Iterations, Material, NetworkParams, Plan, RelaxOptions, Selector, Solver,
+    SpringClass, SpringNetwork, Status, Step, explicit, relax,
+};
+use glam::{DVec3, Vec3};
+
+/// A flat `nx × ny` grid patch in the x–y plane (spacing 1), wound +z.
+fn grid(nx: usize, ny: usize) -> TriMesh {
+    let mut p = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            p.push(Vec3::new(i as f32, j as f32, 0.1 * ((i * j) % 3) as f32));
+        }
+    }
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut t = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    TriMesh::new(p, t).unwrap()
+}
+
+fn two_spheres() -> TriMesh {
+    let a = common::icosphere(1);
+    let mut m = a.clone();
+    let off = a.n_vertices() as u32;
+    m.positions
+        .extend(a.positions.iter().map(|p| *p + Vec3::new(3.0, 0.0, 0.0)));
+    m.triangles
+        .extend(a.triangles.iter().map(|t| t.map(|i| i + off)));
+    m
+}
+
+/// With the default bone (a scaled copy), eq. 4.1 links q_i to b_i, so the
+/// class counts have closed forms in #V and #E.
+fn check_counts(mesh: &TriMesh) -> SpringNetwork {
+    let net = SpringNetwork::build(mesh, None, &NetworkParams::default()).unwrap();
+    let n = mesh.n_vertices();
+    let e = unique_edges(&mesh.triangles).len();
+    assert_eq!(net.n_nodes(), 3 * n);
+    assert_eq!(net.n_free, 2 * n);
+    assert_eq!(net.class_counts(), [e, n + 2 * e, e, n + 2 * e, e]);
+    // Rest length = initial length; springs unique and ordered.
+    for w in net.springs.windows(2) {
+        assert!((w[0].a, w[0].b) < (w[1].a, w[1].b));
+    }
+    for s in &net.springs {
+        let (a, b) = (net.rest[s.a as usize], net.rest[s.b as usize]);
+        let d = Vec3::new(a[0] - b[0], a[1] - b[1], a[2] - b[2]).length();
+        assert!((d - s.rest).abs() <= 1e-6 * d.max(1.0));
+    }
+    // The gather CSR is the symmetric closure over free nodes, rows sorted.
+    let mut expect = 0;
+    for s in &net.springs {
+        expect +=
+            usize::from((s.a as usize) < net.n_free) + usize::from((s.b as usize) < net.n_free);
+    }
+    assert_eq!(net.csr.entries.len(), expect);
+    for i in 0..net.n_free {
+        let row = &net.csr.entries[net.csr.offsets[i] as usize..net.csr.offsets[i + 1] as usize];
+        let ids: Vec<u32> = row.iter().map(|e| e[0] & 0x0fff_ffff).collect();
+        assert!(ids.windows(2).all(|w| w[0] < w[1]), "row {i} not sorted");
+    }
+    net
+}
+
+#[test]
+fn network_counts_open_closed_and_multi_component() {
+    check_counts(&grid(6, 5));
+    let closed = check_counts(&common::icosphere(2));
+    // Closed surface: origin at the bounding-box centre, layers nest.
+    assert!(closed.origin.length() < 1e-6);
+    check_counts(&two_spheres());
+}
+
+#[test]
+fn default_origin_is_behind_an_open_patch_whatever_the_winding() {
+    let mut m = grid(5, 5);
+    // Bulge the patch toward +z so its outer side is +z.
+    for p in &mut m.positions {
+        p.z = 3.0 - 0.1 * ((p.x - 2.0).powi(2) + (p.y - 2.0).powi(2));
+    }
+    let o = chisel::tissue::default_origin(&m).unwrap();
+    let lo = m.bounds().unwrap().0;
+    assert_eq!(o.z, lo.z, "origin must be on the back (−z) face");
+    m.flip_winding();
+    assert_eq!(chisel::tissue::default_origin(&m).unwrap(), o);
+}
+
+#[test]
+fn nearest_bone_links_follow_eq_4_1_with_a_real_bone_mesh() {
+    let skin = common::icosphere(2);
+    let mut bone = common::icosphere(1);
+    for p in &mut bone.positions {
+        *p = *p * 0.6 + Vec3::new(0.05, -0.02, 0.0);
+    }
+    let params = NetworkParams {
+        origin: Some([0.0; 3]),
+        ..NetworkParams::default()
+    };
+    let net = SpringNetwork::build(&skin, Some(&bone), &params).unwrap();
+    let n = skin.n_vertices();
+    let s = 0.7f64 / 0.8;
+    for i in 0..n {
+        let q = net.rest[n + i];
+        let target = DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) * s;
+        let brute = (0..bone.n_vertices())
+            .min_by(|&a, &b| {
+                let da = bone.positions[a].as_dvec3().distance_squared(target);
+                let db = bone.positions[b].as_dvec3().distance_squared(target);
+                da.total_cmp(&db).then(a.cmp(&b))
+            })
+            .unwrap();
+        let b = (2 * n + brute) as u32;
+        assert!(
+            net.springs
+                .iter()
+                .any(|sp| sp.a == (n + i) as u32 && sp.b == b && sp.class == SpringClass::Muscle),
+            "q_{i} not linked to its nearest bone vertex {brute}"
+        );
+    }
+    // Bone nodes are fixed: no CSR rows.
+    assert_eq!(net.csr.offsets.len(), 2 * n + 1);
+}
+
+#[test]
+fn unused_vertices_keep_dermis_and_muscle_links() {
+    let mut m = grid(4, 4);
+    m.positions.push(Vec3::new(1.5, 1.5, 2.0));
+    let net = SpringNetwork::build(&m, None, &NetworkParams::default()).unwrap();
+    let v = (m.n_vertices() - 1) as u32;
+    let n = m.n_vertices() as u32;
+    let has = |a, b, c| {
+        net.springs
+            .iter()
+            .any(|s| s.a == a && s.b == b && s.class == c)
+    };
+    assert!(has(v, n + v, SpringClass::Dermis));
+    assert!(has(n + v, 2 * n + v, SpringClass::Muscle));
+}
+
+#[test]
+fn bad_networks_are_refused() {
+    let empty = TriMesh::default();
+    assert!(SpringNetwork::build(&empty, None, &NetworkParams::default()).is_err());
+    let m = grid(3, 3);
+    let bad_scale = NetworkParams {
+        subcutis_scale: f32::NAN,
+        ..NetworkParams::default()
+    };
+    assert!(SpringNetwork::build(&m, None, &bad_scale).is_err());
+    let bad_origin = NetworkParams {
+        origin: Some([0.0, f32::INFINITY, 0.0]),
+        ..NetworkParams::default()
+    };
+    let e = SpringNetwork::build(&m, None, &bad_origin).unwrap_err();
+    assert!(e.to_string().contains("origin"), "{e}");
+}
+
+#[test]
+fn stiffness_regions_override_springs_in_the_region() {
+    let m = grid(6, 6);
+    let params = NetworkParams {
+        regions: vec![chisel::tissue::StiffnessRegion {
+            region: Selector::Box {
+                min: [-1.0, -1.0, -10.0],
+                max: [2.0, 2.0, 10.0],
+            },
+            class: Some(SpringClass::Epidermis),
+            scale: 4.0,
+        }],
+        ..NetworkParams::default()
+    };
+    let net = SpringNetwork::build(&m, None, &params).unwrap();
+    assert_eq!(net.materials.len(), 6);
+    assert_eq!(net.materials[5].c1, 4.0);
+    let overridden = net.springs.iter().filter(|s| s.material == 5).count();
+    assert!(overridden > 0);
+    assert!(
+        net.springs
+            .iter()
+            .filter(|s| s.material == 5)
+            .all(|s| s.class == SpringClass::Epidermis)
+    );
+}
+
+// ---------------------------------------------------------------- plans
+
+fn plan_err(toml: &str) -> String {
+    Plan::from_toml_str(toml, "test.toml")
+        .unwrap_err()
+        .to_string()
+}
+
+#[test]
+fn plan_validation_names_the_problem() {
+    let e = plan_err("[[step]]\nselect = { vertices = [1] }\ntranslat = [1, 0, 0]\n");
+    assert!(e.contains("translat") && e.contains("line 3"), "{e}");
+    let e =
+        plan_err("[[step]]\nselect = { sphere = { center = [0,0,0], radius = 1, extra = 2 } }\n");
+    assert!(e.contains("extra"), "{e}");
+    let e = plan_err("[[step]]\nselect = { vertices = [1] }\nincrements = 0\n");
+    assert!(e.contains("increments") && e.contains("k = 0"), "{e}");
+    let e = plan_err("[[step]]\nselect = { vertices = [1] }\ntranslate = [nan, 0, 0]\n");
+    assert!(e.contains("not finite"), "{e}");
+    let e = plan_err("[[step]]\nselect = { vertices = [1] }\niterations = \"forever\"\n");
+    assert!(e.contains("converge"), "{e}");
+    let e = plan_err("[[step]]\nselect = { vertices = [] }\n");
+    assert!(e.contains("empty selection"), "{e}");
+    let e = plan_err("[[step]]\nselect = { sphere = { center = [0,0,0], radius = -1 } }\n");
+    assert!(e.contains("radius"), "{e}");
+    let e = plan_err("name = \"x\"\n");
+    assert!(e.contains("step"), "{e}");
+    let e = Plan::from_json_str(
+        r#"{"steps": [{"select": {"box": {"min": [0,0,0]}}}]}"#,
+        "p.json",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("max"), "{e}");
+}
+
+#[test]
+fn plans_parse_from_toml_and_json_alike() {
+    let toml = "name = \"t\"\n[[step]]\nselect = { half_space = { point = [0,0,0], normal = [0,1,0] } }\n\
+                translate = [0, 0, 1]\nincrements = 4\niterations = 3\nreset_velocities = true\n\
+                rotate = { axis = [0, 1, 0], degrees = 10, center = [0, 0, 0] }\n";
+    let a = Plan::from_toml_str(toml, "t.toml").unwrap();
+    let json = r#"{"name": "t", "steps": [{"select": {"half_space": {"point": [0,0,0], "normal": [0,1,0]}},
+        "translate": [0,0,1], "increments": 4, "iterations": 3, "reset_velocities": true,
+        "rotate": {"axis": [0,1,0], "degrees": 10, "center": [0,0,0]}}]}"#;
+    let b = Plan::from_json_str(json, "t.json").unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a.steps[0].iterations, Iterations::Fixed(3));
+    let c = Plan::from_toml_str("[[step]]\nselect = { fragment = \"jaw\" }\n", "c").unwrap();
+    assert_eq!(c.steps[0].iterations, Iterations::Converge);
+    assert_eq!(c.steps[0].increments, 1);
+}
+
+#[test]
+fn resolution_checks_the_bone_layer() {
+    let net = SpringNetwork::build(&grid(5, 5), None, &NetworkParams::default()).unwrap();
+    let resolve = |toml: &str| {
+        Plan::from_toml_str(toml, "r.toml")
+            .unwrap()
+            .resolve(&net, &Fragments::new())
+    };
+    let e = resolve(
+        "[[step]]\nname = \"far\"\nselect = { sphere = { center = [100,0,0], radius = 1 } }\n",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("far") && e.contains("empty selection") && e.contains("bone layer"),
+        "{e}"
+    );
+    let e = resolve("[[step]]\nselect = { vertices = [0, 25] }\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("25") && e.contains("outside the bone layer"),
+        "{e}"
+    );
+    let e = resolve("[[step]]\nselect = { fragment = \"jaw\" }\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown fragment `jaw`"), "{e}");
+    let ok = Plan::from_toml_str(
+        "[[step]]\nselect = { fragment = \"jaw\" }\ntranslate = [1,0,0]\nincrements = 2\n",
+        "ok",
+    )
+    .unwrap()
+    .resolve(&net, &Fragments::from([("jaw".into(), vec![3, 1, 3])]))
+    .unwrap();
+    assert_eq!(ok.steps[0].bone_vertices, vec![1, 3]);
+    let half = ok.steps[0].targets(1);
+    let b1 = net.bone_rest()[1];
+    assert!((half[0][0] - (b1[0] + 0.5)).abs() < 1e-6);
+}
+
+#[test]
+fn later_steps_select_on_the_moved_bone() {
+    let net = SpringNetwork::build(&grid(5, 5), None, &NetworkParams::default()).unwrap();
+    let b0 = net.bone_rest()[0];
+    let toml = format!(
+        "[[step]]\nselect = {{ vertices = [0] }}\ntranslate = [100, 0, 0]\n\
+         [[step]]\nselect = {{ sphere = {{ center = [{}, {}, {}], radius = 0.01 }} }}\n",
+        b0[0] + 100.0,
+        b0[1],
+        b0[2]
+    );
+    let r = Plan::from_toml_str(&toml, "m")
+        .unwrap()
+        .resolve(&net, &Fragments::new())
+        .unwrap();
+    assert_eq!(r.steps[1].bone_vertices, vec![0]);
+}
+
+#[test]
+fn rotation_increments_are_exact_fractions() {
+    let net = SpringNetwork::build(&grid(3, 3), None, &NetworkParams::default()).unwrap();
+    let plan = Plan {
+        name: None,
+        steps: vec![Step {
+            name: None,
+            select: Selector::Vertices(vec![8]),
+            translate: [0.0; 3],
+            rotate: Some(chisel::tissue::Rotation {
+                axis: [0.0, 0.0, 1.0],
+                degrees: 90.0,
+                center: [0.0; 3],
+            }),
+            increments: 3,
+            iterations: Iterations::Fixed(1),
+            reset_velocities: false,
+        }],
+    };
+    let r = plan.resolve(&net, &Fragments::new()).unwrap();
+    let b = net.bone_rest()[8];
+    let end = r.steps[0].targets(3)[0];
+    // (x, y) rotated by 90° about z: (−y, x).
+    assert!((end[0] + b[1]).abs() < 1e-5 && (end[1] - b[0]).abs() < 1e-5);
+    let third = r.steps[0].targets(1)[0];
+    let angle = (third[1].atan2(third[0]) - b[1].atan2(b[0])).to_degrees();
+    assert!((angle - 30.0).abs() < 1e-3, "{angle}");
+}
+
+// ---------------------------------------------------------------- Δt
+
+#[test]
+fn unstable_dt_is_refused_unless_forced() {
+    let net = SpringNetwork::build(&grid(4, 4), None, &NetworkParams::default()).unwrap();
+    let limit = explicit::stability_limit(&net);
+    assert!(limit > 0.0 && limit.is_finite());
+    assert_eq!(
+        explicit::choose_dt(&net, None, false).unwrap(),
+        explicit::DEFAULT_FRACTION * limit
+    );
+    let e = explicit::choose_dt(&net, Some(1.5 * limit), false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("stability limit"), "{e}");
+    assert_eq!(
+        explicit::choose_dt(&net, Some(1.5 * limit), true).unwrap(),
+        1.5 * limit
+    );
+    assert!(explicit::choose_dt(&net, Some(-1.0), true).is_err());
+}
+
+// ---------------------------------------------------------------- oracle
+
+/// One free node on a spring to a fixed node: a damped oscillator.
+fn single_spring(c: f32, gamma: f32) -> SpringNetwork {
+    SpringNetwork::from_parts(
+        &[Vec3::new(1.0, 0.0, 0.0), Vec3::ZERO],
+        1,
+        &[(0, 1, 0)],
+        &[Material::linear(c)],
+        1.0,
+        gamma,
+    )
+    .unwrap()
+}
+
+#[test]
+fn oracle_single_spring_period_and_decay() {
+    let (c, gamma) = (4.0f64, 0.2f64);
+    let net = single_spring(c as f32, gamma as f32);
+    let mut s = OracleState::new(&net, &[DVec3::ZERO]);
+    s.x[0].x = 1.1; // 0.1 extension
+    let dt = 1e-4;
+    let mut crossings = Vec::new();
+    let mut peaks = Vec::new();
+    let mut prev = s.x[0].x - 1.0;
+    let mut prev_v = 0.0;
+    for k in 0..200_000 {
+        s.step(&net, dt, &[]);
+        let u = s.x[0].x - 1.0;
+        if prev > 0.0 && u <= 0.0 {
+            crossings.push(k as f64 * dt);
+        }
+        if prev_v > 0.0 && s.v[0].x <= 0.0 {
+            peaks.push(u);
+        }
+        prev = u;
+        prev_v = s.v[0].x;
+    }
+    let omega_d = (c - gamma * gamma / 4.0).sqrt();
+    let period = 2.0 * std::f64::consts::PI / omega_d;
+    let measured = (crossings[5] - crossings[1]) / 4.0;
+    assert!(
+        (measured - period).abs() < 1e-3 * period,
+        "{measured} vs {period}"
+    );
+    let decay = peaks[2] / peaks[1];
+    let expect = (-gamma / 2.0 * period).exp();
+    assert!((decay - expect).abs() < 2e-3, "{decay} vs {expect}");
+}
+
+#[test]
+fn oracle_chain_reaches_series_spring_equilibrium() {
+    // Fixed ends at x = 0 and x = 4 (moved to 5); three free nodes; springs
+    // c = 1, 2, 1, 2 in series: equal tension, extension_i = T / c_i.
+    let pos: Vec<Vec3> = [1.0, 2.0, 3.0, 0.0, 4.0]
+        .iter()
+        .map(|&x| Vec3::new(x, 0.0, 0.0))
+        .collect();
+    let mats = [Material::linear(1.0), Material::linear(2.0)];
+    let net = SpringNetwork::from_parts(
+        &pos,
+        3,
+        &[(3, 0, 0), (0, 1, 1), (1, 2, 0), (2, 4, 1)],
+        &mats,
+        1.0,
+        1.0,
+    )
+    .unwrap();
+    let mut s = OracleState::new(&net, &[DVec3::ZERO, DVec3::new(5.0, 0.0, 0.0)]);
+    s.settle(&net, 0.1, &[], 1e-12, 1_000_000);
+    let tension = 1.0 / (1.0 + 0.5 + 1.0 + 0.5);
+    let expect = [1.0 + tension, 2.0 + tension * 1.5, 3.0 + tension * 2.5];
+    for (k, (x, want)) in s.x.iter().zip(expect).enumerate() {
+        assert!((x.x - want).abs() < 1e-9, "{k}: {} vs {want}", x.x);
+    }
+    assert!(s.residual(&net, &[]) < 1e-10);
+}
+
+#[test]
+fn oracle_biphasic_knee() {
+    let m = Material {
+        c1: 1.0,
+        c2: 5.0,
+        knee: 0.1,
+    };
+    assert_eq!(oracle::spring_force(&m, 0.05, 1.0), 0.05);
+    assert!((oracle::spring_force(&m, 0.2, 1.0) - (0.1 + 0.5)).abs() < 1e-7);
+    // Continuous at the knee, linear in compression.
+    assert!((oracle::spring_force(&m, 0.1 + 1e-12, 1.0) - 0.1).abs() < 1e-10);
+    assert_eq!(oracle::spring_force(&m, -0.3, 1.0), -0.3);
+    // Static load past the knee: extension = knee·l + (f − c1·knee·l)/c2.
+    let net = SpringNetwork::from_parts(
+        &[Vec3::new(2.0, 0.0, 0.0), Vec3::ZERO],
+        1,
+        &[(0, 1, 0)],
+        &[m],
+        1.0,
+        1.0,
+    )
+    .unwrap();
+    let f = [DVec3::new(1.2, 0.0, 0.0)];
+    let mut s = OracleState::new(&net, &[DVec3::ZERO]);
+    s.settle(&net, 0.05, &f, 1e-13, 1_000_000);
+    let expect = 2.0 + 0.2 + (1.2 - 0.2) / 5.0;
+    assert!((s.x[0].x - expect).abs() < 1e-7, "{}", s.x[0].x);
+}
+
+/// The f32 mirror tracks the f64 oracle on a biphasic network with an
+/// external load (so the knee is crossed) and a moved bone.
+#[test]
+fn mirror_tracks_oracle() {
+    let mesh = common::icosphere(2);
+    let net = SpringNetwork::build(&mesh, None, &NetworkParams::default()).unwrap();
+    let n = mesh.n_vertices();
+    let mut bone: Vec<[f32; 4]> = net.bone_rest().to_vec();
+    for b in bone.iter_mut().filter(|b| b[1] > 0.4) {
+        b[2] += 0.08;
+    }
+    let forces: Vec<Vec3> = (0..net.n_free)
+        .map(|i| {
+            if i < n && mesh.positions[i].x > 0.5 {
+                Vec3::new(0.3, 0.0, 0.0)
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let opts = RelaxOptions {
+        external_forces: Some(forces.clone()),
+        ..RelaxOptions::default()
+    };
+    let dt = explicit::choose_dt(&net, None, false).unwrap();
+    let iters = 300;
+    let mirror = chisel::tissue::iterate(&net, &bone, &opts, iters, Backend::Cpu).unwrap();
+    let bone64: Vec<DVec3> = bone
+        .iter()
+        .map(|b| DVec3::new(b[0] as f64, b[1] as f64, b[2] as f64))
+        .collect();
+    let f64s: Vec<DVec3> = forces.iter().map(|f| f.as_dvec3()).collect();
+    let mut s = OracleState::new(&net, &bone64);
+    for _ in 0..iters {
+        s.step(&net, dt as f64, &f64s);
+    }
+    let moved = (0..net.n_free)
+        .map(|i| {
+            s.x[i].distance(DVec3::new(
+                net.rest[i][0] as f64,
+                net.rest[i][1] as f64,
+                net.rest[i][2] as f64,
+            ))
+        })
+        .fold(0.0, f64::max);
+    assert!(moved > 0.05, "the test must move the network ({moved})");
+    let worst = (0..net.n_free)
+        .map(|i| {
+            let m = mirror[i];
+            s.x[i].distance(DVec3::new(m[0] as f64, m[1] as f64, m[2] as f64))
+        })
+        .fold(0.0, f64::max);
+    // f32 rounding over 300 iterations of a unit-size network.
+    assert!(worst < 1e-4, "mirror vs oracle: {worst}");
+    // The dermis knee was crossed somewhere (biphasic law exercised).
+    let stretched = net.springs.iter().any(|sp| {
+        sp.class == SpringClass::Dermis
+            && s.x[sp.a as usize].distance(s.x[sp.b as usize]) > 1.1 * sp.rest as f64
+    });
+    assert!(stretched);
+}
+
+// ---------------------------------------------------------------- stop criteria
+
+fn one_step_plan(
+    net: &SpringNetwork,
+    dx: f32,
+    increments: u32,
+    iterations: Iterations,
+) -> chisel::tissue::ResolvedPlan {
+    Plan {
+        name: None,
+        steps: vec![Step {
+            name: Some("move".into()),
+            select: Selector::Vertices((0..net.n_bone() as u32).step_by(3).collect()),
+            translate: [dx, 0.0, 0.0],
+            rotate: None,
+            increments,
+            iterations,
+            reset_velocities: false,
+        }],
+    }
+    .resolve(net, &Fragments::new())
+    .unwrap()
+}
+
+#[test]
+fn stop_criteria_converged_stalled_diverged_limit() {
+    let mesh = common::icosphere(1);
+    let net = SpringNetwork::build(&mesh, None, &NetworkParams::default()).unwrap();
+    let plan = one_step_plan(&net, 0.05, 2, Iterations::Converge);
+    let r = relax(&net, &plan, &RelaxOptions::default(), Backend::Cpu).unwrap();
+    assert_eq!(r.status, Status::Converged);
+    assert!(
+        r.steps[0]
+            .increments
+            .iter()
+            .all(|i| i.max_speed < r.epsilon)
+    );
+    assert!(r.iterations > 0 && r.iterations.is_multiple_of(25));
+    assert!(r.max_displacement > 0.0);
+
+    let limited = RelaxOptions {
+        max_iterations: 30,
+        epsilon: Some(1e-12),
+        ..RelaxOptions::default()
+    };
+    let r = relax(&net, &plan, &limited, Backend::Cpu).unwrap();
+    assert_eq!(r.steps[0].increments[0].status, Status::IterationLimit);
+    assert_eq!(r.steps[0].increments[0].iterations, 30);
+
+    // Undamped oscillation with a generous δ: stalled at the first window.
+    let osc = SpringNetwork::from_parts(
+        &[Vec3::new(1.0, 0.0, 0.0), Vec3::ZERO],
+        1,
+        &[(0, 1, 0)],
+        &[Material::linear(1.0)],
+        1.0,
+        0.0,
+    )
+    .unwrap();
+    let plan = Plan::from_toml_str(
+        "[[step]]\nselect = { vertices = [0] }\ntranslate = [0.5, 0, 0]\n",
+        "o",
+    )
+    .unwrap()
+    .resolve(&osc, &Fragments::new())
+    .unwrap();
+    let stall = RelaxOptions {
+        delta: Some(10.0),
+        epsilon: Some(1e-9),
+        ..RelaxOptions::default()
+    };
+    let r = relax(&osc, &plan, &stall, Backend::Cpu).unwrap();
+    assert_eq!(r.status, Status::Stalled);
+    assert_eq!(r.iterations, 100);
+    assert!(r.steps[0].increments[0].window_change.unwrap() < 10.0);
+
+    // Forced Δt far above the limit: diverged, and the plan stops there.
+    let limit = explicit::stability_limit(&net);
+    let wild = RelaxOptions {
+        dt: Some(3.0 * limit),
+        force_dt: true,
+        ..RelaxOptions::default()
+    };
+    let plan = one_step_plan(&net, 0.05, 4, Iterations::Converge);
+    let r = relax(&net, &plan, &wild, Backend::Cpu).unwrap();
+    assert_eq!(r.status, Status::Diverged);
+    assert_eq!(
+        r.steps[0].increments.len(),
+        1,
+        "plan must stop at divergence"
+    );
+}
+
+#[test]
+fn fixed_iteration_increments_and_velocity_reset() {
+    let net = SpringNetwork::build(&common::icosphere(1), None, &NetworkParams::default()).unwrap();
+    let plan = one_step_plan(&net, 0.05, 10, Iterations::Fixed(1));
+    let carry = relax(&net, &plan, &RelaxOptions::default(), Backend::Cpu).unwrap();
+    assert_eq!(carry.iterations, 10);
+    assert_eq!(carry.steps[0].increments.len(), 10);
+    let mut reset_plan = plan.clone();
+    reset_plan.steps[0].reset_velocities = true;
+    let reset = relax(&net, &reset_plan, &RelaxOptions::default(), Backend::Cpu).unwrap();
+    // With one iteration per increment and zeroed velocities the network
+    // can only creep: it moves strictly less than when momentum carries.
+    assert!(reset.max_displacement < carry.max_displacement);
+    assert!(reset.max_displacement > 0.0);
+}
+
+// ---------------------------------------------------------------- accelerated solver
+
+/// Relaxes `plan` with both solvers to a tight ε and returns (max distance
+/// between the equilibria, largest displacement, explicit iterations,
+/// chebyshev iterations).
+fn compare_solvers(
+    net: &SpringNetwork,
+    plan: &chisel::tissue::ResolvedPlan,
+    eps: f32,
+) -> (f32, f32, u64, u64) {
+    let opts = |solver| RelaxOptions {
+        solver,
+        epsilon: Some(eps),
+        max_iterations: 1_000_000,
+        ..RelaxOptions::default()
+    };
+    let a = relax(net, plan, &opts(Solver::Explicit), Backend::Cpu).unwrap();
+    let b = relax(net, plan, &opts(Solver::Chebyshev), Backend::Cpu).unwrap();
+    let per_inc = |r: &chisel::tissue::RelaxReport| {
+        r.steps[0]
+            .increments
+            .iter()
+            .map(|i| i.iterations)
+            .collect::<Vec<_>>()
+    };
+    eprintln!("explicit {:?}\nchebyshev {:?}", per_inc(&a), per_inc(&b));
+    // Stalled = at rest within the f32 noise floor of the positions.
+    for r in [&a, &b] {
+        assert!(
+            matches!(r.status, Status::Converged | Status::Stalled),
+            "{:?}",
+            r.status
+        );
+    }
+    let dist = (0..net.n_free)
+        .map(|i| {
+            let (p, q) = (a.positions[i], b.positions[i]);
+            Vec3::new(p[0] - q[0], p[1] - q[1], p[2] - q[2]).length()
+        })
+        .fold(0.0, f32::max);
+    let disp = (0..net.n_free)
+        .map(|i| {
+            let (p, r) = (a.positions[i], net.rest[i]);
+            Vec3::new(p[0] - r[0], p[1] - r[1], p[2] - r[2]).length()
+        })
+        .fold(0.0, f32::max);
+    (dist, disp, a.iterations, b.iterations)
+}
+
+#[test]
+fn chebyshev_reaches_the_explicit_equilibrium_on_a_sphere() {
+    let net = SpringNetwork::build(&common::icosphere(3), None, &NetworkParams::default()).unwrap();
+    let plan = one_step_plan(&net, 0.05, 1, Iterations::Converge);
+    let (dist, disp, it_e, it_c) = compare_solvers(&net, &plan, 1e-6);
+    eprintln!("icosphere(3): dist {dist:e}, disp {disp:e}, explicit {it_e}, chebyshev {it_c}");
+    assert!(disp > 0.01);
+    assert!(dist < 1e-3 * disp, "{dist} vs {disp}");
+    assert!(it_c < it_e);
+}
+
+#[test]
+fn chebyshev_reaches_the_explicit_equilibrium_on_fran_cut() {
+    let Some(face) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let net = SpringNetwork::build(&face, None, &NetworkParams::default()).unwrap();
+    let plan = Plan::from_toml_str(phantom::FRAN_CHIN_ADVANCE_TOML, "chin")
+        .unwrap()
+        .resolve(&net, &Fragments::new())
+        .unwrap();
+    // ε = 3e-7 m/s is just above the f32 noise floor of 0.1 m coordinates.
+    let (dist, disp, it_e, it_c) = compare_solvers(&net, &plan, 3e-7);
+    eprintln!("fran_cut: dist {dist:e}, disp {disp:e}, explicit {it_e}, chebyshev {it_c}");
+    assert!(disp > 0.002, "{disp}");
+    assert!(dist < 2.5e-3 * disp, "{dist} vs {disp}");
+    assert!(it_c < it_e);
+}
+
+#[test]
+fn fran_cut_network_and_seed_plans() {
+    let Some(face) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let net = SpringNetwork::build(&face, None, &NetworkParams::default()).unwrap();
+    // SPEC default origin: back face (x = 0) of the bounding box, mid y/z.
+    assert!(net.origin.x.abs() < 1e-6, "{}", net.origin);
+    assert!((net.origin.y + 0.128).abs() < 1e-4 && (net.origin.z + 0.0574).abs() < 1e-4);
+    // 6,615 nodes; 42,978 springs with a free end (43k as in the issue).
+    assert_eq!(net.n_nodes(), 6615);
+    let c = net.class_counts();
+    assert_eq!(c[0] + c[1] + c[2] + c[3], 6428 + 15061 + 6428 + 15061);
+    let plan = Plan::from_toml_str(phantom::FRAN_TABLE2_TOML, "table2").unwrap();
+    let r = plan.resolve(&net, &Fragments::new()).unwrap();
+    let counts: Vec<usize> = r.steps.iter().map(|s| s.bone_vertices.len()).collect();
+    for (got, want) in counts.iter().zip([60, 60, 150, 70]) {
+        assert!(got.abs_diff(want) * 10 <= want, "{counts:?}");
+    }
+    let report = relax(&net, &r, &RelaxOptions::default(), Backend::Cpu).unwrap();
+    assert_eq!(report.iterations, 10 + 10 + 8 + 5);
+    assert_ne!(report.status, Status::Diverged);
+    let skin = report.skin_mesh(&net);
+    assert_eq!(skin.n_vertices(), 2205);
+    assert!(
+        skin.scalar("displacement")
+            .unwrap()
+            .values
+            .iter()
+            .any(|&d| d > 1e-4)
+    );
+}
+
+#[test]
+fn refined_fran_cut_sizes_match_the_benchmark_networks() {
+    let Some(face) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let (cols, rows) = FRAN_GRID;
+    let fine = phantom::refine_grid(&face, cols, rows, 4).unwrap();
+    assert_eq!(fine.n_vertices(), 177 * 193);
+    // Same orientation as the input (inward), same bounds.
+    let (lo, hi) = fine.bounds().unwrap();
+    let (lo0, hi0) = face.bounds().unwrap();
+    assert!((lo - lo0).abs().max_element() < 1e-3 && (hi - hi0).abs().max_element() < 1e-3);
+}

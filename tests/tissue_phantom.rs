@@ -1,0 +1,163 @@
+//! The demo's head phantom and jaw-advance plan, and the accelerated
+//! solver's equilibrium on a ~10⁵-node network.
+
+mod common;
+
+use chisel::Backend;
+use chisel::tissue::phantom::{self, FRAN_CHIN_ADVANCE_TOML, FRAN_GRID, HeadPhantom};
+use chisel::tissue::{
+    Fragments, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status, relax,
+};
+use glam::Vec3;
+
+fn phantom_network(resolution: usize) -> (HeadPhantom, SpringNetwork) {
+    let head = phantom::head_phantom(resolution).unwrap();
+    let params = NetworkParams {
+        origin: Some(head.origin.to_array()),
+        ..NetworkParams::default()
+    };
+    let net = SpringNetwork::build(&head.skin, Some(&head.skull), &params).unwrap();
+    (head, net)
+}
+
+#[test]
+fn jaw_advance_moves_the_chin_not_the_forehead() {
+    let (head, net) = phantom_network(24);
+    let plan = HeadPhantom::demo_plan()
+        .unwrap()
+        .resolve(&net, &head.fragments())
+        .unwrap();
+    assert_eq!(plan.steps[0].bone_vertices.len(), head.jaw_vertices.len());
+    let opts = RelaxOptions {
+        solver: Solver::Chebyshev,
+        ..RelaxOptions::default()
+    };
+    let r = relax(&net, &plan, &opts, Backend::Cpu).unwrap();
+    assert_eq!(r.status, Status::Converged, "{:?}", r.steps);
+    let disp_at = |dir: Vec3| {
+        let (i, _) = head
+            .skin
+            .positions
+            .iter()
+            .enumerate()
+            .max_by(|a, b| {
+                a.1.normalize()
+                    .dot(dir)
+                    .total_cmp(&b.1.normalize().dot(dir))
+            })
+            .unwrap();
+        r.displacement[i]
+    };
+    let chin = disp_at(Vec3::new(0.0, -0.75, 0.66).normalize());
+    let forehead = disp_at(Vec3::new(0.0, 0.6, 0.8).normalize());
+    let back = disp_at(Vec3::new(0.0, 0.0, -1.0));
+    eprintln!(
+        "chin {chin} mm, forehead {forehead} mm, back {back} mm, {} iterations",
+        r.iterations
+    );
+    assert!(
+        chin > 1.0 && chin < 9.0,
+        "chin moved {chin} mm for a 6 mm jaw advance"
+    );
+    assert!(forehead < 0.2 * chin && back < 0.05 * chin);
+    // The skin mesh carries the displacement for the caller to write.
+    let skin = r.skin_mesh(&net);
+    assert_eq!(skin.n_vertices(), head.skin.n_vertices());
+}
+
+#[test]
+fn demo_relaxation_on_the_gpu_matches_the_cpu() {
+    let Some(gpu) = common::gpu() else { return };
+    let (head, net) = phantom_network(24);
+    let plan = HeadPhantom::demo_plan()
+        .unwrap()
+        .resolve(&net, &head.fragments())
+        .unwrap();
+    let opts = RelaxOptions {
+        solver: Solver::Chebyshev,
+        ..RelaxOptions::default()
+    };
+    let a = relax(&net, &plan, &opts, Backend::Cpu).unwrap();
+    let b = relax(&net, &plan, &opts, Backend::Gpu(&gpu)).unwrap();
+    assert_eq!(a.iterations, b.iterations);
+    assert_eq!(b.status, Status::Converged);
+    let tol = chisel::tissue::cpu::position_tolerance(a.iterations as u32, net.diagonal());
+    chisel::parity::compare_vec("phantom", &a.positions, &b.positions, tol)
+        .unwrap_or_else(|m| panic!("{m}"));
+}
+
+/// ~10⁵ nodes: fran_cut's grid refined 4× (102,483 nodes), on the CPU
+/// mirror (the GPU case of this size and larger is in `benches/relax.rs`).
+///
+/// Both solvers reach the same static residual (f64 oracle) and Chebyshev
+/// needs ≥ 2× fewer iterations. Known limit (measured: max distance 1.2 mm
+/// for a 4.4 mm largest displacement): at this refinement the tangential
+/// (sliding) modes are so soft (λ ≈ 1e-3 c) that the f32 noise of absolute
+/// coordinates (~1e-7 in force) leaves them undetermined to ~0.1–1 mm; both
+/// solvers stop at that floor in different places. Storing displacements
+/// from rest instead of absolute positions would lower the floor ~16×.
+/// Takes ~4 min at the test profile, hence ignored by default.
+#[test]
+#[ignore = "~4 min on 2 cores at the test profile; run with --ignored"]
+fn chebyshev_reaches_the_explicit_residual_on_1e5_nodes() {
+    let Some(face) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let fine = phantom::refine_grid(&face, FRAN_GRID.0, FRAN_GRID.1, 4).unwrap();
+    let net = SpringNetwork::build(&fine, None, &NetworkParams::default()).unwrap();
+    assert!(net.n_nodes() > 100_000);
+    let mut plan = Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").unwrap();
+    plan.steps[0].translate = plan.steps[0].translate.map(|c| c / 4.0);
+    plan.steps[0].increments = 1;
+    let plan = plan.resolve(&net, &Fragments::new()).unwrap();
+    let opts = |solver| RelaxOptions {
+        solver,
+        epsilon: Some(3e-7),
+        max_iterations: 200_000,
+        ..RelaxOptions::default()
+    };
+    let a = relax(&net, &plan, &opts(Solver::Explicit), Backend::Cpu).unwrap();
+    let b = relax(&net, &plan, &opts(Solver::Chebyshev), Backend::Cpu).unwrap();
+    for r in [&a, &b] {
+        assert!(
+            matches!(r.status, Status::Converged | Status::Stalled),
+            "{:?}",
+            r.status
+        );
+    }
+    let dist = (0..net.n_free)
+        .map(|i| {
+            Vec3::from_slice(&a.positions[i][..3]).distance(Vec3::from_slice(&b.positions[i][..3]))
+        })
+        .fold(0.0, f32::max);
+    let residual = |r: &chisel::tissue::RelaxReport| {
+        let x: Vec<glam::DVec3> = r
+            .positions
+            .iter()
+            .map(|p| Vec3::from_slice(&p[..3]).as_dvec3())
+            .collect();
+        let g = chisel::tissue::oracle::spring_forces(&net, &x);
+        g[..net.n_free]
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max)
+    };
+    eprintln!(
+        "statuses {:?} {:?}; residual explicit {:e}, chebyshev {:e}",
+        a.status,
+        b.status,
+        residual(&a),
+        residual(&b)
+    );
+    eprintln!(
+        "1e5 nodes: dist {dist:e}, max displacement {:e}, explicit {} it, chebyshev {} it",
+        a.max_displacement, a.iterations, b.iterations
+    );
+    assert!(a.max_displacement > 5e-4);
+    assert!(
+        dist < 2.5e-3 * a.max_displacement,
+        "{dist} vs {}",
+        a.max_displacement
+    );
+    assert!(b.iterations * 2 < a.iterations);
+}

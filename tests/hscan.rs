@@ -461,3 +461,80 @@ fn digital_ball_inside_its_supporting_polytope() {
     let [_, on, inside] = c.counts();
     assert!(on > 0 && inside > 0);
 }
+
+/// Incident faces by brute force: every corner of every ZKH voxel against
+/// every face (`n·c ≥ d`), per label.
+fn incident_by_brute_force(
+    a: &zkh::ZkhAnalysis,
+    bbox: &VoxelBox,
+    faces: &[HalfSpace],
+) -> Vec<Vec<usize>> {
+    let [nx, ny, _] = bbox.dims;
+    let mut sets = vec![std::collections::BTreeSet::new(); a.components.len()];
+    for (i, &l) in a.labels.iter().enumerate() {
+        if l == 0 {
+            continue;
+        }
+        let v = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        for corner in 0..8 {
+            let c: [i64; 3] =
+                std::array::from_fn(|k| 2 * (bbox.origin[k] + (v[k] + ((corner >> k) & 1)) as i64));
+            for (f, face) in faces.iter().enumerate() {
+                if face.side(c) >= 0 {
+                    sets[l as usize - 1].insert(f);
+                }
+            }
+        }
+    }
+    sets.into_iter().map(|s| s.into_iter().collect()).collect()
+}
+
+#[test]
+fn zkh_incident_faces_match_brute_force_on_random_objects() {
+    let mut rng = Rng::new(31);
+    let mut classes = std::collections::BTreeSet::new();
+    for case in 0..40 {
+        let n = rng.range(6, 14) as usize;
+        let bbox = VoxelBox {
+            origin: [rng.range(-5, 5), rng.range(-5, 5), rng.range(-5, 5)],
+            dims: [n, n + 1, n - 1],
+        };
+        // A random blob: a ball with random voxels removed.
+        let len = bbox.n_voxels().unwrap();
+        let density = rng.range(55, 90) as u64;
+        let obj: Vec<bool> = (0..len)
+            .map(|i| {
+                let p = bbox.centre([i % n, (i / n) % (n + 1), i / (n * (n + 1))]);
+                let c: [i64; 3] = std::array::from_fn(|k| 2 * bbox.origin[k] + bbox.dims[k] as i64);
+                let d2: i64 = (0..3).map(|k| (p[k] - c[k]).pow(2)).sum();
+                d2 <= (n as i64 * n as i64) && rng.next() % 100 < density
+            })
+            .collect();
+        // Half the blobs get a straight 2 × 2 hole along a random axis.
+        let mut obj = obj;
+        if case % 2 == 0 {
+            let axis = (rng.next() % 3) as usize;
+            for (i, o) in obj.iter_mut().enumerate() {
+                let v = [i % n, (i / n) % (n + 1), i / (n * (n + 1))];
+                let near = (0..3)
+                    .filter(|&k| k != axis)
+                    .all(|k| v[k].abs_diff(bbox.dims[k] / 2) <= 1 && v[k] < bbox.dims[k] / 2 + 1);
+                *o &= !near;
+            }
+        }
+        if !obj.iter().any(|&o| o) {
+            continue;
+        }
+        let pts = hscan_fixtures::centres(&obj, &bbox);
+        let p = Polytope::new(&supporting(&pts, &dirs26()));
+        let a = analyse(&obj, &bbox, &p);
+        let want = incident_by_brute_force(&a, &bbox, &p.faces);
+        for (z, w) in a.components.iter().zip(&want) {
+            let mut got: Vec<usize> = z.face_sets.iter().flatten().copied().collect();
+            got.sort_unstable();
+            assert_eq!(&got, w, "case {case}, ZKH {}", z.label);
+            classes.insert(z.class);
+        }
+    }
+    assert!(classes.len() >= 3, "{classes:?}");
+}

@@ -35,9 +35,10 @@
 //! for which no intermediate overflows 64 bits: `|n_c · x_c| < 2³¹·2¹⁶ = 2⁴⁷`,
 //! `|n·p| < 3·2⁴⁷ < 2⁴⁹`, the row remainder `r = d − n_y·y − n_z·z` has
 //! `|r| < 2⁶⁰ + 2⁴⁹ < 2⁶¹`, and the division operands `r − n_x` and `2·n_x`
-//! stay below `2⁶²` and `2³²`. Normals of hull faces built from points with
-//! coordinates below `2¹⁵` (cross products of edge vectors, each product
-//! below `2³⁰`) satisfy the bound; so does every hull of a 16384³ box.
+//! stay below `2⁶²` and `2³²`. Normals of hull faces built as cross
+//! products of edge vectors between points with coordinates in `[0, 2¹⁵)`
+//! satisfy the bound (each product below `2³⁰`, the difference below
+//! `2³¹`): every hull of cells of a box of at most 16383 voxels per axis.
 //! The GPU fallback multiplies `i32 × i32` into exact 64-bit pairs, which is
 //! why normals must fit `i32` on every backend.
 

@@ -120,7 +120,12 @@ pub fn analyse(
     let labelling = label_6_connected(bbox.dims, |i| {
         !object[i] && classification.sides[i] != Side::Outside as u8
     })?;
-    let incident = incident_faces(&labelling.labels, faces, classification)?;
+    let incident = incident_faces(
+        &labelling.labels,
+        labelling.n_components(),
+        faces,
+        classification,
+    );
     let mut stamp = vec![u32::MAX; faces.len()];
     let components = labelling
         .sizes
@@ -143,20 +148,20 @@ pub fn analyse(
     })
 }
 
-/// Per label (index `c − 1`), the ascending faces seen by or coplanar with
+/// Per label `c` of `n_labels` (index `c − 1`), the ascending faces seen by or coplanar with
 /// some corner of its voxels. Only corners not strictly inside the hull
 /// are tested: per corner row, those outside the open interval of the row
 /// and within one voxel of a closed voxel interval next to it.
 fn incident_faces(
     labels: &[u32],
+    n_labels: usize,
     faces: &[HalfSpace],
     classification: &Classification,
-) -> Result<Vec<Vec<usize>>> {
+) -> Vec<Vec<usize>> {
     let bbox = classification.bbox;
     let [nx, ny, nz] = bbox.dims;
-    let n_labels = labels.iter().copied().max().unwrap_or(0) as usize;
     if n_labels == 0 {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     let corner_dims = [nx + 1, ny + 1, nz + 1];
     let corner_open = lattice_rows(faces, bbox.origin, corner_dims, 0);
@@ -218,7 +223,7 @@ fn incident_faces(
     for (l, f) in pairs {
         per_label[l as usize - 1].push(f as usize);
     }
-    Ok(per_label)
+    per_label
 }
 
 /// Splits `members` (ascending face ids) into sets connected through

@@ -398,3 +398,82 @@ fn relax_rejects_a_bad_plan_clearly() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn mc_and_capped_cut_of_the_ct_bone() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let bone = tmp.path().join("bone.ply");
+    let groups = tmp.path().join("groups");
+    let mc = ok_json(&[
+        "mc",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        "--level",
+        "1150",
+        "-o",
+        path_str(&bone),
+        "--groups-dir",
+        path_str(&groups),
+        "--json",
+    ]);
+    assert_eq!(mc["triangles"], 78_792);
+    let n_groups = mc["group_count"].as_u64().unwrap() as usize;
+    assert_eq!(mc["groups"].as_array().unwrap().len(), n_groups);
+    assert_eq!(std::fs::read_dir(&groups).unwrap().count(), n_groups);
+
+    let closed = tmp.path().join("closed.ply");
+    ok_json(&[
+        "mc",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        "--level",
+        "1150",
+        "--close-border",
+        "-o",
+        path_str(&closed),
+        "--json",
+    ]);
+    let pieces = tmp.path().join("pieces");
+    let cut = ok_json(&[
+        "cut",
+        path_str(&closed),
+        "--plane",
+        "100,100,60,0,0.3,1",
+        "--cap",
+        "-o",
+        path_str(&pieces),
+        "--json",
+    ]);
+    let total: f64 = cut["pieces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["signed_volume"].as_f64().unwrap())
+        .sum();
+    let original = cut["input_signed_volume"].as_f64().unwrap();
+    assert!(
+        ((total - original) / original).abs() < 1e-6,
+        "{total} vs {original}"
+    );
+    assert!(
+        cut["pieces"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|p| p["closed"] == true)
+    );
+    let tested = cut["stats"]["triangles_tested"].as_u64().unwrap();
+    let all = cut["stats"]["triangles_total"].as_u64().unwrap();
+    assert!(tested * 4 < all, "tree tested {tested} of {all} triangles");
+
+    let out = chisel(&[
+        "cut",
+        path_str(&closed),
+        "--plane",
+        "1,2,3",
+        "-o",
+        path_str(&pieces),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "a plane needs 6 numbers");
+}

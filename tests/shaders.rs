@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use chisel::gpu::{Kernel, Shader, preprocess};
-use chisel::{hscan, normals, reduce, scan};
+use chisel::{hscan, normals, reduce, scan, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use wgpu::BufferBindingType as B;
 
@@ -183,6 +183,95 @@ fn host(kernel: Kernel) -> Host {
                 vec![("n", 0xC1)],
             ),
         },
+        Kernel::McClassify => Host {
+            bindings: surface::gpu::CLASSIFY_BINDINGS,
+            wg_size: surface::gpu::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&surface::gpu::ClassifyParams {
+                    nx: 0xD1,
+                    ny: 0xD2,
+                    nz: 0xD3,
+                    z_first: 0xD4,
+                    z_begin: 0xD5,
+                    n_layers: 0xD6,
+                    blocks_per_layer: 0xD7,
+                    level: f32::from_bits(0xD8),
+                }),
+                vec![
+                    ("nx", 0xD1),
+                    ("ny", 0xD2),
+                    ("nz", 0xD3),
+                    ("z_first", 0xD4),
+                    ("z_begin", 0xD5),
+                    ("n_layers", 0xD6),
+                    ("blocks_per_layer", 0xD7),
+                    ("level", 0xD8),
+                ],
+            ),
+        },
+        Kernel::McVertices => Host {
+            bindings: surface::gpu::VERTICES_BINDINGS,
+            wg_size: surface::gpu::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&surface::gpu::VerticesParams {
+                    nx: 0xE1,
+                    ny: 0xE2,
+                    nz: 0xE3,
+                    z_first: 0xE4,
+                    z_begin: 0xE5,
+                    n_layers: 0xE6,
+                    n_owned: 0xE7,
+                    blocks_per_layer: 0xE8,
+                    v_start: 0xE9,
+                    level: f32::from_bits(0xEA),
+                }),
+                vec![
+                    ("nx", 0xE1),
+                    ("ny", 0xE2),
+                    ("nz", 0xE3),
+                    ("z_first", 0xE4),
+                    ("z_begin", 0xE5),
+                    ("n_layers", 0xE6),
+                    ("n_owned", 0xE7),
+                    ("blocks_per_layer", 0xE8),
+                    ("v_start", 0xE9),
+                    ("level", 0xEA),
+                ],
+            ),
+        },
+        Kernel::McTriangles => Host {
+            bindings: surface::gpu::TRIANGLES_BINDINGS,
+            wg_size: surface::gpu::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&surface::gpu::TrianglesParams {
+                    nx: 0xF1,
+                    ny: 0xF2,
+                    nz: 0xF3,
+                    z_first: 0xF4,
+                    z_begin: 0xF5,
+                    n_layers: 0xF6,
+                    blocks_per_layer: 0xF7,
+                    vb_first: 0xF8,
+                    t_start: 0xF9,
+                    level: f32::from_bits(0xFA),
+                }),
+                vec![
+                    ("nx", 0xF1),
+                    ("ny", 0xF2),
+                    ("nz", 0xF3),
+                    ("z_first", 0xF4),
+                    ("z_begin", 0xF5),
+                    ("n_layers", 0xF6),
+                    ("blocks_per_layer", 0xF7),
+                    ("vb_first", 0xF8),
+                    ("t_start", 0xF9),
+                    ("level", 0xFA),
+                ],
+            ),
+        },
         Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => {
             Host {
                 bindings: hscan::gpu::BINDINGS,
@@ -282,6 +371,14 @@ fn kernels_match_their_host_side() {
             Some(host.wg_size),
             "{path}: WG_SIZE"
         );
+
+        for (name, value) in host.consts {
+            assert_eq!(
+                u32_const(&module, name),
+                Some(*value),
+                "{path}: const {name}"
+            );
+        }
 
         // Params: naga's layout vs the bytes encase writes.
         let (bytes, fields) = host.params;

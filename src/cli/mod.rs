@@ -7,8 +7,10 @@
 //! writes it atomically.
 
 mod convert;
+mod cut;
 mod demo;
 mod info;
+mod mc;
 mod relax;
 mod render;
 mod report;
@@ -58,6 +60,10 @@ enum Command {
     Stats(stats::Args),
     /// Convert between mesh formats (vtk, ply, obj, stl, byu) or volume formats.
     Convert(convert::Args),
+    /// Marching cubes with one-pass grouping: iso-surface or label boundary of a volume.
+    Mc(mc::Args),
+    /// Cut a mesh with plane / rectangle / sphere / mesh scalpels (optionally capped).
+    Cut(cut::Args),
     /// Relax the soft tissue over the bone after a surgery plan (spring network, GPU or CPU).
     Relax(relax::Args),
     /// Render a mesh to a PNG preview (shaded, views, wireframe, scalar colour map).
@@ -110,6 +116,8 @@ pub fn main() -> ExitCode {
         Command::Info(a) => info::run(&cli.global, a),
         Command::Stats(a) => stats::run(&cli.global, a),
         Command::Convert(a) => convert::run(&cli.global, a),
+        Command::Mc(a) => mc::run(&cli.global, a),
+        Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),
         Command::Demo(a) => demo::run(&cli.global, a),

@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long)]
     bone: Option<PathBuf>,
     /// Origin O of the layer construction `x,y,z` (default: SPEC §1.1 rule).
-    #[arg(long, value_delimiter = ',', num_args = 3)]
+    #[arg(long, value_delimiter = ',')]
     origin: Option<Vec<f32>>,
     /// Solver: `explicit` (the seed's damped dynamics) or `chebyshev` (accelerated equilibrium).
     #[arg(long, default_value = "explicit")]
@@ -139,8 +139,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let skin = crate::io::read_mesh(&args.mesh)?;
     let bone = args.bone.as_deref().map(crate::io::read_mesh).transpose()?;
+    let origin = match args.origin.as_deref() {
+        None => None,
+        Some(&[x, y, z]) => Some([x, y, z]),
+        Some(o) => anyhow::bail!("--origin takes x,y,z; got {} numbers", o.len()),
+    };
     let params = NetworkParams {
-        origin: args.origin.as_deref().map(|o| [o[0], o[1], o[2]]),
+        origin,
         ..Default::default()
     };
     let network = SpringNetwork::build(&skin, bone.as_ref(), &params)?;

@@ -76,3 +76,15 @@ pub fn emit(value: &Value, json: bool, report: Option<&Path>) -> anyhow::Result<
     }
     Ok(())
 }
+
+/// Writes `value` to `report` and prints it only with `json` (commands whose
+/// main output is a file, not a table).
+pub fn emit_optional(value: &Value, json: bool, report: Option<&Path>) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(value)?);
+    }
+    if let Some(path) = report {
+        write_json(path, value)?;
+    }
+    Ok(())
+}

@@ -107,3 +107,71 @@ impl TriMesh {
         }
     }
 }
+
+/// Splits `mesh` by a per-triangle label (`labels.len() == #F`, labels
+/// `0..n`): mesh `k` holds the triangles labelled `k` with its vertices
+/// renumbered in first-use order; scalar fields follow their vertices.
+pub fn split_by_label(mesh: &TriMesh, labels: &[u32]) -> Vec<TriMesh> {
+    let n = labels.iter().map(|&l| l as usize + 1).max().unwrap_or(0);
+    let mut parts: Vec<(TriMesh, Vec<u32>)> = (0..n)
+        .map(|_| {
+            let part = TriMesh {
+                scalars: mesh
+                    .scalars
+                    .iter()
+                    .map(|s| ScalarField {
+                        name: s.name.clone(),
+                        values: Vec::new(),
+                    })
+                    .collect(),
+                ..TriMesh::default()
+            };
+            (part, Vec::new())
+        })
+        .collect();
+    let mut local = vec![u32::MAX; mesh.n_vertices()];
+    for (tri, &label) in mesh.triangles.iter().zip(labels) {
+        let (part, used) = &mut parts[label as usize];
+        let t = tri.map(|v| {
+            let slot = &mut local[v as usize];
+            if *slot == u32::MAX || used.get(*slot as usize) != Some(&v) {
+                *slot = part.positions.len() as u32;
+                used.push(v);
+                part.positions.push(mesh.positions[v as usize]);
+                for (dst, src) in part.scalars.iter_mut().zip(&mesh.scalars) {
+                    dst.values.push(src.values[v as usize]);
+                }
+            }
+            *slot
+        });
+        part.triangles.push(t);
+    }
+    parts.into_iter().map(|(p, _)| p).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_by_label_renumbers_and_keeps_scalars() {
+        let p = (0..5)
+            .map(|i| Vec3::new(i as f32, 0.0, (i * i) as f32))
+            .collect();
+        let mut m = TriMesh::new(p, vec![[0, 1, 2], [2, 3, 4], [1, 2, 3]]).unwrap();
+        m.scalars.push(ScalarField {
+            name: "s".into(),
+            values: vec![0.0, 1.0, 2.0, 3.0, 4.0],
+        });
+        let parts = split_by_label(&m, &[1, 0, 1]);
+        assert_eq!(parts.len(), 2);
+        assert_eq!(parts[0].triangles, vec![[0, 1, 2]]);
+        assert_eq!(parts[0].scalars[0].values, vec![2.0, 3.0, 4.0]);
+        assert_eq!(parts[1].triangles, vec![[0, 1, 2], [1, 2, 3]]);
+        assert_eq!(parts[1].positions.len(), 4);
+        assert_eq!(parts[1].scalars[0].values, vec![0.0, 1.0, 2.0, 3.0]);
+        for part in &parts {
+            part.validate().unwrap();
+        }
+    }
+}

@@ -22,7 +22,19 @@ use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::parity::find_sentinel;
 use crate::{Error, Result};
 
-const WG_SIZE: u32 = 256;
+/// Invocations per workgroup of all three kernels (`WG_SIZE` in WGSL).
+pub const WG_SIZE: u32 = 256;
+
+const UNIFORM: wgpu::BufferBindingType = wgpu::BufferBindingType::Uniform;
+const READ: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: true };
+const WRITE: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: false };
+/// `mc_classify` bindings: params, samples, table, block_counts.
+pub const CLASSIFY_BINDINGS: &[wgpu::BufferBindingType] = &[UNIFORM, READ, READ, WRITE];
+/// `mc_vertices` bindings: params, samples, block_offsets, vert_base, positions.
+pub const VERTICES_BINDINGS: &[wgpu::BufferBindingType] = &[UNIFORM, READ, READ, WRITE, WRITE];
+/// `mc_triangles` bindings: params, samples, table, block_offsets, vert_base, triangles.
+pub const TRIANGLES_BINDINGS: &[wgpu::BufferBindingType] =
+    &[UNIFORM, READ, READ, READ, READ, WRITE];
 
 /// Uniform parameters of `mc_classify`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]

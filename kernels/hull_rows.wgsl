@@ -48,8 +48,10 @@ fn row_span(y: i64, z: i64) -> vec4<i32> {
     var open = true;
     for (var f = 0u; f < params.n_faces; f++) {
         let face = faces[f];
-        // Sign tests on the i32 component: with naga 30 on Mesa lavapipe,
-        // `i64(n) > 0li` came out true for n = −1 (the parity tests caught it).
+        // Sign tests on the i32 component: with naga 30 on Mesa 22.3 lavapipe,
+        // ordered comparisons of `i64(n)` (n: i32) with a literal come out
+        // constant (`> 0li` always true, `< 0li` always false, even for
+        // n = 0); `==` and comparisons of computed values are right.
         let a = i64(face.normal.x);
         let r = offset_of(face) - i64(face.normal.y) * y - i64(face.normal.z) * z;
         if face.normal.x == 0 {

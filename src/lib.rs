@@ -20,6 +20,7 @@ pub mod cli;
 pub mod cut;
 pub mod error;
 pub mod gpu;
+pub mod hscan;
 pub mod io;
 pub mod mesh;
 pub mod normals;

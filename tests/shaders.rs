@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use chisel::gpu::{Kernel, Shader, preprocess};
-use chisel::{normals, reduce, scan, surface};
+use chisel::{hscan, normals, reduce, scan, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use wgpu::BufferBindingType as B;
 
@@ -272,6 +272,35 @@ fn host(kernel: Kernel) -> Host {
                 ],
             ),
         },
+        Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => {
+            Host {
+                bindings: hscan::gpu::BINDINGS,
+                wg_size: hscan::gpu::WG_SIZE,
+                consts: &[],
+                params: (
+                    encase_bytes(&hscan::gpu::Params {
+                        n_faces: 0xD1,
+                        n_items: 0xD2,
+                        nx: 0xD3,
+                        ny: 0xD4,
+                        z0: 0xD5,
+                        origin_x: 0xD6,
+                        origin_y: 0xD7,
+                        origin_z: 0xD8,
+                    }),
+                    vec![
+                        ("n_faces", 0xD1),
+                        ("n_items", 0xD2),
+                        ("nx", 0xD3),
+                        ("ny", 0xD4),
+                        ("z0", 0xD5),
+                        ("origin_x", 0xD6),
+                        ("origin_y", 0xD7),
+                        ("origin_z", 0xD8),
+                    ],
+                ),
+            }
+        }
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its host binding table to tests/shaders.rs::host",

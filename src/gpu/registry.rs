@@ -80,6 +80,14 @@ registry! {
     McVertices => "mc_vertices",
     /// Marching cubes: triangles of each cell at scanned offsets.
     McTriangles => "mc_triangles",
+    /// Inside/on/outside of every voxel against every hull face, exact i64.
+    HullScan => "hull_scan" needs SHADER_INT64,
+    /// Inside/on/outside of every voxel, exact emulated 64-bit (portable).
+    HullScanI32x2 => "hull_scan_i32x2",
+    /// Per-row inside/on intervals of a convex polyhedron, exact i64 division.
+    HullRows => "hull_rows" needs SHADER_INT64,
+    /// Per-row intervals by binary search on emulated 64-bit products (portable).
+    HullRowsI32x2 => "hull_rows_i32x2",
 }
 
 registry! {
@@ -101,6 +109,11 @@ const SHARED: &[(&str, &str)] = &[
         "order_key",
         include_str!("../../kernels/shared/order_key.wgsl"),
     ),
+    (
+        "hull_face",
+        include_str!("../../kernels/shared/hull_face.wgsl"),
+    ),
+    ("i32x2", include_str!("../../kernels/shared/i32x2.wgsl")),
 ];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`

@@ -11,6 +11,7 @@ mod mc_surface;
 
 mod bounds_reduce;
 mod exclusive_scan;
+mod hull_scan;
 mod range_reduce;
 mod spring_chebyshev;
 mod spring_step;

@@ -19,6 +19,7 @@
 pub mod cli;
 pub mod error;
 pub mod gpu;
+pub mod hull;
 pub mod io;
 pub mod mesh;
 pub mod normals;
@@ -28,6 +29,7 @@ pub mod reduce;
 pub mod render;
 pub mod scan;
 pub mod volume;
+pub mod voxel;
 
 pub use error::{Error, Position, Result};
 pub use gpu::Gpu;

@@ -4,6 +4,8 @@
 //! Coordinates are millimetres; +y is up (cranial), +z is anterior (the face
 //! looks toward +z), +x is the subject's left.
 
+pub mod voxel;
+
 use glam::Vec3;
 
 use crate::mesh::TriMesh;
@@ -45,15 +47,51 @@ pub fn head_skin(n_lat: u32, n_lon: u32) -> crate::Result<TriMesh> {
     }
     let dir = |x: f32, y: f32, z: f32| Vec3::new(x, y, z).normalize();
     let bumps = [
-        Bump { dir: dir(0.0, -0.05, 1.0), width: 0.16, amplitude: 0.20 },  // nose
-        Bump { dir: dir(0.0, -0.55, 1.0), width: 0.22, amplitude: 0.08 },  // chin
-        Bump { dir: dir(0.0, 0.30, 1.0), width: 0.35, amplitude: 0.04 },   // brow
-        Bump { dir: dir(0.33, 0.12, 1.0), width: 0.12, amplitude: -0.07 }, // eye socket
-        Bump { dir: dir(-0.33, 0.12, 1.0), width: 0.12, amplitude: -0.07 },
-        Bump { dir: dir(0.45, -0.15, 1.0), width: 0.25, amplitude: 0.04 }, // cheeks
-        Bump { dir: dir(-0.45, -0.15, 1.0), width: 0.25, amplitude: 0.04 },
-        Bump { dir: dir(1.0, 0.0, -0.05), width: 0.15, amplitude: 0.06 },  // ears
-        Bump { dir: dir(-1.0, 0.0, -0.05), width: 0.15, amplitude: 0.06 },
+        Bump {
+            dir: dir(0.0, -0.05, 1.0),
+            width: 0.16,
+            amplitude: 0.20,
+        }, // nose
+        Bump {
+            dir: dir(0.0, -0.55, 1.0),
+            width: 0.22,
+            amplitude: 0.08,
+        }, // chin
+        Bump {
+            dir: dir(0.0, 0.30, 1.0),
+            width: 0.35,
+            amplitude: 0.04,
+        }, // brow
+        Bump {
+            dir: dir(0.33, 0.12, 1.0),
+            width: 0.12,
+            amplitude: -0.07,
+        }, // eye socket
+        Bump {
+            dir: dir(-0.33, 0.12, 1.0),
+            width: 0.12,
+            amplitude: -0.07,
+        },
+        Bump {
+            dir: dir(0.45, -0.15, 1.0),
+            width: 0.25,
+            amplitude: 0.04,
+        }, // cheeks
+        Bump {
+            dir: dir(-0.45, -0.15, 1.0),
+            width: 0.25,
+            amplitude: 0.04,
+        },
+        Bump {
+            dir: dir(1.0, 0.0, -0.05),
+            width: 0.15,
+            amplitude: 0.06,
+        }, // ears
+        Bump {
+            dir: dir(-1.0, 0.0, -0.05),
+            width: 0.15,
+            amplitude: 0.06,
+        },
     ];
     let mut positions = Vec::with_capacity(((n_lat - 1) * n_lon + 2) as usize);
     let mut push = |d: Vec3| positions.push(d * head_radius(d, &bumps));
@@ -62,7 +100,11 @@ pub fn head_skin(n_lat: u32, n_lon: u32) -> crate::Result<TriMesh> {
         let theta = std::f32::consts::PI * i as f32 / n_lat as f32;
         for j in 0..n_lon {
             let phi = std::f32::consts::TAU * j as f32 / n_lon as f32;
-            push(Vec3::new(theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos()));
+            push(Vec3::new(
+                theta.sin() * phi.sin(),
+                theta.cos(),
+                theta.sin() * phi.cos(),
+            ));
         }
     }
     push(-Vec3::Y);
@@ -75,7 +117,12 @@ pub fn head_skin(n_lat: u32, n_lon: u32) -> crate::Result<TriMesh> {
     }
     for i in 1..n_lat - 1 {
         for j in 0..n_lon {
-            let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i, j + 1),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+            );
             triangles.push([a, c, d]);
             triangles.push([a, d, b]);
         }

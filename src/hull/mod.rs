@@ -174,7 +174,7 @@ impl ConvexHull {
         ConvexHull::build(&object.candidates(kind), options)
     }
 
-    /// Hull vertices (combinatorial coordinates), in candidate order.
+    /// Hull vertices (combinatorial coordinates), sorted lexicographically.
     pub fn vertices(&self) -> &[[i64; 3]] {
         &self.vertices
     }
@@ -409,7 +409,7 @@ fn initial_tetrahedron(pts: &[P3]) -> Option<[u32; 4]> {
     Some([a, b, c, d].map(|i| i as u32))
 }
 
-/// Renumbers the vertices used by `faces` in point order.
+/// Renumbers the vertices used by `faces` in lexicographic order.
 fn compact(
     pts: &[P3],
     faces: impl Iterator<Item = (Vec<u32>, P3, i64)>,
@@ -421,9 +421,11 @@ fn compact(
             used[v as usize] = true;
         }
     }
+    let mut order: Vec<usize> = (0..pts.len()).filter(|&i| used[i]).collect();
+    order.sort_unstable_by_key(|&i| pts[i]);
     let mut index = vec![u32::MAX; pts.len()];
-    let mut vertices = Vec::new();
-    for (i, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+    let mut vertices = Vec::with_capacity(order.len());
+    for i in order {
         index[i] = vertices.len() as u32;
         vertices.push(pts[i]);
     }

@@ -24,7 +24,10 @@ fn ok_json(args: &[&str]) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
-        panic!("chisel {args:?}: stdout is not JSON ({e}): {}", String::from_utf8_lossy(&out.stdout))
+        panic!(
+            "chisel {args:?}: stdout is not JSON ({e}): {}",
+            String::from_utf8_lossy(&out.stdout)
+        )
     })
 }
 
@@ -33,7 +36,10 @@ fn assert_clean_error(args: &[&str], names: &str) {
     let out = chisel(args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "chisel {args:?}: {stderr}");
-    assert!(stderr.contains(names), "error should name {names}: {stderr}");
+    assert!(
+        stderr.contains(names),
+        "error should name {names}: {stderr}"
+    );
     assert!(!stderr.contains("panicked"), "panic: {stderr}");
 }
 
@@ -47,7 +53,12 @@ fn info_lists_adapters_as_json() {
     let v = ok_json(&["info", "--json"]);
     let adapters = v["adapters"].as_array().expect("adapters array");
     assert!(!adapters.is_empty());
-    assert!(adapters[0]["max_storage_buffer_binding_size"].as_u64().unwrap() > 0);
+    assert!(
+        adapters[0]["max_storage_buffer_binding_size"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
     assert!(v["chosen"]["name"].is_string(), "{v}");
 }
 
@@ -56,7 +67,10 @@ fn unknown_adapter_is_a_clear_error() {
     let out = chisel(&["info", "--adapter", "no-such-adapter-xyz"]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("no GPU adapter matches `no-such-adapter-xyz`"), "{stderr}");
+    assert!(
+        stderr.contains("no GPU adapter matches `no-such-adapter-xyz`"),
+        "{stderr}"
+    );
     assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
 }
 
@@ -66,19 +80,28 @@ fn missing_and_garbage_inputs_are_clean_errors() {
     let missing = dir.path().join("missing.ply");
     assert_clean_error(&["stats", path_str(&missing)], "missing.ply");
     let garbage = dir.path().join("garbage.vtk");
-    std::fs::write(&garbage, b"# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n").unwrap();
+    std::fs::write(
+        &garbage,
+        b"# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n",
+    )
+    .unwrap();
     assert_clean_error(&["stats", path_str(&garbage)], "garbage.vtk");
     let vol = dir.path().join("bad.nhdr");
     std::fs::write(&vol, b"NRRD0004\ndimension: 3\nsizes: 100000 100000 100000\ntype: short\nencoding: raw\ndata file: nothing.raw\n").unwrap();
     assert_clean_error(&["stats", path_str(&vol)], "bad.nhdr");
     let out = dir.path().join("x.png");
-    assert_clean_error(&["render", path_str(&garbage), "-o", path_str(&out)], "garbage.vtk");
+    assert_clean_error(
+        &["render", path_str(&garbage), "-o", path_str(&out)],
+        "garbage.vtk",
+    );
     assert!(!out.exists(), "no partial preview on failure");
 }
 
 #[test]
 fn stats_meshes_match_the_data_readme() {
-    let Some(dir) = common::data_dir() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
     let fran = ok_json(&["stats", path_str(&dir.join("fran_cut.vtk")), "--json"]);
     let t = &fran["topology"];
     assert_eq!(t["vertices"], 2205);
@@ -97,7 +120,10 @@ fn stats_meshes_match_the_data_readme() {
     assert_eq!(t["boundary_edges"], 223);
     assert_eq!(t["euler"], -3);
     assert_eq!(t["orientation"], "inward");
-    assert_eq!(bunny["scalars"], serde_json::json!(["confidence", "intensity"]));
+    assert_eq!(
+        bunny["scalars"],
+        serde_json::json!(["confidence", "intensity"])
+    );
 
     let feet = ok_json(&["stats", path_str(&dir.join("fsu/footbones.ply")), "--json"]);
     let t = &feet["topology"];
@@ -110,8 +136,16 @@ fn stats_meshes_match_the_data_readme() {
 
 #[test]
 fn stats_volumes_match_the_data_readme() {
-    let Some(dir) = common::data_dir() else { return };
-    let head = ok_json(&["stats", path_str(&dir.join("headsq/quarter.nhdr")), "--json", "--threshold", "1150"]);
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let head = ok_json(&[
+        "stats",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        "--json",
+        "--threshold",
+        "1150",
+    ]);
     let s = &head["stats"];
     assert_eq!(s["dims"], serde_json::json!([64, 64, 93]));
     assert_eq!(s["spacing"], serde_json::json!([3.2, 3.2, 1.5]));
@@ -121,7 +155,13 @@ fn stats_volumes_match_the_data_readme() {
     assert!(head["threshold"]["voxels"].as_u64().unwrap() > 0);
     assert!(head["threshold"]["components"].as_u64().unwrap() >= 1);
 
-    let frog = ok_json(&["stats", path_str(&dir.join("froggy/frogtissue.mhd")), "--json", "--label", "13"]);
+    let frog = ok_json(&[
+        "stats",
+        path_str(&dir.join("froggy/frogtissue.mhd")),
+        "--json",
+        "--label",
+        "13",
+    ]);
     assert_eq!(frog["stats"]["dims"], serde_json::json!([500, 470, 136]));
     assert_eq!(frog["label"]["voxels"], 440_722);
 }
@@ -129,41 +169,79 @@ fn stats_volumes_match_the_data_readme() {
 #[test]
 fn stats_gpu_backend_matches_cpu_on_real_data() {
     let Some(_gpu) = common::gpu() else { return };
-    let Some(dir) = common::data_dir() else { return };
-    let v = ok_json(&["stats", path_str(&dir.join("fran_cut.vtk")), "--json", "--backend", "gpu"]);
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let v = ok_json(&[
+        "stats",
+        path_str(&dir.join("fran_cut.vtk")),
+        "--json",
+        "--backend",
+        "gpu",
+    ]);
     assert_eq!(v["gpu"]["matches_cpu"], true, "{v}");
-    let v = ok_json(&["stats", path_str(&dir.join("headsq/quarter.nhdr")), "--json", "--backend", "gpu"]);
+    let v = ok_json(&[
+        "stats",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        "--json",
+        "--backend",
+        "gpu",
+    ]);
     assert_eq!(v["gpu"]["matches_cpu"], true, "{v}");
     assert_eq!(v["gpu"]["range"]["max"], 3926.0);
 }
 
 #[test]
 fn convert_round_trips_a_real_mesh_and_volume() {
-    let Some(dir) = common::data_dir() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
     let tmp = tempfile::tempdir().unwrap();
     let ply = tmp.path().join("fran.ply");
-    let out = chisel(&["convert", path_str(&dir.join("fran_cut.vtk")), path_str(&ply)]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = chisel(&[
+        "convert",
+        path_str(&dir.join("fran_cut.vtk")),
+        path_str(&ply),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let a = chisel::io::read_mesh(&dir.join("fran_cut.vtk")).unwrap();
     let b = chisel::io::read_mesh(&ply).unwrap();
     assert_eq!(a.positions, b.positions);
     assert_eq!(a.triangles, b.triangles);
 
     let nrrd = tmp.path().join("head.nrrd");
-    let out = chisel(&["convert", path_str(&dir.join("headsq/quarter.nhdr")), path_str(&nrrd)]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = chisel(&[
+        "convert",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        path_str(&nrrd),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let a = chisel::io::read_volume(&dir.join("headsq/quarter.nhdr")).unwrap();
     let b = chisel::io::read_volume(&nrrd).unwrap();
     assert_eq!(a, b);
 
-    let out = chisel(&["convert", path_str(&dir.join("fran_cut.vtk")), path_str(&nrrd)]);
+    let out = chisel(&[
+        "convert",
+        path_str(&dir.join("fran_cut.vtk")),
+        path_str(&nrrd),
+    ]);
     assert_eq!(out.status.code(), Some(1), "mesh → volume must be refused");
 }
 
 #[test]
 fn render_writes_a_png_of_a_real_mesh() {
     let Some(_gpu) = common::gpu() else { return };
-    let Some(dir) = common::data_dir() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
     let tmp = tempfile::tempdir().unwrap();
     let png = tmp.path().join("bunny.png");
     let out = chisel(&[
@@ -178,7 +256,11 @@ fn render_writes_a_png_of_a_real_mesh() {
         "--size",
         "128",
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
 }
@@ -189,7 +271,11 @@ fn demo_runs_and_writes_its_outputs() {
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("demo");
     let out = chisel(&["demo", "--out", path_str(&out_dir), "--rings", "48"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let report: Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["parity"]["vertex_normals"]["status"], "match");
@@ -197,4 +283,27 @@ fn demo_runs_and_writes_its_outputs() {
     assert!(out_dir.join("preview.png").is_file());
     let mesh = chisel::io::read_mesh(&out_dir.join("phantom_skin.ply")).unwrap();
     assert!(mesh.scalar("normal_deviation_deg").is_some());
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_are_world_readable_files() {
+    use std::os::unix::fs::PermissionsExt;
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let ply = tmp.path().join("fran.ply");
+    let out = chisel(&[
+        "convert",
+        path_str(&dir.join("fran_cut.vtk")),
+        path_str(&ply),
+    ]);
+    assert!(out.status.success());
+    let mode = std::fs::metadata(&ply).unwrap().permissions().mode();
+    assert_eq!(
+        mode & 0o044,
+        0o044,
+        "mode {mode:o}: group/other cannot read the output"
+    );
 }

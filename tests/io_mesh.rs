@@ -2,9 +2,13 @@
 
 mod common;
 
+use std::path::Path;
+
 use chisel::TriMesh;
+use chisel::io::{mesh_format_carries_scalars, read_mesh, write_mesh};
 
 use chisel::mesh::ScalarField;
+use glam::Vec3;
 
 fn assert_bounds(m: &TriMesh, lo: [f32; 3], hi: [f32; 3]) {
     let (a, b) = m.bounds().expect("non-empty");
@@ -95,4 +99,261 @@ fn footbones_ply_crlf() {
         [-5.63324, -1.86044, -2.12503],
         [5.63321, 1.86044, 2.12566],
     );
+}
+
+/// A mesh with two scalar fields and awkward coordinates (negative zero,
+/// tiny and large magnitudes) that must survive every writer exactly.
+fn sample_mesh() -> TriMesh {
+    let mut m = common::icosphere(1);
+    m.positions[0] = Vec3::new(-0.0, 1.0e-7, 12345.678);
+    m.positions[1] *= 3.0e4;
+    let n = m.n_vertices();
+    m.scalars = vec![
+        ScalarField {
+            name: "displacement".into(),
+            values: (0..n).map(|i| i as f32 * 0.125 - 3.0).collect(),
+        },
+        ScalarField {
+            name: "label".into(),
+            values: (0..n).map(|i| (i % 7) as f32).collect(),
+        },
+    ];
+    m
+}
+
+fn round_trip(name: &str, m: &TriMesh) -> TriMesh {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    write_mesh(&path, m).unwrap_or_else(|e| panic!("{e}"));
+    read_mesh(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Triangles as corner positions (bit patterns), for formats that renumber.
+fn corner_soup(m: &TriMesh) -> Vec<[[u32; 3]; 3]> {
+    m.triangles
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                m.positions[v as usize]
+                    .to_array()
+                    .map(|c| (c + 0.0).to_bits())
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn ply_and_vtk_round_trip_with_scalars() {
+    let m = sample_mesh();
+    for name in ["m.ply", "m.vtk"] {
+        assert!(mesh_format_carries_scalars(Path::new(name)));
+        let back = round_trip(name, &m);
+        assert_eq!(back, m, "{name}");
+    }
+}
+
+#[test]
+fn obj_and_byu_round_trip_without_scalars() {
+    let m = sample_mesh();
+    for name in ["m.obj", "m.byu", "m.g"] {
+        assert!(!mesh_format_carries_scalars(Path::new(name)));
+        let back = round_trip(name, &m);
+        assert_eq!(back.positions, m.positions, "{name}");
+        assert_eq!(back.triangles, m.triangles, "{name}");
+        assert!(back.scalars.is_empty(), "{name}");
+    }
+}
+
+#[test]
+fn stl_round_trip_welds_to_the_same_surface() {
+    let m = sample_mesh();
+    assert!(!mesh_format_carries_scalars(Path::new("m.stl")));
+    let back = round_trip("m.stl", &m);
+    // Every icosphere vertex is used and distinct, so welding restores the count.
+    assert_eq!(back.n_vertices(), m.n_vertices());
+    assert_eq!(corner_soup(&back), corner_soup(&m));
+    assert!(back.scalars.is_empty());
+}
+
+#[test]
+fn real_meshes_round_trip_through_ply_and_vtk() {
+    for rel in ["bunny.ply", "fran_cut.vtk", "fsu/footbones.ply"] {
+        let Some(m) = common::real_mesh(rel) else {
+            return;
+        };
+        for name in ["m.ply", "m.vtk"] {
+            assert_eq!(round_trip(name, &m), m, "{rel} via {name}");
+        }
+    }
+}
+
+fn read_text(name: &str, text: &[u8]) -> TriMesh {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, text).unwrap();
+    read_mesh(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn unit_quad_points() -> Vec<Vec3> {
+    vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(2.0, 0.5, 0.0),
+    ]
+}
+
+/// VTK BINARY (big-endian): a quad polygon, a 4-point strip, point scalars
+/// with a lookup table, normals and an empty CELL_DATA section.
+#[test]
+fn vtk_binary_big_endian_polygons_and_strips() {
+    let pts = unit_quad_points();
+    let mut f =
+        b"# vtk DataFile Version 3.0\nbinary test\nBINARY\nDATASET POLYDATA\nPOINTS 5 float\n"
+            .to_vec();
+    for p in &pts {
+        for c in p.to_array() {
+            f.extend(c.to_be_bytes());
+        }
+    }
+    f.extend(b"\nPOLYGONS 1 5\n");
+    for v in [4i32, 0, 1, 2, 3] {
+        f.extend(v.to_be_bytes());
+    }
+    f.extend(b"\nTRIANGLE_STRIPS 1 5\n");
+    for v in [4i32, 1, 4, 2, 0] {
+        f.extend(v.to_be_bytes());
+    }
+    f.extend(b"\nCELL_DATA 2\nPOINT_DATA 5\nSCALARS temp double 1\nLOOKUP_TABLE default\n");
+    for v in [0.5f64, -1.0, 2.0, 3.0, 1e-3] {
+        f.extend(v.to_be_bytes());
+    }
+    f.extend(b"\nNORMALS n float\n");
+    for _ in 0..15 {
+        f.extend(1f32.to_be_bytes());
+    }
+    f.extend(b"\n");
+    let m = read_text("b.vtk", &f);
+    assert_eq!(m.positions, pts);
+    assert_eq!(
+        m.triangles,
+        [[0, 1, 2], [0, 2, 3], [1, 4, 2], [2, 4, 0]],
+        "fan, then strip with alternating winding"
+    );
+    assert_eq!(m.scalars.len(), 1);
+    assert_eq!(m.scalars[0].name, "temp");
+    assert_eq!(m.scalars[0].values, [0.5, -1.0, 2.0, 3.0, 1e-3]);
+}
+
+/// VTK 5.1 ASCII cells (OFFSETS/CONNECTIVITY) and a FIELD array.
+#[test]
+fn vtk_51_offsets_connectivity() {
+    let f = b"# vtk DataFile Version 5.1\nnew layout\nASCII\nDATASET POLYDATA\n\
+POINTS 5 float\n0 0 0 1 0 0 1 1 0 0 1 0 2 0.5 0\n\
+POLYGONS 3 7\nOFFSETS vtktypeint64\n0 4 7\nCONNECTIVITY vtktypeint64\n0 1 2 3 1 4 2\n\
+POINT_DATA 5\nFIELD FieldData 2\nw 1 5 float\n1 2 3 4 5\nuv 2 5 float\n0 0 0 0 0 0 0 0 0 0\n";
+    let m = read_text("n.vtk", f);
+    assert_eq!(m.positions, unit_quad_points());
+    assert_eq!(m.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
+    assert_eq!(m.scalars.len(), 1);
+    assert_eq!(m.scalars[0].values, [1.0, 2.0, 3.0, 4.0, 5.0]);
+}
+
+/// PLY binary big-endian with classic type names, an extra property, a quad
+/// and an extra element after the faces.
+#[test]
+fn ply_binary_big_endian() {
+    let pts = unit_quad_points();
+    let mut f = b"ply\r\nformat binary_big_endian 1.0\r\ncomment x\r\nelement vertex 5\r\n\
+property float x\r\nproperty float y\r\nproperty float z\r\nproperty uchar quality\r\n\
+element face 2\r\nproperty uchar flags\r\nproperty list uchar int vertex_indices\r\n\
+element edge 1\r\nproperty int vertex1\r\nproperty int vertex2\r\nend_header\r\n"
+        .to_vec();
+    for (i, p) in pts.iter().enumerate() {
+        for c in p.to_array() {
+            f.extend(c.to_be_bytes());
+        }
+        f.push(10 * i as u8);
+    }
+    f.extend([0u8, 4]);
+    for v in [0i32, 1, 2, 3] {
+        f.extend(v.to_be_bytes());
+    }
+    f.extend([0u8, 3]);
+    for v in [1i32, 4, 2] {
+        f.extend(v.to_be_bytes());
+    }
+    for v in [0i32, 1] {
+        f.extend(v.to_be_bytes());
+    }
+    let m = read_text("b.ply", &f);
+    assert_eq!(m.positions, pts);
+    assert_eq!(m.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
+    assert_eq!(m.scalars.len(), 1);
+    assert_eq!(m.scalars[0].name, "quality");
+    assert_eq!(m.scalars[0].values, [0.0, 10.0, 20.0, 30.0, 40.0]);
+}
+
+#[test]
+fn ply_binary_little_endian_matches_ascii() {
+    let ascii = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n\
+property double z\nelement face 1\nproperty list uint8 uint32 vertex_index\nend_header\n\
+0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let mut bin = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float64 x\n\
+property float64 y\nproperty float64 z\nelement face 1\nproperty list uint8 uint32 vertex_index\nend_header\n"
+        .to_vec();
+    for v in [0f64, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend(v.to_le_bytes());
+    }
+    bin.push(3);
+    for v in [0u32, 1, 2] {
+        bin.extend(v.to_le_bytes());
+    }
+    let a = read_text("a.ply", ascii);
+    assert_eq!(a.n_triangles(), 1);
+    assert_eq!(a, read_text("b.ply", &bin));
+}
+
+#[test]
+fn obj_corner_forms_negative_indices_and_polygons() {
+    let f = b"# test\nmtllib x.mtl\no quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n\
+f 1/1/1 2/1/1 3//1 4\nv 2 0.5 0 1.0\ns off\nf -4 -1 -3\n";
+    let m = read_text("q.obj", f);
+    assert_eq!(m.positions, unit_quad_points());
+    assert_eq!(m.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
+}
+
+#[test]
+fn stl_ascii_and_binary_weld_shared_corners() {
+    let ascii = b"solid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n\
+   vertex 1 1 0\n  endloop\n endfacet\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n\
+   vertex 1 1 0\n   vertex -0 1 0\n  endloop\n endfacet\nendsolid t\n";
+    let a = read_text("a.stl", ascii);
+    assert_eq!(a.n_vertices(), 4);
+    assert_eq!(a.triangles, [[0, 1, 2], [0, 2, 3]]);
+    // Binary whose 80-byte header starts with "solid": the length decides.
+    let mut bin = b"solid but binary".to_vec();
+    bin.resize(80, b' ');
+    bin.extend(2u32.to_le_bytes());
+    for tri in [
+        [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.]],
+        [[0., 0., 0.], [1., 1., 0.], [0., 1., 0.]],
+    ] {
+        bin.extend([0u8; 12]);
+        for c in tri.iter().flatten() {
+            bin.extend(c.to_le_bytes());
+        }
+        bin.extend([0u8; 2]);
+    }
+    assert_eq!(read_text("b.stl", &bin), a);
+}
+
+/// MovieBYU with two parts and a quad (seed 000's format).
+#[test]
+fn byu_two_parts_and_a_quad() {
+    let f = b"2 5 2 7\n1 1 2 2\n0 0 0 1 0 0 1 1 0 0 1 0 2 0.5 0\n1 2 3 -4\n2 5 -3\n";
+    let m = read_text("t.byu", f);
+    assert_eq!(m.positions, unit_quad_points());
+    assert_eq!(m.triangles, [[0, 1, 2], [0, 2, 3], [1, 4, 2]]);
 }

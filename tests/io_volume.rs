@@ -2,8 +2,11 @@
 
 mod common;
 
-use chisel::Volume;
-use chisel::volume::VolumeData;
+use std::path::Path;
+
+use chisel::io::{RawSpec, read_raw_volume, read_volume, write_volume};
+use chisel::volume::{ScalarType, VolumeData};
+use chisel::{Error, Volume};
 
 fn histogram_u8(v: &Volume) -> [usize; 256] {
     let VolumeData::U8(d) = &v.data else {
@@ -102,4 +105,268 @@ fn head_mr_volume_three_digit_exponents() {
     let h = histogram_u8(&v);
     assert_eq!(v.len() - h[0], 123_631);
     assert_eq!(h[254], 0);
+}
+
+const WRITE_NAMES: [&str; 6] = ["v.nrrd", "v.nhdr", "v.mha", "v.mhd", "v.nii", "v.nii.gz"];
+
+/// A 5×4×3 volume of every element type with values that need all bytes
+/// (so a byte-order mistake shows), f32-exact spacing and origin.
+fn sample_volumes() -> Vec<Volume> {
+    let dims = [5, 4, 3];
+    let n: usize = 60;
+    let data = [
+        VolumeData::U8((0..n).map(|i| (i * 37 % 256) as u8).collect()),
+        VolumeData::I8((0..n).map(|i| (i as i8).wrapping_mul(-7)).collect()),
+        VolumeData::U16((0..n).map(|i| (i as u16).wrapping_mul(4099)).collect()),
+        VolumeData::I16((0..n).map(|i| (i as i16 - 30).wrapping_mul(1031)).collect()),
+        VolumeData::U32(
+            (0..n)
+                .map(|i| (i as u32).wrapping_mul(0x0101_0307))
+                .collect(),
+        ),
+        VolumeData::I32(
+            (0..n)
+                .map(|i| (i as i32 - 30).wrapping_mul(0x0102_0305))
+                .collect(),
+        ),
+        VolumeData::F32((0..n).map(|i| i as f32 * -0.3 + 1e-20).collect()),
+        VolumeData::F64((0..n).map(|i| (i as f64).sqrt() * 1e200).collect()),
+    ];
+    data.into_iter()
+        .map(|d| Volume::new(dims, [0.5, 1.25, 3.0], [-10.5, 3.25, 0.0], d).unwrap())
+        .collect()
+}
+
+#[test]
+fn every_volume_writer_round_trips_every_type() {
+    let dir = tempfile::tempdir().unwrap();
+    for v in sample_volumes() {
+        for name in WRITE_NAMES {
+            let path = dir.path().join(name);
+            write_volume(&path, &v).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let back = read_volume(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(back, v, "{name} {:?}", v.data.scalar_type());
+        }
+    }
+}
+
+#[test]
+fn real_volumes_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    for rel in ["headsq/quarter.nhdr", "HeadMRVolume.mhd", "foot/foot.mha"] {
+        let Some(v) = common::real_volume(rel) else {
+            return;
+        };
+        for name in WRITE_NAMES {
+            let path = dir.path().join(name);
+            write_volume(&path, &v).unwrap_or_else(|e| panic!("{rel} → {name}: {e}"));
+            let back = read_volume(&path).unwrap();
+            assert_eq!(back.dims, v.dims, "{rel} → {name}");
+            assert!(back.data == v.data, "{rel} → {name}: samples differ");
+            assert_eq!(back.origin, v.origin, "{rel} → {name}");
+            // NIfTI stores pixdim as f32 (3.2 → 3.2000000477): documented.
+            let tol = if name.starts_with("v.nii") { 1e-6 } else { 0.0 };
+            for (a, b) in back.spacing.iter().zip(v.spacing) {
+                assert!(
+                    (a - b).abs() <= tol * b,
+                    "{rel} → {name}: spacing {a} vs {b}"
+                );
+            }
+        }
+    }
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+fn i16_ramp() -> Vec<i16> {
+    (0..24).map(|i| (i - 12) * 1001).collect()
+}
+
+fn i16_be(v: &[i16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_be_bytes()).collect()
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+#[test]
+fn nrrd_big_endian_gzip_attached_with_directions() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut f = b"NRRD0005\n# c\ntype: short\ndimension: 3\nspace: left-posterior-superior\n\
+sizes: 4 3 2\nspace directions: (0.5,0,0) (0,0.75,0) (0,0,2)\nspace origin: (1,-2,3.5)\n\
+endian: big\nencoding: gzip\nkey:=value\n\n"
+        .to_vec();
+    f.extend(gzip(&i16_be(&i16_ramp())));
+    let v = read_volume(&write(dir.path(), "be.nrrd", &f)).unwrap();
+    assert_eq!(v.dims, [4, 3, 2]);
+    assert_eq!(v.spacing, [0.5, 0.75, 2.0]);
+    assert_eq!(v.origin, [1.0, -2.0, 3.5]);
+    assert_eq!(v.data, VolumeData::I16(i16_ramp()));
+}
+
+#[test]
+fn nrrd_detached_pattern_with_subdim_list_and_skips() {
+    let dir = tempfile::tempdir().unwrap();
+    let ramp = i16_ramp();
+    // Two files of 12 samples each (subdim 2 of sizes 4 3 2), zero-padded names.
+    for (k, chunk) in ramp.chunks(12).enumerate() {
+        let mut bytes = b"junk line\n".to_vec();
+        bytes.extend([0xAA; 3]);
+        bytes.extend(i16_be(chunk));
+        write(dir.path(), &format!("s{:03}.raw", 2 * k + 2), &bytes);
+    }
+    let hdr = b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 4 3 2\nspacings: 1 2 nan\n\
+endian: big\nencoding: raw\nline skip: 1\nbyte skip: 3\ndata file: s%03d.raw 2 4 2 2\n";
+    let v = read_volume(&write(dir.path(), "p.nhdr", hdr)).unwrap();
+    assert_eq!(v.spacing, [1.0, 2.0, 1.0]);
+    assert_eq!(v.data, VolumeData::I16(ramp.clone()));
+    // The same through LIST, and with byte skip -1 (data at the end).
+    let hdr = b"NRRD0004\ntype: int16\ndimension: 3\nsizes: 4 3 2\nendian: big\n\
+encoding: raw\nbyte skip: -1\ndata file: LIST\ns002.raw\ns004.raw\n";
+    let v = read_volume(&write(dir.path(), "l.nhdr", hdr)).unwrap();
+    assert_eq!(v.data, VolumeData::I16(ramp));
+}
+
+#[test]
+fn nrrd_oblique_or_flipped_directions_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for dirs in [
+        "(0.7,0.7,0) (0,1,0) (0,0,1)",
+        "(-1,0,0) (0,1,0) (0,0,1)",
+        "(0,1,0) (1,0,0) (0,0,1)",
+    ] {
+        let hdr = format!(
+            "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\nspace directions: {dirs}\nencoding: raw\n\nx"
+        );
+        let e = read_volume(&write(dir.path(), "o.nrrd", hdr.as_bytes())).unwrap_err();
+        assert!(matches!(e, Error::Unsupported { .. }), "{dirs}: {e}");
+        assert!(
+            e.to_string().contains("o.nrrd") && e.to_string().contains("line 5"),
+            "{e}"
+        );
+    }
+}
+
+#[test]
+fn metaimage_msb_local_and_zlib() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let ramp = i16_ramp();
+    let mut f = b"ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\nElementType = MET_SHORT\n\
+ElementSpacing = 2 2 2 9\nOrigin = 1 2 3\nBinaryDataByteOrderMSB = True\nElementDataFile = LOCAL\n"
+        .to_vec();
+    f.extend(i16_be(&ramp));
+    let v = read_volume(&write(dir.path(), "msb.mha", &f)).unwrap();
+    assert_eq!(
+        (v.dims, v.spacing, v.origin),
+        ([4, 3, 2], [2.0; 3], [1.0, 2.0, 3.0])
+    );
+    assert_eq!(v.data, VolumeData::I16(ramp.clone()));
+    // zlib with a deliberately wrong CompressedDataSize hint.
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(&i16_be(&ramp)).unwrap();
+    let z = z.finish().unwrap();
+    write(dir.path(), "z.zraw", &z);
+    let hdr = format!(
+        "NDims = 3\nDimSize = 4 3 2\nElementType = MET_SHORT\nElementByteOrderMSB = True\n\
+CompressedData = True\nCompressedDataSize = {}\nElementDataFile = z.zraw\n",
+        z.len() / 2
+    );
+    let v = read_volume(&write(dir.path(), "z.mhd", hdr.as_bytes())).unwrap();
+    assert_eq!(v.data, VolumeData::I16(ramp));
+}
+
+/// A big-endian NIfTI-1 header built by hand (not by chisel's writer).
+fn nifti_be(
+    dims: [i16; 3],
+    datatype: i16,
+    bitpix: i16,
+    pixdim: [f32; 3],
+    slope: f32,
+    inter: f32,
+) -> Vec<u8> {
+    let mut b = vec![0u8; 352];
+    let mut put = |at: usize, bytes: &[u8]| b[at..at + bytes.len()].copy_from_slice(bytes);
+    put(0, &348i32.to_be_bytes());
+    for (i, d) in [3, dims[0], dims[1], dims[2], 1, 1, 1, 1]
+        .iter()
+        .enumerate()
+    {
+        put(40 + 2 * i, &d.to_be_bytes());
+    }
+    put(70, &datatype.to_be_bytes());
+    put(72, &bitpix.to_be_bytes());
+    for (i, p) in [1.0, pixdim[0], pixdim[1], pixdim[2]].iter().enumerate() {
+        put(76 + 4 * i, &p.to_be_bytes());
+    }
+    put(108, &352f32.to_be_bytes());
+    put(112, &slope.to_be_bytes());
+    put(116, &inter.to_be_bytes());
+    put(254, &1i16.to_be_bytes());
+    for (r, row) in [[0.5f32, 0., 0., 7.], [0., 0.5, 0., -8.], [0., 0., 2., 9.]]
+        .iter()
+        .enumerate()
+    {
+        for (c, x) in row.iter().enumerate() {
+            put(280 + 16 * r + 4 * c, &x.to_be_bytes());
+        }
+    }
+    put(344, b"n+1\0");
+    b
+}
+
+#[test]
+fn nifti_big_endian_with_sform_origin_and_scaling() {
+    let dir = tempfile::tempdir().unwrap();
+    let ramp = i16_ramp();
+    let mut f = nifti_be([4, 3, 2], 4, 16, [0.5, 0.5, 2.0], 0.0, 0.0);
+    f.extend(i16_be(&ramp));
+    let v = read_volume(&write(dir.path(), "be.nii", &f)).unwrap();
+    assert_eq!(
+        (v.dims, v.spacing, v.origin),
+        ([4, 3, 2], [0.5, 0.5, 2.0], [7.0, -8.0, 9.0])
+    );
+    assert_eq!(v.data, VolumeData::I16(ramp.clone()));
+    let v = read_volume(&write(dir.path(), "be.nii.gz", &gzip(&f))).unwrap();
+    assert_eq!(v.data, VolumeData::I16(ramp.clone()));
+    // scl_slope 0.5, scl_inter 10 → f32 samples.
+    let mut f = nifti_be([4, 3, 2], 4, 16, [0.5, 0.5, 2.0], 0.5, 10.0);
+    f.extend(i16_be(&ramp));
+    let v = read_volume(&write(dir.path(), "s.nii", &f)).unwrap();
+    let expected: Vec<f32> = ramp.iter().map(|&x| f32::from(x) * 0.5 + 10.0).collect();
+    assert_eq!(v.data, VolumeData::F32(expected));
+}
+
+#[test]
+fn raw_volume_with_header_bytes_big_endian() {
+    let dir = tempfile::tempdir().unwrap();
+    let ramp = i16_ramp();
+    let mut f = vec![7u8; 10];
+    f.extend(i16_be(&ramp));
+    let path = write(dir.path(), "r.bin", &f);
+    let spec = RawSpec {
+        dims: [4, 3, 2],
+        scalar_type: ScalarType::I16,
+        big_endian: true,
+        spacing: [1.0, 2.0, 3.0],
+        origin: [0.0, 0.0, -5.0],
+        header_bytes: 10,
+    };
+    let v = read_raw_volume(&path, &spec).unwrap();
+    assert_eq!((v.spacing, v.origin), (spec.spacing, spec.origin));
+    assert_eq!(v.data, VolumeData::I16(ramp));
+    let long = RawSpec {
+        header_bytes: 12,
+        ..spec
+    };
+    let e = read_raw_volume(&path, &long).unwrap_err();
+    assert!(matches!(e, Error::Size { .. }), "{e}");
 }

@@ -123,6 +123,8 @@ struct Host {
     bindings: &'static [B],
     /// Invocations per workgroup the host divides by.
     wg_size: u32,
+    /// Other WGSL `const`s the host relies on, with the host's values.
+    consts: &'static [(&'static str, u32)],
     /// The encase `Params` bytes with distinct field values, and each field's
     /// (name, value) in declaration order.
     params: (Vec<u8>, Vec<(&'static str, u32)>),
@@ -150,6 +152,7 @@ fn host(kernel: Kernel) -> Host {
         Kernel::VertexNormals => Host {
             bindings: NORMALS_BINDINGS,
             wg_size: 256,
+            consts: &[],
             params: (
                 encase_bytes(&normals::gpu::Params { n_vertices: 0xA1 }),
                 vec![("n_vertices", 0xA1)],
@@ -158,6 +161,7 @@ fn host(kernel: Kernel) -> Host {
         Kernel::BoundsReduce | Kernel::RangeReduce => Host {
             bindings: reduce::gpu::BINDINGS,
             wg_size: reduce::gpu::WG_SIZE,
+            consts: &[("BLOCK", reduce::gpu::BLOCK)],
             params: (
                 encase_bytes(&reduce::gpu::Params {
                     n_items: 0xB1,
@@ -173,6 +177,7 @@ fn host(kernel: Kernel) -> Host {
                 scan::gpu::ADD_BINDINGS
             },
             wg_size: scan::gpu::WG_SIZE,
+            consts: &[],
             params: (
                 encase_bytes(&scan::gpu::Params { n: 0xC1 }),
                 vec![("n", 0xC1)],

@@ -34,7 +34,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 global.note(format!(
                     "note: {} cannot store per-vertex scalars; dropped: {}",
                     args.output.display(),
-                    m.scalars.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
+                    m.scalars
+                        .iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ));
             }
             crate::io::write_mesh(&args.output, &m)?;

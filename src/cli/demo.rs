@@ -43,8 +43,7 @@ fn normal_deviation(mesh: &TriMesh, normals: &[[f32; 4]]) -> Vec<f32> {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| crate::Error::io(&args.out, e))?;
+    std::fs::create_dir_all(&args.out).map_err(|e| crate::Error::io(&args.out, e))?;
     let bar = global.progress(5, "demo");
     let mut stages = serde_json::Map::new();
     let mut stage = |name: &str, t: Instant| {
@@ -67,7 +66,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let cpu_normals = crate::normals::vertex_normals(&skin, Backend::Cpu)?;
     stage("vertex_normals_cpu", t);
-    let normals_parity = compare_vec("vertex_normals/phantom", &cpu_normals, &gpu_normals, crate::normals::cpu::TOL);
+    let normals_parity = compare_vec(
+        "vertex_normals/phantom",
+        &cpu_normals,
+        &gpu_normals,
+        crate::normals::cpu::TOL,
+    );
     let max_dev = cpu_normals
         .iter()
         .zip(&gpu_normals)
@@ -136,13 +140,24 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     global.note(format!(
         "demo: {} vertices, normals {} (max |Δ| {max_dev:.2e}), bounds {}; wrote {}, {}, {}",
         skin.n_vertices(),
-        if normals_parity.is_ok() { "match CPU" } else { "DIFFER from CPU" },
-        if gpu_bounds == cpu_bounds { "exact" } else { "DIFFER" },
+        if normals_parity.is_ok() {
+            "match CPU"
+        } else {
+            "DIFFER from CPU"
+        },
+        if gpu_bounds == cpu_bounds {
+            "exact"
+        } else {
+            "DIFFER"
+        },
         mesh_path.display(),
         preview_path.display(),
         report_path.display()
     ));
     normals_parity?;
-    anyhow::ensure!(gpu_bounds == cpu_bounds, "bounds_reduce: GPU {gpu_bounds:?} != CPU {cpu_bounds:?}");
+    anyhow::ensure!(
+        gpu_bounds == cpu_bounds,
+        "bounds_reduce: GPU {gpu_bounds:?} != CPU {cpu_bounds:?}"
+    );
     Ok(())
 }

@@ -30,7 +30,10 @@ fn inline(value: &Value) -> String {
             format!("[{}]", items.join(", "))
         }
         Value::Object(m) => {
-            let items: Vec<String> = m.iter().map(|(k, v)| format!("{k}: {}", inline(v))).collect();
+            let items: Vec<String> = m
+                .iter()
+                .map(|(k, v)| format!("{k}: {}", inline(v)))
+                .collect();
             format!("{{{}}}", items.join(", "))
         }
         other => other.to_string(),

@@ -49,7 +49,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         volume_stats(global, args)?
     } else {
         if args.threshold.is_some() || args.label.is_some() {
-            anyhow::bail!("--threshold and --label apply to volumes, not to the mesh {}", args.file.display());
+            anyhow::bail!(
+                "--threshold and --label apply to volumes, not to the mesh {}",
+                args.file.display()
+            );
         }
         mesh_stats(global, args)?
     };

@@ -29,7 +29,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     sc.count("the number of connectivity entries")?;
     let parts = sc.check_count(pat, "part ranges", parts, 4)?;
     for _ in 0..parts {
-        let at = sc.pos();
+        let at = sc.mark();
         // `first last` with `last = first - 1` is an empty part.
         let first = sc.index(Num::I64, None, "a part's first polygon")?;
         let last = sc.index(Num::I64, None, "a part's last polygon")?;
@@ -55,9 +55,9 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     let mut poly = Vec::new();
     for _ in 0..npoly {
         poly.clear();
-        let start = sc.pos();
+        let start = sc.mark();
         loop {
-            let at = sc.pos();
+            let at = sc.mark();
             let ix = sc.index(
                 Num::I64,
                 None,

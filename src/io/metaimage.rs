@@ -25,7 +25,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use super::nrrd::pattern_files;
-use super::raw::{Encoding, Payload, Piece, Skip, read_samples, write_le};
+use super::raw::{Encoding, Payload, Piece, Skip, read_samples, sample_count, write_le};
 use super::text::{Endian, Scanner, clip, read_prefix};
 use super::write_atomic_with;
 use crate::volume::ScalarType;
@@ -230,6 +230,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
         });
     }
     let ty = met_type(path, need("ElementType")?)?;
+    sample_count(path, &size_field.at, dims, ty)?;
     let mut spacing = [1.0f64; 3];
     if let Some(f) = h
         .get(&["ElementSpacing"])
@@ -302,7 +303,6 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     let df = need("ElementDataFile")?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let words: Vec<&str> = df.value.split_whitespace().collect();
-    let n: usize = dims.iter().product();
     let subdim = |i: usize| -> Result<usize> {
         words.get(i).map_or(Ok(ndims - 1), |w| {
             w.parse::<usize>()
@@ -323,12 +323,14 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             .collect();
         (pieces, Some(subdim(1)?))
     } else if words.len() >= 4 && words[0].contains('%') {
-        let files = pattern_files(path, &df.at, dir, &words, n)?;
+        let sub = subdim(4)?;
+        let blocks = sizes[sub..].iter().product();
+        let files = pattern_files(path, &df.at, dir, &words, blocks)?;
         let pieces = files
             .into_iter()
             .map(|p| Piece::new(p, 0, 0, skip))
             .collect();
-        (pieces, Some(subdim(4)?))
+        (pieces, Some(sub))
     } else {
         (vec![Piece::new(dir.join(&df.value), 0, 0, skip)], None)
     };

@@ -15,10 +15,9 @@
 //! **Why hand-written parsers.** Every reader here must report the file, the
 //! position (line for text, byte for binary) and what it expected, and must
 //! check every size a header announces against the file size and the memory
-//! budget *before* allocating. The format crates we looked at either panic
-//! on hostile input, allocate what a header claims, or lose positions, and
-//! the formats themselves are short. [`text::Scanner`] is the one tokenizer
-//! all readers share.
+//! budget *before* allocating; that is easiest to guarantee, and to test,
+//! when one small tokenizer (`text::Scanner`) is shared by all readers. The
+//! formats themselves are short. Only (de)compression uses a crate (`flate2`).
 //!
 //! **Guarantees.** Readers never panic on input data and never return a
 //! partial result: a count field larger than the rest of the file is an
@@ -162,7 +161,8 @@ pub fn mesh_format_carries_scalars(path: &Path) -> bool {
 /// Writes a mesh atomically; the format follows the extension: `.ply`
 /// (binary little-endian, scalars as `float` vertex properties), `.vtk`
 /// (ASCII legacy, scalars as `POINT_DATA SCALARS`), `.obj`, `.stl` (binary),
-/// `.byu`/`.g`. Scalar names are written with whitespace replaced by `_`.
+/// `.byu`/`.g`. Scalar names are written with whitespace replaced by `_`
+/// (and `x`/`y`/`z` prefixed with `scalar_`), so they read back as one token.
 /// The mesh is validated first; nothing is written if it is invalid.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     let format = mesh_format(path)?;
@@ -259,11 +259,13 @@ where
             .map(|n| n.to_string_lossy())
             .unwrap_or_default()
     );
-    let tmp = tempfile::Builder::new()
-        .prefix(&prefix)
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| Error::io(path, e))?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    // Outputs are ordinary files (0644 less the umask), not the 0600 of a
+    // private temp file.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+    let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     let mut w = std::io::BufWriter::new(tmp);
     fill(&mut w).map_err(|e| Error::io(path, e))?;
     let tmp = w

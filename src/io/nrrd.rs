@@ -21,7 +21,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use super::raw::{Encoding, Payload, Piece, Skip, read_samples, write_le};
+use super::raw::{Encoding, Payload, Piece, Skip, read_samples, sample_count, write_le};
 use super::text::{Endian, Scanner, clip, read_prefix};
 use super::write_atomic_with;
 use crate::volume::ScalarType;
@@ -236,7 +236,8 @@ pub(crate) fn format_index(pattern: &str, i: i64) -> Option<String> {
     used.then_some(out)
 }
 
-/// The files of a `fmt min max step` pattern, at most `limit` of them.
+/// The files of a `fmt min max step` pattern; more than `limit` (the number
+/// of blocks the sizes call for) is an error before any name is made.
 pub(crate) fn pattern_files(
     path: &Path,
     at: &Position,
@@ -256,7 +257,7 @@ pub(crate) fn pattern_files(
             )
         })?;
     let (min, max, step) = (nums[0], nums[1], nums[2]);
-    if step == 0 || (max - min).signum() * step.signum() < 0 {
+    if step == 0 || (i128::from(max) - i128::from(min)).signum() * i128::from(step.signum()) < 0 {
         return Err(bad(
             "a non-zero step going from min to max",
             format!("{min} {max} {step}"),
@@ -271,7 +272,7 @@ pub(crate) fn pattern_files(
     }
     (0..count as i64)
         .map(|k| {
-            format_index(words[0], min + k * step)
+            format_index(words[0], min.saturating_add(k.saturating_mul(step)))
                 .map(|name| dir.join(name))
                 .ok_or_else(|| {
                     bad(
@@ -349,6 +350,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     for (d, s) in dims.iter_mut().zip(&sizes) {
         *d = *s;
     }
+    sample_count(path, &sizes_field.at, dims, ty)?;
 
     let mut spacing = [1.0f64; 3];
     if let Some(f) = h.get("spacings") {
@@ -485,7 +487,6 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     };
 
     let dir = path.parent().unwrap_or(Path::new(""));
-    let n: usize = dims.iter().product();
     let (files, subdim, field_at) = match h.get("datafile") {
         None => {
             let offset = h.data_offset.ok_or_else(|| {
@@ -523,7 +524,9 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
                 let names = h.list.iter().map(|(_, name)| dir.join(name)).collect();
                 (names, subdim_at(1)?)
             } else if words.len() >= 4 && words[0].contains('%') {
-                (pattern_files(path, &f.at, dir, &words, n)?, subdim_at(4)?)
+                let sub = subdim_at(4)?;
+                let blocks = sizes[sub.unwrap_or(dimension - 1)..].iter().product();
+                (pattern_files(path, &f.at, dir, &words, blocks)?, sub)
             } else {
                 (vec![dir.join(&f.value)], None)
             };

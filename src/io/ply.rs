@@ -19,7 +19,7 @@ use glam::Vec3;
 use super::text::{Endian, Num, Scanner, clip, fan};
 use super::vtk::field_name;
 use crate::mesh::ScalarField;
-use crate::{Result, TriMesh};
+use crate::{Position, Result, TriMesh};
 
 #[derive(Debug, Clone, Copy)]
 enum PropKind {
@@ -38,6 +38,7 @@ struct Element {
     name: String,
     count: u64,
     at: usize,
+    line: Position,
     props: Vec<Prop>,
 }
 
@@ -101,6 +102,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
                     name: (*name).to_string(),
                     count,
                     at,
+                    line: sc.position(at),
                     props: Vec::new(),
                 });
             }
@@ -138,7 +140,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
             }
         }
     }
-    let header_end = sc.pos();
+    let header_end = sc.mark();
     let binary = format.ok_or_else(|| sc.error(header_end, "a `format` line", "none"))?;
     if binary.is_some() {
         sc.set_binary();
@@ -179,7 +181,7 @@ fn read_element(
         })
         .sum();
     let what = format!("`{}` elements", el.name);
-    let count = sc.check_count(el.at, &what, el.count, min_row.max(1))?;
+    let count = sc.check_count_at(el.line.clone(), &what, el.count, min_row.max(1))?;
     let is_vertex = el.name == "vertex";
     let is_face = el.name == "face";
     let mut roles = Vec::with_capacity(el.props.len());
@@ -219,7 +221,7 @@ fn read_element(
         for (prop, role) in el.props.iter().zip(&roles) {
             match prop.kind {
                 PropKind::Scalar(t) => {
-                    let at = sc.pos();
+                    let at = sc.mark();
                     let v = sc.value(t, binary, &format!("property `{}`", prop.name))?;
                     match *role {
                         Role::Coord(axis) => {
@@ -234,7 +236,7 @@ fn read_element(
                     }
                 }
                 PropKind::List(ct, it) => {
-                    let at = sc.pos();
+                    let at = sc.mark();
                     let k = sc.index(ct, binary, "a list length")?;
                     let min = if binary.is_some() {
                         it.size() as u64
@@ -254,7 +256,7 @@ fn read_element(
                     }
                     poly.clear();
                     for _ in 0..k {
-                        let vat = sc.pos();
+                        let vat = sc.mark();
                         if corners {
                             let ix = sc.index(it, binary, "a vertex index")?;
                             if ix < 0 || ix as u64 >= nv {

@@ -249,28 +249,38 @@ fn open_after_lines(piece: &Piece) -> Result<(BufReader<File>, u64)> {
     Ok((r, offset))
 }
 
+/// `nx·ny·nz`, checked for overflow and (times the sample size) against the
+/// memory budget.
+pub(crate) fn sample_count(
+    header: &Path,
+    at: &Position,
+    dims: [usize; 3],
+    ty: ScalarType,
+) -> Result<usize> {
+    let bytes = dims
+        .iter()
+        .try_fold(ty.size() as u64, |a, &d| a.checked_mul(d as u64))
+        .unwrap_or(u64::MAX);
+    check_budget(
+        header,
+        at.clone(),
+        &format!("{dims:?} samples of {}", ty.name()),
+        bytes,
+    )?;
+    usize::try_from(bytes / ty.size() as u64).map_err(|_| Error::Size {
+        path: header.into(),
+        at: at.clone(),
+        what: format!("{dims:?} samples"),
+        needed: bytes,
+        limit_kind: "the address space",
+        limit: usize::MAX as u64,
+    })
+}
+
 /// Decodes all samples described by `p`.
 pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
-    let n = p
-        .dims
-        .iter()
-        .try_fold(1usize, |a, &d| a.checked_mul(d))
-        .filter(|&n| n.checked_mul(p.ty.size()).is_some())
-        .ok_or_else(|| Error::Size {
-            path: p.header.into(),
-            at: p.field.clone(),
-            what: format!("{:?} samples", p.dims),
-            needed: u64::MAX,
-            limit_kind: super::BUDGET_KIND,
-            limit: super::input_budget(),
-        })?;
+    let n = sample_count(p.header, &p.field, p.dims, p.ty)?;
     let elem = p.ty.size() as u64;
-    check_budget(
-        p.header,
-        p.field.clone(),
-        &format!("{:?} samples of {}", p.dims, p.ty.name()),
-        n as u64 * elem,
-    )?;
     let pieces = p.pieces.len();
     if pieces == 0 || n % pieces != 0 {
         return Err(Error::format(

@@ -63,13 +63,13 @@ fn read_binary(path: &Path, bytes: &[u8], n: u64) -> Result<TriMesh> {
     let mut w = Welder::default();
     w.mesh.triangles.reserve(n);
     for _ in 0..n {
-        let facet = sc.pos();
+        let facet = sc.mark();
         sc.take(12, "a facet normal")?;
         let mut tri = [0u32; 3];
         for corner in &mut tri {
             let mut p = [0f32; 3];
             for c in &mut p {
-                let at = sc.pos();
+                let at = sc.mark();
                 *c = Num::F32.decode(sc.take(4, "a coordinate")?, Endian::Little) as f32;
                 if !c.is_finite() {
                     return Err(Error::format(

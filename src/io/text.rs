@@ -3,6 +3,7 @@
 //! the position (1-based line while the file is text, 0-based byte offset
 //! once a binary block has been read) and what was expected.
 
+use std::cell::Cell;
 use std::path::Path;
 use std::str::FromStr;
 
@@ -18,6 +19,9 @@ pub(crate) struct Scanner<'a> {
     bytes: &'a [u8],
     pos: usize,
     binary: bool,
+    /// `(offset, line at offset)` of the last position asked for, so that
+    /// positions requested in file order cost O(file) in total.
+    line_cache: Cell<(usize, usize)>,
 }
 
 impl<'a> Scanner<'a> {
@@ -28,11 +32,21 @@ impl<'a> Scanner<'a> {
             bytes,
             pos: 0,
             binary: false,
+            line_cache: Cell::new((0, 1)),
         }
     }
 
     /// Current byte offset.
     pub fn pos(&self) -> usize {
+        self.pos
+    }
+
+    /// Offset of the next token: skips whitespace first while the file is
+    /// text (never inside binary payloads), so errors point at the token.
+    pub fn mark(&mut self) -> usize {
+        if !self.binary {
+            self.skip_ws();
+        }
         self.pos
     }
 
@@ -53,7 +67,13 @@ impl<'a> Scanner<'a> {
             Position::Byte(at as u64)
         } else {
             let at = at.min(self.bytes.len());
-            Position::Line(1 + self.bytes[..at].iter().filter(|&&b| b == b'\n').count())
+            let (from, line) = match self.line_cache.get() {
+                (off, line) if off <= at => (off, line),
+                _ => (0, 1),
+            };
+            let line = line + self.bytes[from..at].iter().filter(|&&b| b == b'\n').count();
+            self.line_cache.set((at, line));
+            Position::Line(line)
         }
     }
 
@@ -62,12 +82,16 @@ impl<'a> Scanner<'a> {
         Error::format(self.path, self.position(at), expected, found)
     }
 
-    /// An [`Error::Size`] at `at`: `count` items of at least `min_bytes` each
-    /// do not fit in the rest of the file.
+    /// An [`Error::Size`] at byte offset `at`: `needed` bytes for `what` do
+    /// not fit in the rest of the file.
     pub fn size_error(&self, at: usize, what: impl Into<String>, needed: u64) -> Error {
+        self.size_error_at(self.position(at), what, needed)
+    }
+
+    fn size_error_at(&self, at: Position, what: impl Into<String>, needed: u64) -> Error {
         Error::Size {
             path: self.path.into(),
-            at: self.position(at),
+            at,
             what: what.into(),
             needed,
             limit_kind: REST_OF_FILE,
@@ -78,11 +102,29 @@ impl<'a> Scanner<'a> {
     /// Checks that `count` items of at least `min_bytes` each can still be in
     /// the file before anything is allocated for them; returns `count` as `usize`.
     pub fn check_count(&self, at: usize, what: &str, count: u64, min_bytes: u64) -> Result<usize> {
+        // The position (a newline count) is only computed on the error path.
+        let needed = count.saturating_mul(min_bytes);
+        match usize::try_from(count) {
+            Ok(n) if needed <= self.remaining() as u64 => Ok(n),
+            _ => self.check_count_at(self.position(at), what, count, min_bytes),
+        }
+    }
+
+    /// [`Scanner::check_count`] with an explicit position (e.g. a header line
+    /// of a binary file).
+    pub fn check_count_at(
+        &self,
+        at: Position,
+        what: &str,
+        count: u64,
+        min_bytes: u64,
+    ) -> Result<usize> {
         let needed = count.saturating_mul(min_bytes);
         if needed > self.remaining() as u64 {
-            return Err(self.size_error(at, format!("{count} {what}"), needed));
+            return Err(self.size_error_at(at, format!("{count} {what}"), needed));
         }
-        usize::try_from(count).map_err(|_| self.size_error(at, what.to_string(), needed))
+        usize::try_from(count)
+            .map_err(|_| self.size_error_at(at, format!("{count} {what}"), needed))
     }
 
     fn skip_ws(&mut self) {
@@ -351,7 +393,7 @@ impl Scanner<'_> {
 
     /// One vertex index of type `num` (an integer that fits `i64`).
     pub fn index(&mut self, num: Num, binary: Option<Endian>, expected: &str) -> Result<i64> {
-        let at = self.pos();
+        let at = self.mark();
         let v = self.value(num, binary, expected)?;
         if v.fract() != 0.0 || !v.is_finite() || v.abs() > 9.0e15 {
             return Err(self.error(at, expected, format!("{v}")));

@@ -74,7 +74,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     {
         return Err(sc.error(at, magic, format!("`{}`", clip(first.trim()))));
     }
-    let at = sc.pos();
+    let at = sc.mark();
     sc.line()
         .ok_or_else(|| sc.error(at, "a title line", "end of file"))?;
     let (at, mode) = sc.next("ASCII or BINARY")?;
@@ -262,7 +262,7 @@ impl Reader<'_> {
         for _ in 0..n {
             let mut p = [0f32; 3];
             for c in &mut p {
-                let vat = self.sc.pos();
+                let vat = self.sc.mark();
                 let v = self.sc.value(num, self.binary, "a point coordinate")? as f32;
                 if !v.is_finite() {
                     return Err(self
@@ -303,12 +303,12 @@ impl Reader<'_> {
             let num = vtk_type(&self.sc, tat, ty)?;
             self.end_header_line();
             let mut offsets = Vec::new();
-            let oat = self.sc.pos();
+            let oat = self.sc.mark();
             let min = self.min_bytes(num);
             let count = self.sc.check_count(oat, "cell offsets", n, min)?;
             offsets.reserve(count);
             for _ in 0..count {
-                let vat = self.sc.pos();
+                let vat = self.sc.mark();
                 let o = self.sc.index(num, self.binary, "a cell offset")?;
                 let prev = offsets.last().copied().unwrap_or(0);
                 if o < prev || o as u64 > size || (offsets.is_empty() && o != 0) {
@@ -331,27 +331,27 @@ impl Reader<'_> {
             let (tat, ty) = self.sc.next("a connectivity type")?;
             let num = vtk_type(&self.sc, tat, ty)?;
             self.end_header_line();
-            let cat = self.sc.pos();
+            let cat = self.sc.mark();
             let min = self.min_bytes(num);
             let count = self
                 .sc
                 .check_count(cat, "connectivity entries", size, min)?;
             corners.reserve(count);
             for _ in 0..count {
-                let vat = self.sc.pos();
+                let vat = self.sc.mark();
                 corners.push((vat, self.sc.index(num, self.binary, "a point index")?));
             }
             for w in offsets.windows(2) {
                 polygons.push((cat, w[0] as usize..w[1] as usize));
             }
-            self.n_cells = offsets.len().saturating_sub(1) as u64;
+            self.n_cells += offsets.len().saturating_sub(1) as u64;
         } else {
             let min = self.min_bytes(Num::I32);
             let count = self.sc.check_count(at, "cell list entries", size, min)?;
             let cells = self.sc.check_count(at, "cells", n, min)?;
             corners.reserve(count);
             for _ in 0..cells {
-                let cat = self.sc.pos();
+                let cat = self.sc.mark();
                 let k = self.sc.index(Num::I32, self.binary, "a cell size")?;
                 let end = corners.len() as u64 + 1 + k.max(0) as u64;
                 if k < 0 || end > size {
@@ -365,7 +365,7 @@ impl Reader<'_> {
                 corners.push((cat, -1));
                 let first = corners.len();
                 for _ in 0..k {
-                    let vat = self.sc.pos();
+                    let vat = self.sc.mark();
                     corners.push((vat, self.sc.index(Num::I32, self.binary, "a point index")?));
                 }
                 polygons.push((cat, first..corners.len()));
@@ -377,7 +377,7 @@ impl Reader<'_> {
                     format!("{} entries", corners.len()),
                 ));
             }
-            self.n_cells = n;
+            self.n_cells += n;
         }
         if kind == CellKind::Skip {
             return Ok(());
@@ -557,11 +557,17 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &TriMesh) -> io::Result<()> {
     Ok(())
 }
 
-/// A scalar name as one whitespace-free token (`scalar` when empty).
+/// A scalar name as one whitespace-free token that cannot be taken for a
+/// coordinate: whitespace becomes `_`, an empty name `scalar`, and `x`, `y`,
+/// `z` get a `scalar_` prefix.
 pub(crate) fn field_name(name: &str) -> String {
     let n: String = name
         .chars()
         .map(|c| if c.is_whitespace() { '_' } else { c })
         .collect();
-    if n.is_empty() { "scalar".into() } else { n }
+    match n.as_str() {
+        "" => "scalar".into(),
+        "x" | "y" | "z" => format!("scalar_{n}"),
+        _ => n,
+    }
 }

@@ -1,15 +1,16 @@
 //! CPU mirrors of `kernels/bounds_reduce.wgsl` and `kernels/range_reduce.wgsl`.
 //!
 //! Exact: parity compares bits (`Tolerance::EXACT` and key equality). Each
-//! pass mirrors one dispatch (one output pair per block of [`WG_SIZE`]
-//! items). Within a block the kernel reduces by a tree and the mirror by a
-//! fold; integer min/max of order keys is associative and commutative, so
-//! both give the same bits.
+//! pass mirrors one dispatch (one output pair per block of [`BLOCK`]
+//! items). Within a block the kernel folds per invocation and then by a
+//! tree, the mirror by one fold; integer min/max of order keys is
+//! associative and commutative, so both give the same bits.
 
 use rayon::prelude::*;
 
-/// Items per workgroup (`WG_SIZE` in both kernels).
-pub const WG_SIZE: usize = 256;
+/// Items one workgroup reduces (`BLOCK` = `WG_SIZE` 256 ·
+/// `ITEMS_PER_INVOCATION` 16 in both kernels).
+pub const BLOCK: usize = 4096;
 
 /// Order key of an f32 bit pattern: `order_key(a) < order_key(b)` exactly
 /// when `a` precedes `b` in IEEE 754 totalOrder (mirror of
@@ -44,10 +45,10 @@ fn max4(a: [u32; 4], b: [u32; 4]) -> [u32; 4] {
 }
 
 /// One `bounds_reduce` dispatch with `pairs = 0`: one (lo, hi) key pair
-/// per block of [`WG_SIZE`] positions.
+/// per block of [`BLOCK`] positions.
 pub fn bounds_pass_positions(positions: &[[f32; 4]]) -> Vec<[[u32; 4]; 2]> {
     positions
-        .par_chunks(WG_SIZE)
+        .par_chunks(BLOCK)
         .map(|block| {
             block
                 .iter()
@@ -61,10 +62,10 @@ pub fn bounds_pass_positions(positions: &[[f32; 4]]) -> Vec<[[u32; 4]; 2]> {
 }
 
 /// One `bounds_reduce` dispatch with `pairs = 1`: one pair per block of
-/// [`WG_SIZE`] pairs.
+/// [`BLOCK`] pairs.
 pub fn bounds_pass(items: &[[[u32; 4]; 2]]) -> Vec<[[u32; 4]; 2]> {
     items
-        .chunks(WG_SIZE)
+        .chunks(BLOCK)
         .map(|block| {
             block
                 .iter()
@@ -87,10 +88,10 @@ pub fn bounds_reduce(positions: &[[f32; 4]]) -> Option<([f32; 4], [f32; 4])> {
 }
 
 /// One `range_reduce` dispatch with `pairs = 0`: one (lo, hi) key pair per
-/// block of [`WG_SIZE`] samples.
+/// block of [`BLOCK`] samples.
 pub fn range_pass_samples(samples: &[f32]) -> Vec<[u32; 2]> {
     samples
-        .par_chunks(WG_SIZE)
+        .par_chunks(BLOCK)
         .map(|block| {
             let first = order_key(block[0].to_bits());
             block.iter().skip(1).fold([first; 2], |[lo, hi], s| {
@@ -104,7 +105,7 @@ pub fn range_pass_samples(samples: &[f32]) -> Vec<[u32; 2]> {
 /// One `range_reduce` dispatch with `pairs = 1`.
 pub fn range_pass(items: &[[u32; 2]]) -> Vec<[u32; 2]> {
     items
-        .chunks(WG_SIZE)
+        .chunks(BLOCK)
         .map(|block| {
             block
                 .iter()

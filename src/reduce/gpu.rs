@@ -1,7 +1,7 @@
 //! GPU passes for `kernels/bounds_reduce.wgsl` and `kernels/range_reduce.wgsl`.
 //!
 //! [`ReduceBuffers`] holds one problem: the input (f32 bit patterns) and one
-//! output buffer per pass, 2·ceil(n / 256) keys each, down to a single
+//! output buffer per pass, 2·ceil(n / BLOCK) keys each, down to a single
 //! (min, max) pair. Every pass has its own uniform, so all passes record
 //! into one command buffer.
 
@@ -11,8 +11,11 @@ use super::cpu::from_key;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer, chunk_ranges};
 use crate::{Error, Result};
 
-/// Items per workgroup (`WG_SIZE` in both kernels).
+/// Invocations per workgroup (`WG_SIZE` in both kernels).
 pub const WG_SIZE: u32 = 256;
+/// Items one workgroup reduces to one pair (`BLOCK` in both kernels:
+/// `WG_SIZE · ITEMS_PER_INVOCATION`).
+pub const BLOCK: u32 = super::cpu::BLOCK as u32;
 
 /// Uniform parameters of `bounds_reduce` and `range_reduce`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
@@ -30,7 +33,7 @@ pub const BINDINGS: &[wgpu::BufferBindingType] = &[
     wgpu::BufferBindingType::Storage { read_only: false },
 ];
 
-/// One pass: its parameters and its 2·ceil(n_items / WG_SIZE) output keys.
+/// One pass: its parameters and its 2·ceil(n_items / BLOCK) output keys.
 #[derive(Debug)]
 struct Pass<T: Pod> {
     params: UniformBuffer<Params>,
@@ -71,7 +74,7 @@ impl<T: Pod> ReduceBuffers<T> {
         let mut n_items = n;
         loop {
             let pairs = u32::from(!passes.is_empty());
-            let n_out = n_items.div_ceil(WG_SIZE);
+            let n_out = n_items.div_ceil(BLOCK);
             passes.push(Pass {
                 params: UniformBuffer::new(
                     gpu,
@@ -98,7 +101,7 @@ impl<T: Pod> ReduceBuffers<T> {
         })
     }
 
-    /// Number of passes (⌈log₂₅₆ n⌉, at least 1).
+    /// Number of passes (⌈log₄₀₉₆ n⌉, at least 1).
     pub fn n_passes(&self) -> usize {
         self.passes.len()
     }
@@ -121,7 +124,8 @@ impl<T: Pod> ReduceBuffers<T> {
             timestamp_writes: None,
         });
         for (pass, bind) in self.passes.iter().zip(&binds) {
-            gpu.dispatch(&mut cpass, &pipeline, bind, pass.n_items, WG_SIZE);
+            let n_invocations = pass.n_items.div_ceil(BLOCK) * WG_SIZE;
+            gpu.dispatch(&mut cpass, &pipeline, bind, n_invocations, WG_SIZE);
         }
         Ok(())
     }

@@ -1,9 +1,9 @@
 //! Min/max reductions: the bounding box of positions (kernel `bounds_reduce`)
 //! and the intensity range of volume samples (kernel `range_reduce`).
 //!
-//! Both reduce by a multi-pass tree: each pass turns #N items into
-//! ceil(#N / 256) (min, max) pairs in workgroup memory, repeated until one
-//! pair is left; no atomics. Floats are compared through order keys
+//! Both reduce in passes: each pass turns #N items into ceil(#N / 4096)
+//! (min, max) pairs (per-invocation folds of 16 items, then a tree in
+//! workgroup memory), repeated until one pair is left; no atomics. Floats are compared through order keys
 //! ([`cpu::order_key`], IEEE 754 totalOrder), so min/max are exact integer
 //! operations whose result does not depend on the tree shape, the chunking
 //! or the backend: parity is bit-for-bit. −0 sorts below +0.

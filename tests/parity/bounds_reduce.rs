@@ -86,25 +86,34 @@ fn synthetic() {
         "random_mesh",
         &positions(&common::random_mesh(7, 3000, 10)),
     );
-    let wg = cpu::WG_SIZE;
-    for n in [1, 2, wg - 1, wg, wg + 1, wg * wg, wg * wg + 1, 1_000_007] {
+    // Lanes (256), blocks (4096 items per workgroup) and pass counts.
+    let (wg, b) = (256, cpu::BLOCK);
+    for n in [
+        1,
+        2,
+        wg - 1,
+        wg,
+        wg + 1,
+        b - 1,
+        b,
+        b + 1,
+        b * wg,
+        b * wg + 1,
+        1_000_007,
+    ] {
         check(&gpu, &format!("n{n}"), &random_positions(n as u64, n, 1e3));
     }
 }
 
 #[test]
 fn extremes_land_anywhere() {
-    // The min and max of each axis placed first, last, at a block boundary
-    // and in the last partial block: every lane of the tree is exercised.
+    // The min and max of each axis placed first, last, at lane and block
+    // boundaries, in a later per-invocation item and in the last partial
+    // block.
     let Some(gpu) = common::gpu() else { return };
-    let n = 3 * cpu::WG_SIZE + 17;
-    for at in [
-        0,
-        n - 1,
-        cpu::WG_SIZE - 1,
-        cpu::WG_SIZE,
-        3 * cpu::WG_SIZE + 3,
-    ] {
+    let b = cpu::BLOCK;
+    let n = 3 * b + 17;
+    for at in [0, n - 1, 255, 256, 2 * 256 + 7, b - 1, b, 3 * b + 3] {
         let mut p = random_positions(at as u64 + 11, n, 1.0);
         p[at] = [-5.0, 6.0, -7.0, 0.0];
         p[(at + 1) % n] = [8.0, -9.0, 10.0, 0.0];
@@ -223,7 +232,7 @@ fn real_meshes() {
 #[test]
 fn negative_control() {
     let Some(gpu) = common::gpu() else { return };
-    let p = random_positions(5, 5000, 1.0);
+    let p = random_positions(5, 50_000, 1.0);
     let buffers = BoundsBuffers::new(&gpu, &p).unwrap();
     let mut encoder = gpu.encoder("bounds_reduce");
     buffers.record(&gpu, &mut encoder).unwrap();

@@ -209,6 +209,7 @@ fn real_meshes() {
             err_gpu <= f64::from(cpu::TOL.abs),
             "{rel}: gpu vs oracle {err_gpu:e}"
         );
+        eprintln!("{rel}: |mirror − oracle| ≤ {err:e}, |gpu − oracle| ≤ {err_gpu:e}");
         compare_vec(&format!("vertex_normals/{rel}"), &mirror, &got, cpu::TOL)
             .unwrap_or_else(|m| panic!("{m}"));
     }

@@ -1,15 +1,27 @@
 //! The incremental hull of seed §4.1.4–4.1.8 in exact integer arithmetic.
 //!
-//! Points are inserted one after another. For point `p` every face `F` gets
-//! `s = n·p − d` (Def. VI: `> 0` visible, `< 0` invisible, `= 0` coplanar;
-//! `n` is the primitive outward integer normal, `d = n·Q` for a vertex `Q`).
-//! The faces to replace form a region R (by policy, see
+//! Points are inserted one after another in the given order. For point `p`
+//! a face `F` has `s = n·p − d` (Def. VI: `> 0` visible, `< 0` invisible,
+//! `= 0` coplanar; `n` is the primitive outward integer normal, `d = n·Q`
+//! for a vertex `Q`). The faces to replace form a region R (by policy, see
 //! [`CoplanarPolicy`]); its boundary, the horizon, is joined to `p` by a cone
-//! of new faces. Coordinates are bounded by [`MAX_COORD`], so every normal
-//! (≤ 2³⁵), offset and `s` (≤ 2⁵⁴) fits `i64` without overflow; volumes are
+//! of new faces.
+//!
+//! Visibility walk with conflict lists (Clarkson–Shor, Qhull's outside
+//! sets): every waiting point keeps one face it sees; a point that sees no
+//! face of the current polyhedron lies inside or on it and stays there
+//! (hulls only grow), so it is dropped. Point `p` finds its visible faces by
+//! walking from its face across edges (the visible set is connected), and
+//! the points of replaced faces move to the first new face they see — a
+//! point outside the new polyhedron that saw a replaced face sees a new
+//! one. The result is identical to testing every face for every point (the
+//! seed's formulation), for every order.
+//!
+//! Coordinates are bounded by [`MAX_COORD`], so every normal (≤ 2³⁵), offset and `s` (≤ 2⁵⁴) fits `i64` without overflow; volumes are
 //! accumulated in `i128`.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 use super::CoplanarPolicy;
 
@@ -80,31 +92,64 @@ pub struct HullStats {
     pub visibility_tests: u64,
 }
 
+const NONE: u32 = u32::MAX;
+
+/// Multiply-rotate hasher for vertex-index pairs (Fx-style): the default
+/// SipHash dominates the run time of small hulls.
+#[derive(Default, Clone, Copy)]
+struct EdgeHasher(u64);
+
+impl Hasher for EdgeHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u32(u32::from(b));
+        }
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.0 = (self.0.rotate_left(5) ^ u64::from(i)).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+type EdgeMap<V> = HashMap<(u32, u32), V, BuildHasherDefault<EdgeHasher>>;
+type VertexMap = HashMap<u32, u32, BuildHasherDefault<EdgeHasher>>;
+
 pub(crate) struct Builder<'a> {
     pts: &'a [P3],
     policy: CoplanarPolicy,
     pub faces: Vec<Option<Face>>,
-    /// `[nx, ny, nz, d]` per face slot; dead slots are `[0, 0, 0, 1]` (s = −1).
-    planes: Vec<[i64; 4]>,
     free: Vec<u32>,
-    edge_face: HashMap<(u32, u32), u32>,
+    edge_face: EdgeMap<u32>,
+    /// Waiting points assigned to each face slot (outside sets).
+    outside: Vec<Vec<u32>>,
+    /// Per point: the face it sees, or `NONE` (inside/on, or processed).
+    witness: Vec<u32>,
     /// 6·volume of the current polyhedron, kept incrementally (ch. 5).
     pub vol6: i128,
     pub stats: HullStats,
+    /// `s` of a face for the current point, valid where `stamp == cur`.
     s: Vec<i64>,
+    stamp: Vec<u32>,
+    cur: u32,
     in_region: Vec<bool>,
+    /// Faces created by the last insertion (for [`Builder::run_furthest`]).
+    touched: Vec<u32>,
 }
 
 impl<'a> Builder<'a> {
-    /// Starts from the tetrahedron `t` (indices into `pts`, non-coplanar).
+    /// Starts from the tetrahedron `t` (indices into `pts`, non-coplanar) and
+    /// assigns every other point to a face it sees.
     pub fn new(pts: &'a [P3], policy: CoplanarPolicy, t: [u32; 4]) -> Builder<'a> {
         let mut b = Builder {
             pts,
             policy,
             faces: Vec::new(),
-            planes: Vec::new(),
             free: Vec::new(),
-            edge_face: HashMap::new(),
+            edge_face: EdgeMap::default(),
+            outside: Vec::new(),
+            witness: vec![NONE; pts.len()],
             vol6: 0,
             stats: HullStats {
                 candidates: pts.len(),
@@ -112,8 +157,12 @@ impl<'a> Builder<'a> {
                 ..HullStats::default()
             },
             s: Vec::new(),
+            stamp: Vec::new(),
+            cur: 0,
             in_region: Vec::new(),
+            touched: Vec::new(),
         };
+        let mut ids = Vec::new();
         for (i, j, k, o) in [(0, 1, 2, 3), (0, 1, 3, 2), (0, 2, 3, 1), (1, 2, 3, 0)] {
             let (a, c, e) = (t[i], t[j], t[k]);
             let n = cross(
@@ -125,14 +174,35 @@ impl<'a> Builder<'a> {
             } else {
                 vec![a, c, e]
             };
-            b.add_face(verts);
+            ids.push(b.add_face(verts));
         }
         let p = |i: usize| pts[t[i] as usize];
         b.vol6 = det128(sub(p(1), p(0)), sub(p(2), p(0)), sub(p(3), p(0))).abs();
+        let rest: Vec<u32> = (0..pts.len() as u32).filter(|i| !t.contains(i)).collect();
+        b.assign(&rest, &ids);
         b
     }
 
-    fn add_face(&mut self, verts: Vec<u32>) {
+    /// Gives each of `points` the first face of `candidates` it sees.
+    fn assign(&mut self, points: &[u32], candidates: &[u32]) {
+        for &q in points {
+            let p = self.pts[q as usize];
+            self.witness[q as usize] = NONE;
+            for &f in candidates {
+                self.stats.visibility_tests += 1;
+                let face = self.faces[f as usize]
+                    .as_ref()
+                    .map(|fc| dot(fc.n, p) - fc.d);
+                if face.is_some_and(|s| s > 0) {
+                    self.witness[q as usize] = f;
+                    self.outside[f as usize].push(q);
+                    break;
+                }
+            }
+        }
+    }
+
+    fn add_face(&mut self, verts: Vec<u32>) -> u32 {
         let pt = |i: u32| self.pts[i as usize];
         let n = primitive(cross(
             sub(pt(verts[1]), pt(verts[0])),
@@ -143,8 +213,9 @@ impl<'a> Builder<'a> {
             Some(id) => id,
             None => {
                 self.faces.push(None);
-                self.planes.push([0, 0, 0, 1]);
+                self.outside.push(Vec::new());
                 self.s.push(0);
+                self.stamp.push(u32::MAX);
                 self.in_region.push(false);
                 (self.faces.len() - 1) as u32
             }
@@ -153,19 +224,21 @@ impl<'a> Builder<'a> {
             self.edge_face
                 .insert((verts[k], verts[(k + 1) % verts.len()]), id);
         }
-        self.planes[id as usize] = [n[0], n[1], n[2], d];
+        self.stamp[id as usize] = u32::MAX;
         self.faces[id as usize] = Some(Face { verts, n, d });
+        id
     }
 
-    fn remove_face(&mut self, id: u32) {
+    /// Removes face `id`; returns its waiting points.
+    fn remove_face(&mut self, id: u32) -> Vec<u32> {
         if let Some(f) = self.faces[id as usize].take() {
             for k in 0..f.verts.len() {
                 self.edge_face
                     .remove(&(f.verts[k], f.verts[(k + 1) % f.verts.len()]));
             }
-            self.planes[id as usize] = [0, 0, 0, 1];
             self.free.push(id);
         }
+        std::mem::take(&mut self.outside[id as usize])
     }
 
     fn twin(&self, u: u32, w: u32) -> crate::Result<u32> {
@@ -174,30 +247,52 @@ impl<'a> Builder<'a> {
         })
     }
 
+    /// `s = n·p − d` of face `f` for the current point (cached per point).
+    fn side(&mut self, f: u32, p: P3) -> i64 {
+        let fi = f as usize;
+        if self.stamp[fi] != self.cur {
+            self.stamp[fi] = self.cur;
+            self.stats.visibility_tests += 1;
+            self.s[fi] = self.faces[fi].as_ref().map_or(-1, |fc| dot(fc.n, p) - fc.d);
+        }
+        self.s[fi]
+    }
+
     /// Inserts point `pi`; returns whether the polyhedron changed.
     pub fn insert(&mut self, pi: u32) -> crate::Result<bool> {
         let p = self.pts[pi as usize];
-        let mut visible = Vec::new();
-        for (f, pl) in self.planes.iter().enumerate() {
-            let s = pl[0] * p[0] + pl[1] * p[1] + pl[2] * p[2] - pl[3];
-            self.s[f] = s;
-            if s > 0 {
-                visible.push(f as u32);
-            }
-        }
-        self.stats.visibility_tests += self.planes.len() as u64;
-        if visible.is_empty() {
+        let start_face = self.witness[pi as usize];
+        self.witness[pi as usize] = NONE;
+        if start_face == NONE {
             self.stats.skipped += 1;
             return Ok(false);
         }
-        let region = self.region(&visible, p)?;
+        self.cur = pi;
+        if self.side(start_face, p) <= 0 {
+            return Err(crate::Error::InvalidInput(
+                "stale conflict face (internal error)".into(),
+            ));
+        }
+        // Visibility walk: the visible faces are edge-connected.
+        let mut visible = vec![start_face];
+        self.in_region[start_face as usize] = true;
+        let mut k = 0;
+        while k < visible.len() {
+            let verts = self.face_verts(visible[k]);
+            for e in 0..verts.len() {
+                let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
+                if !self.in_region[g as usize] && self.side(g, p) > 0 {
+                    self.in_region[g as usize] = true;
+                    visible.push(g);
+                }
+            }
+            k += 1;
+        }
+        let region = self.region(visible, p)?;
         // Horizon: directed edges of R whose twin face is outside R.
-        let mut next: HashMap<u32, u32> = HashMap::new();
+        let mut next = VertexMap::default();
         for &f in &region {
-            let verts = &self.faces[f as usize]
-                .as_ref()
-                .map(|f| f.verts.clone())
-                .unwrap_or_default();
+            let verts = self.face_verts(f);
             for k in 0..verts.len() {
                 let (u, w) = (verts[k], verts[(k + 1) % verts.len()]);
                 let g = self.twin(u, w)?;
@@ -246,12 +341,14 @@ impl<'a> Builder<'a> {
                 }
             }
         }
+        let mut orphans = Vec::new();
         for &f in &region {
             self.in_region[f as usize] = false;
-            self.remove_face(f);
+            orphans.extend(self.remove_face(f));
         }
         let m = cycle.len();
         let h = |i: usize| self.pts[cycle[i % m] as usize];
+        let mut new_faces = Vec::new();
         if self.policy == CoplanarPolicy::Merge {
             // Cone triangles i and i+1 are coplanar iff h_i, h_i+1, h_i+2, p are.
             let joins: Vec<bool> = (0..m)
@@ -271,24 +368,26 @@ impl<'a> Builder<'a> {
                 }
                 verts.push(cycle[(i + 1) % m]);
                 verts.push(pi);
-                self.add_face(verts);
+                new_faces.push(self.add_face(verts));
                 i += 1;
             }
         } else {
             for i in 0..m {
-                self.add_face(vec![cycle[i], cycle[(i + 1) % m], pi]);
+                new_faces.push(self.add_face(vec![cycle[i], cycle[(i + 1) % m], pi]));
             }
         }
+        orphans.retain(|&q| q != pi);
+        self.assign(&orphans, &new_faces);
+        self.touched.extend_from_slice(&new_faces);
         self.stats.inserted += 1;
         Ok(true)
     }
 
-    /// The faces to replace for a point with `visible` faces (non-empty).
-    fn region(&mut self, visible: &[u32], p: P3) -> crate::Result<Vec<u32>> {
-        let mut region = visible.to_vec();
-        for &f in visible {
-            self.in_region[f as usize] = true;
-        }
+    /// The faces to replace for a point with `visible` faces (non-empty,
+    /// flagged in `in_region`).
+    fn region(&mut self, visible: Vec<u32>, p: P3) -> crate::Result<Vec<u32>> {
+        let n_visible = visible.len();
+        let mut region = visible;
         match self.policy {
             CoplanarPolicy::Visible => {
                 // Coplanar faces edge-connected to the visible ones join R.
@@ -297,7 +396,7 @@ impl<'a> Builder<'a> {
                     let verts = self.face_verts(region[k]);
                     for e in 0..verts.len() {
                         let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
-                        if !self.in_region[g as usize] && self.s[g as usize] == 0 {
+                        if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
                         }
@@ -307,11 +406,11 @@ impl<'a> Builder<'a> {
             }
             CoplanarPolicy::Merge => {
                 // 2-D extension: coplanar faces next to a visible face absorb p.
-                for &f in visible {
-                    let verts = self.face_verts(f);
+                for k in 0..n_visible {
+                    let verts = self.face_verts(region[k]);
                     for e in 0..verts.len() {
                         let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
-                        if !self.in_region[g as usize] && self.s[g as usize] == 0 {
+                        if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
                         }
@@ -327,7 +426,7 @@ impl<'a> Builder<'a> {
                     for e in 0..verts.len() {
                         let (u, w) = (verts[e], verts[(e + 1) % verts.len()]);
                         let g = self.twin(u, w)?;
-                        if self.in_region[g as usize] || self.s[g as usize] != 0 {
+                        if self.in_region[g as usize] || self.side(g, p) != 0 {
                             continue;
                         }
                         let (a, b) = (self.pts[u as usize], self.pts[w as usize]);
@@ -342,6 +441,31 @@ impl<'a> Builder<'a> {
             }
         }
         Ok(region)
+    }
+
+    /// Qhull's order: repeatedly the point of some non-empty outside set
+    /// that lies furthest beyond that set's face (largest `s`, exact), until
+    /// every outside set is empty.
+    pub fn run_furthest(&mut self) -> crate::Result<()> {
+        let mut pending: Vec<u32> = (0..self.faces.len() as u32).collect();
+        while let Some(f) = pending.pop() {
+            let fi = f as usize;
+            let Some(face) = &self.faces[fi] else {
+                continue;
+            };
+            let (n, d) = (face.n, face.d);
+            let Some(&q) = self.outside[fi]
+                .iter()
+                .max_by_key(|&&q| (dot(n, self.pts[q as usize]) - d, std::cmp::Reverse(q)))
+            else {
+                continue;
+            };
+            self.insert(q)?;
+            // Only the new faces can have received points.
+            pending.append(&mut self.touched);
+        }
+        self.stats.skipped = self.stats.candidates - self.stats.inserted;
+        Ok(())
     }
 
     fn face_verts(&self, f: u32) -> Vec<u32> {

@@ -267,6 +267,17 @@ fn corner_hull_of_a_cube_is_the_cube() {
     assert_eq!((h.n_faces(), h.n_vertices()), (6, 8));
     assert_eq!(h.volume_voxels(), 125.0);
     assert_eq!(h.area_voxels(), 150.0);
+    let frame = chisel::voxel::Frame {
+        spacing: [1.0, 2.0, 3.0],
+        origin: [5.0, 0.0, -1.0],
+    };
+    let s = h.summary(&frame);
+    assert_eq!((s.faces, s.vertices, s.edges, s.triangles), (6, 8, 12, 12));
+    assert_eq!(s.integers_eq_8_2, 3 * 8 + 5 * 6);
+    assert_eq!(s.integers_compact, 2 + 3 * 8 + 6 * 5);
+    assert!((s.volume_world - 750.0).abs() < 1e-9);
+    // Box 5 × 10 × 15: 2·(50 + 75 + 150).
+    assert!((s.area_world - 550.0).abs() < 1e-9, "{}", s.area_world);
     assert_eq!(h.bbox(), ([2, 2, 2], [12, 12, 12]));
     assert_eq!(h.voxel_bbox(), ([1, 1, 1], [5, 5, 5]));
     assert_eq!(h.containment([7, 7, 7]), Containment::Inside);

@@ -114,7 +114,6 @@ impl Hasher for EdgeHasher {
 }
 
 type EdgeMap<V> = HashMap<(u32, u32), V, BuildHasherDefault<EdgeHasher>>;
-type VertexMap = HashMap<u32, u32, BuildHasherDefault<EdgeHasher>>;
 
 pub(crate) struct Builder<'a> {
     pts: &'a [P3],
@@ -147,7 +146,10 @@ impl<'a> Builder<'a> {
             policy,
             faces: Vec::new(),
             free: Vec::new(),
-            edge_face: EdgeMap::default(),
+            edge_face: EdgeMap::with_capacity_and_hasher(
+                (6 * pts.len()).clamp(64, 1 << 22),
+                BuildHasherDefault::default(),
+            ),
             outside: Vec::new(),
             witness: vec![NONE; pts.len()],
             vol6: 0,
@@ -278,9 +280,10 @@ impl<'a> Builder<'a> {
         self.in_region[start_face as usize] = true;
         let mut k = 0;
         while k < visible.len() {
-            let verts = self.face_verts(visible[k]);
-            for e in 0..verts.len() {
-                let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
+            let fv = visible[k];
+            for e in 0..self.n_edges(fv) {
+                let (eu, ew) = self.edge(fv, e);
+                let g = self.twin(eu, ew)?;
                 if !self.in_region[g as usize] && self.side(g, p) > 0 {
                     self.in_region[g as usize] = true;
                     visible.push(g);
@@ -290,45 +293,40 @@ impl<'a> Builder<'a> {
         }
         let region = self.region(visible, p)?;
         // Horizon: directed edges of R whose twin face is outside R.
-        let mut next = VertexMap::default();
+        let mut next: Vec<(u32, u32)> = Vec::new();
         for &f in &region {
-            let verts = self.face_verts(f);
-            for k in 0..verts.len() {
-                let (u, w) = (verts[k], verts[(k + 1) % verts.len()]);
+            for k in 0..self.n_edges(f) {
+                let (u, w) = self.edge(f, k);
                 let g = self.twin(u, w)?;
-                if !self.in_region[g as usize] && next.insert(u, w).is_some() {
-                    return Err(crate::Error::InvalidInput(
-                        "visible region of a hull point is not a disk (internal error)".into(),
-                    ));
+                if !self.in_region[g as usize] {
+                    next.push((u, w));
                 }
             }
         }
-        let Some(&start) = next.keys().min() else {
-            return Err(crate::Error::InvalidInput(
-                "empty horizon (internal error)".into(),
-            ));
-        };
+        next.sort_unstable();
+        let internal = |what: &str| crate::Error::InvalidInput(format!("{what} (internal error)"));
+        if next.is_empty() || next.windows(2).any(|w| w[0].0 == w[1].0) {
+            return Err(internal("visible region of a hull point is not a disk"));
+        }
+        let start = next[0].0;
         let mut cycle = vec![start];
         let mut u = start;
         loop {
-            let w = *next.get(&u).ok_or_else(|| {
-                crate::Error::InvalidInput("open horizon (internal error)".into())
-            })?;
+            let w = next
+                .binary_search_by_key(&u, |e| e.0)
+                .map(|i| next[i].1)
+                .map_err(|_| internal("open horizon"))?;
             if w == start {
                 break;
             }
             cycle.push(w);
             u = w;
             if cycle.len() > next.len() {
-                return Err(crate::Error::InvalidInput(
-                    "horizon is not one cycle (internal error)".into(),
-                ));
+                return Err(internal("horizon is not one cycle"));
             }
         }
         if cycle.len() != next.len() {
-            return Err(crate::Error::InvalidInput(
-                "horizon is not one cycle (internal error)".into(),
-            ));
+            return Err(internal("horizon is not one cycle"));
         }
         // Incremental volume: the cone over R adds Σ vol(p, fan triangle).
         for &f in &region {
@@ -393,9 +391,10 @@ impl<'a> Builder<'a> {
                 // Coplanar faces edge-connected to the visible ones join R.
                 let mut k = 0;
                 while k < region.len() {
-                    let verts = self.face_verts(region[k]);
-                    for e in 0..verts.len() {
-                        let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
+                    let fv = region[k];
+                    for e in 0..self.n_edges(fv) {
+                        let (eu, ew) = self.edge(fv, e);
+                        let g = self.twin(eu, ew)?;
                         if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
@@ -407,9 +406,10 @@ impl<'a> Builder<'a> {
             CoplanarPolicy::Merge => {
                 // 2-D extension: coplanar faces next to a visible face absorb p.
                 for k in 0..n_visible {
-                    let verts = self.face_verts(region[k]);
-                    for e in 0..verts.len() {
-                        let g = self.twin(verts[e], verts[(e + 1) % verts.len()])?;
+                    let fv = region[k];
+                    for e in 0..self.n_edges(fv) {
+                        let (eu, ew) = self.edge(fv, e);
+                        let g = self.twin(eu, ew)?;
                         if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
@@ -422,9 +422,10 @@ impl<'a> Builder<'a> {
                 // shared edge (the cone triangle would be degenerate).
                 let mut k = 0;
                 while k < region.len() {
-                    let verts = self.face_verts(region[k]);
-                    for e in 0..verts.len() {
-                        let (u, w) = (verts[e], verts[(e + 1) % verts.len()]);
+                    let fv = region[k];
+                    for e in 0..self.n_edges(fv) {
+                        let (eu, ew) = self.edge(fv, e);
+                        let (u, w) = (eu, ew);
                         let g = self.twin(u, w)?;
                         if self.in_region[g as usize] || self.side(g, p) != 0 {
                             continue;
@@ -468,10 +469,17 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    fn face_verts(&self, f: u32) -> Vec<u32> {
+    /// Number of edges of face `f` (0 for a dead slot).
+    fn n_edges(&self, f: u32) -> usize {
         self.faces[f as usize]
             .as_ref()
-            .map(|f| f.verts.clone())
-            .unwrap_or_default()
+            .map_or(0, |fc| fc.verts.len())
+    }
+
+    /// Directed edge `e` of face `f` (CCW from outside).
+    fn edge(&self, f: u32, e: usize) -> (u32, u32) {
+        self.faces[f as usize].as_ref().map_or((0, 0), |fc| {
+            (fc.verts[e], fc.verts[(e + 1) % fc.verts.len()])
+        })
     }
 }

@@ -111,6 +111,37 @@ pub struct HullFace {
     pub plane: HalfSpace,
 }
 
+/// Report figures of a hull ([`ConvexHull::summary`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct HullSummary {
+    /// 2-cells.
+    pub faces: usize,
+    /// 0-cells.
+    pub vertices: usize,
+    /// 1-cells.
+    pub edges: usize,
+    /// Triangles of the fan triangulation (mesh export).
+    pub triangles: usize,
+    /// Storage estimate of eq. 8.2, `3·N_V + 5·N_F`.
+    pub integers_eq_8_2: usize,
+    /// Length of [`CellList::encode_compact`].
+    pub integers_compact: usize,
+    /// Volume in voxels.
+    pub volume_voxels: f64,
+    /// Area in voxel faces.
+    pub area_voxels: f64,
+    /// Volume in world units.
+    pub volume_world: f64,
+    /// Area in world units.
+    pub area_world: f64,
+    /// Whether the input was coplanar.
+    pub planar: bool,
+    /// Options used.
+    pub options: HullOptions,
+    /// Construction counters.
+    pub stats: HullStats,
+}
+
 /// An exact convex hull (or, for coplanar input, a flat convex polygon
 /// stored as two opposite faces).
 #[derive(Debug, Clone)]
@@ -334,6 +365,51 @@ impl ConvexHull {
             })
             .sum::<f64>()
             / 4.0
+    }
+
+    /// Surface area in world units: the faces mapped through `frame`
+    /// (anisotropic spacing changes areas per face orientation).
+    pub fn area_world(&self, frame: &Frame) -> f64 {
+        let w: Vec<glam::DVec3> = self
+            .vertices
+            .iter()
+            .map(|&v| glam::DVec3::from(frame.world(v)))
+            .collect();
+        self.faces
+            .iter()
+            .map(|f| {
+                let p = |k: usize| w[f.vertices[k] as usize];
+                (1..f.vertices.len() - 1)
+                    .map(|k| (p(k) - p(0)).cross(p(k + 1) - p(0)).length() / 2.0)
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// Volume in world units (`frame.spacing` product per voxel).
+    pub fn volume_world(&self, frame: &Frame) -> f64 {
+        self.volume_voxels() * frame.spacing.iter().product::<f64>()
+    }
+
+    /// The figures a report needs (faces, vertices, integers per eq. 8.2 and
+    /// of the compact encoding, volume, area, counters).
+    pub fn summary(&self, frame: &Frame) -> HullSummary {
+        let cl = self.cell_list();
+        HullSummary {
+            faces: self.n_faces(),
+            vertices: self.n_vertices(),
+            edges: self.n_edges(),
+            triangles: self.n_triangles(),
+            integers_eq_8_2: cl.integers_eq_8_2(),
+            integers_compact: cl.encode_compact().len(),
+            volume_voxels: self.volume_voxels(),
+            area_voxels: self.area_voxels(),
+            volume_world: self.volume_world(frame),
+            area_world: self.area_world(frame),
+            planar: self.is_planar(),
+            options: self.options,
+            stats: self.stats,
+        }
     }
 
     /// The cell list of App. C (0-, 1-, 2-cells with signed incidences).

@@ -25,6 +25,7 @@ pub mod mesh;
 pub mod normals;
 pub mod parity;
 pub mod phantom;
+pub mod polyhedron;
 pub mod reduce;
 pub mod render;
 pub mod scan;

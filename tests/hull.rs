@@ -440,3 +440,68 @@ fn real_frog_tissue_hulls() {
         check_maximal(&h, "frog");
     }
 }
+
+/// Facets by brute force: distinct primitive planes through three points
+/// with every point on one side (O(n⁴), small inputs only).
+fn brute_force_facets(pts: &[[i64; 3]]) -> HashSet<HalfSpace> {
+    let mut out = HashSet::new();
+    for i in 0..pts.len() {
+        for j in i + 1..pts.len() {
+            for k in j + 1..pts.len() {
+                let n = cross(sub(pts[j], pts[i]), sub(pts[k], pts[i]));
+                if n == [0, 0, 0] {
+                    continue;
+                }
+                let g = n.iter().fold(0i64, |g, &c| gcd(g, c));
+                for sign in [1, -1] {
+                    let n = n.map(|c| sign * c / g);
+                    let d = dot(n, pts[i]);
+                    if pts.iter().all(|&p| dot(n, p) <= d) {
+                        out.insert(HalfSpace {
+                            normal: n,
+                            offset: d,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(128))]
+    /// Points on a tiny grid are full of coplanar and collinear quadruples:
+    /// the merged hull must be exactly the brute-force facet set, every
+    /// policy must span the same solid, and V − E + F = 2.
+    #[test]
+    fn merged_hull_equals_brute_force_facets(
+        raw in proptest::collection::vec((0i64..4, 0i64..4, 0i64..4), 4..24)
+    ) {
+        let pts: Vec<[i64; 3]> = raw.into_iter().map(|(x, y, z)| [x, y, z]).collect();
+        let facets = brute_force_facets(&pts);
+        let Ok(h) = ConvexHull::build(&pts, HullOptions::default()) else {
+            // Collinear input: no facet exists, no two opposite planes either.
+            proptest::prop_assert!(facets.is_empty());
+            return Ok(());
+        };
+        if h.is_planar() {
+            return Ok(());
+        }
+        let got: HashSet<HalfSpace> = h.half_spaces().into_iter().collect();
+        proptest::prop_assert_eq!(&got, &facets);
+        proptest::prop_assert_eq!(h.n_vertices() as i64 - h.n_edges() as i64 + h.n_faces() as i64, 2);
+        proptest::prop_assert_eq!(h.volume6(), h.volume6_from_faces());
+        for coplanar in [CoplanarPolicy::Invisible, CoplanarPolicy::Visible] {
+            for order in [Order::Lexicographic, Order::ExtremeFirst, Order::Furthest] {
+                let t = ConvexHull::build(&pts, opts(coplanar, order)).unwrap();
+                proptest::prop_assert_eq!(t.volume6(), h.volume6());
+                proptest::prop_assert_eq!(t.volume6_from_faces(), h.volume6());
+                proptest::prop_assert_eq!(t.n_vertices() as i64 - t.n_edges() as i64 + t.n_faces() as i64, 2);
+                for s in t.half_spaces() {
+                    proptest::prop_assert!(pts.iter().all(|&p| s.side(p) <= 0));
+                }
+            }
+        }
+    }
+}

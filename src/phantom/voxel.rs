@@ -10,13 +10,24 @@
 //! - [`digital_ball`]: combinatorial radius `r`, centre at a 0-cell (cell
 //!   corner); voxel with centre `c` (odd coordinates relative to the
 //!   centre) is in the ball iff `|c|² ≤ r²`. `r = 100` gives the seed's
-//!   523 984 voxels (§3.3).
+//!   523 984 voxels (§3.3), and r = 12, 16, 20, 24 give the hulls of seed
+//!   Table 4.2 in all three columns (236/492/636/668 triangles with
+//!   coplanar faces invisible, 140/428/380/524 visible, 74/218/170/290
+//!   merged n-gons; 6-neighbourhood local corners, lexicographic order).
 //! - [`cylinder_tunnel`]: outer/inner diameters `d_o`, `d_i` in voxels,
 //!   axis at `d_o/2` in voxel-centre units (a cell corner for odd `d_o`, a
 //!   voxel centre for even `d_o`); with doubled offsets `u, v` from the axis,
 //!   a voxel is in the object iff `d_i² ≤ u² + v² < d_o²`. Reproduces
 //!   Table 8.6: 6 060 / 14 520 / 23 640 / 32 160 voxels and 2 848 / 6 976 /
-//!   11 192 / 15 328 boundary facets for 25/10, 50/35, 75/60, 100/85, h = 15.
+//!   11 192 / 15 328 boundary facets for 25/10, 50/35, 75/60, 100/85, h = 15
+//!   (the seed prints 23 460 voxels for the third, a transposition), and
+//!   1 200 / 14 595 / 42 420 background voxels inside the hull for the first
+//!   three. For the fourth the seed prints 87 135 where this rule gives
+//!   85 215 (= 15 × 5 681); no variant of the rule that keeps the other
+//!   figures gives 87 135.
+//! - [`ellipsoid_dent`]: the seed does not state the dent's shape, and its
+//!   Table 8.4 figures (e.g. a = b = 10, c = 7: 2 664 voxels) are not
+//!   reproduced by this ellipsoid-minus-ball; it is a qualitative stand-in.
 
 use crate::volume::{Volume, VolumeData};
 

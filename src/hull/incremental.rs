@@ -20,9 +20,6 @@
 //! Coordinates are bounded by [`MAX_COORD`], so every normal (≤ 2³⁵), offset and `s` (≤ 2⁵⁴) fits `i64` without overflow; volumes are
 //! accumulated in `i128`.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use super::CoplanarPolicy;
 
 /// Largest accepted |coordinate| (combinatorial units): 2¹⁶.
@@ -72,6 +69,8 @@ pub(crate) fn primitive(n: P3) -> P3 {
 #[derive(Debug, Clone)]
 pub(crate) struct Face {
     pub verts: Vec<u32>,
+    /// `twins[k]`: the face across edge `verts[k] → verts[k+1]`.
+    pub twins: Vec<u32>,
     pub n: P3,
     pub d: i64,
 }
@@ -94,33 +93,11 @@ pub struct HullStats {
 
 const NONE: u32 = u32::MAX;
 
-/// Multiply-rotate hasher for vertex-index pairs (Fx-style): the default
-/// SipHash dominates the run time of small hulls.
-#[derive(Default, Clone, Copy)]
-struct EdgeHasher(u64);
-
-impl Hasher for EdgeHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u32(u32::from(b));
-        }
-    }
-    fn write_u32(&mut self, i: u32) {
-        self.0 = (self.0.rotate_left(5) ^ u64::from(i)).wrapping_mul(0x517c_c1b7_2722_0a95);
-    }
-}
-
-type EdgeMap<V> = HashMap<(u32, u32), V, BuildHasherDefault<EdgeHasher>>;
-
 pub(crate) struct Builder<'a> {
     pts: &'a [P3],
     policy: CoplanarPolicy,
     pub faces: Vec<Option<Face>>,
     free: Vec<u32>,
-    edge_face: EdgeMap<u32>,
     /// Waiting points assigned to each face slot (outside sets).
     outside: Vec<Vec<u32>>,
     /// Per point: the face it sees, or `NONE` (inside/on, or processed).
@@ -146,10 +123,6 @@ impl<'a> Builder<'a> {
             policy,
             faces: Vec::new(),
             free: Vec::new(),
-            edge_face: EdgeMap::with_capacity_and_hasher(
-                (6 * pts.len()).clamp(64, 1 << 22),
-                BuildHasherDefault::default(),
-            ),
             outside: Vec::new(),
             witness: vec![NONE; pts.len()],
             vol6: 0,
@@ -176,7 +149,20 @@ impl<'a> Builder<'a> {
             } else {
                 vec![a, c, e]
             };
-            ids.push(b.add_face(verts));
+            ids.push(b.add_face(verts, vec![NONE; 3]));
+        }
+        // Twins of the tetrahedron: the face holding the reversed edge.
+        for &f in &ids {
+            for e in 0..3 {
+                let (u, w) = b.edge(f, e);
+                let g = ids
+                    .iter()
+                    .copied()
+                    .find(|&g| (0..3).any(|k| b.edge(g, k) == (w, u)));
+                if let (Some(g), Some(face)) = (g, b.faces[f as usize].as_mut()) {
+                    face.twins[e] = g;
+                }
+            }
         }
         let p = |i: usize| pts[t[i] as usize];
         b.vol6 = det128(sub(p(1), p(0)), sub(p(2), p(0)), sub(p(3), p(0))).abs();
@@ -204,7 +190,7 @@ impl<'a> Builder<'a> {
         }
     }
 
-    fn add_face(&mut self, verts: Vec<u32>) -> u32 {
+    fn add_face(&mut self, verts: Vec<u32>, twins: Vec<u32>) -> u32 {
         let pt = |i: u32| self.pts[i as usize];
         let n = primitive(cross(
             sub(pt(verts[1]), pt(verts[0])),
@@ -222,31 +208,27 @@ impl<'a> Builder<'a> {
                 (self.faces.len() - 1) as u32
             }
         };
-        for k in 0..verts.len() {
-            self.edge_face
-                .insert((verts[k], verts[(k + 1) % verts.len()]), id);
-        }
         self.stamp[id as usize] = u32::MAX;
-        self.faces[id as usize] = Some(Face { verts, n, d });
+        self.faces[id as usize] = Some(Face { verts, twins, n, d });
         id
     }
 
     /// Removes face `id`; returns its waiting points.
     fn remove_face(&mut self, id: u32) -> Vec<u32> {
-        if let Some(f) = self.faces[id as usize].take() {
-            for k in 0..f.verts.len() {
-                self.edge_face
-                    .remove(&(f.verts[k], f.verts[(k + 1) % f.verts.len()]));
-            }
+        if self.faces[id as usize].take().is_some() {
             self.free.push(id);
         }
         std::mem::take(&mut self.outside[id as usize])
     }
 
-    fn twin(&self, u: u32, w: u32) -> crate::Result<u32> {
-        self.edge_face.get(&(w, u)).copied().ok_or_else(|| {
-            crate::Error::InvalidInput(format!("hull edge {u}→{w} has no twin (internal error)"))
-        })
+    /// The face across edge `e` of face `f`.
+    fn twin(&self, f: u32, e: usize) -> crate::Result<u32> {
+        match self.faces[f as usize].as_ref().map(|fc| fc.twins[e]) {
+            Some(g) if g != NONE && self.faces[g as usize].is_some() => Ok(g),
+            _ => Err(crate::Error::InvalidInput(format!(
+                "edge {e} of hull face {f} has no twin (internal error)"
+            ))),
+        }
     }
 
     /// `s = n·p − d` of face `f` for the current point (cached per point).
@@ -282,8 +264,7 @@ impl<'a> Builder<'a> {
         while k < visible.len() {
             let fv = visible[k];
             for e in 0..self.n_edges(fv) {
-                let (eu, ew) = self.edge(fv, e);
-                let g = self.twin(eu, ew)?;
+                let g = self.twin(fv, e)?;
                 if !self.in_region[g as usize] && self.side(g, p) > 0 {
                     self.in_region[g as usize] = true;
                     visible.push(g);
@@ -293,13 +274,13 @@ impl<'a> Builder<'a> {
         }
         let region = self.region(visible, p)?;
         // Horizon: directed edges of R whose twin face is outside R.
-        let mut next: Vec<(u32, u32)> = Vec::new();
+        let mut next: Vec<(u32, u32, u32)> = Vec::new();
         for &f in &region {
             for k in 0..self.n_edges(f) {
                 let (u, w) = self.edge(f, k);
-                let g = self.twin(u, w)?;
+                let g = self.twin(f, k)?;
                 if !self.in_region[g as usize] {
-                    next.push((u, w));
+                    next.push((u, w, g));
                 }
             }
         }
@@ -310,12 +291,15 @@ impl<'a> Builder<'a> {
         }
         let start = next[0].0;
         let mut cycle = vec![start];
+        // outer[i]: the face beyond horizon edge cycle[i] → cycle[i+1].
+        let mut outer = Vec::new();
         let mut u = start;
         loop {
-            let w = next
+            let (w, g) = next
                 .binary_search_by_key(&u, |e| e.0)
-                .map(|i| next[i].1)
+                .map(|i| (next[i].1, next[i].2))
                 .map_err(|_| internal("open horizon"))?;
+            outer.push(g);
             if w == start {
                 break;
             }
@@ -346,7 +330,8 @@ impl<'a> Builder<'a> {
         }
         let m = cycle.len();
         let h = |i: usize| self.pts[cycle[i % m] as usize];
-        let mut new_faces = Vec::new();
+        // Runs of horizon edges that form one new face: (first edge, count).
+        let mut runs: Vec<(usize, usize)> = Vec::new();
         if self.policy == CoplanarPolicy::Merge {
             // Cone triangles i and i+1 are coplanar iff h_i, h_i+1, h_i+2, p are.
             let joins: Vec<bool> = (0..m)
@@ -359,19 +344,44 @@ impl<'a> Builder<'a> {
             };
             let mut i = first;
             while i < first + m {
-                let mut verts = vec![cycle[i % m]];
+                let start_edge = i;
                 while joins[i % m] {
                     i += 1;
-                    verts.push(cycle[i % m]);
                 }
-                verts.push(cycle[(i + 1) % m]);
-                verts.push(pi);
-                new_faces.push(self.add_face(verts));
+                runs.push((start_edge % m, i - start_edge + 1));
                 i += 1;
             }
         } else {
-            for i in 0..m {
-                new_faces.push(self.add_face(vec![cycle[i], cycle[(i + 1) % m], pi]));
+            runs.extend((0..m).map(|i| (i, 1)));
+        }
+        let n_new = runs.len();
+        let mut new_faces = Vec::with_capacity(n_new);
+        for &(e0, len) in &runs {
+            let mut verts: Vec<u32> = (0..=len).map(|j| cycle[(e0 + j) % m]).collect();
+            verts.push(pi);
+            let mut twins: Vec<u32> = (0..len).map(|j| outer[(e0 + j) % m]).collect();
+            twins.extend([NONE, NONE]);
+            new_faces.push(self.add_face(verts, twins));
+        }
+        for (j, &(e0, len)) in runs.iter().enumerate() {
+            let f = new_faces[j];
+            let (next_face, prev_face) = (
+                new_faces[(j + 1) % n_new],
+                new_faces[(j + n_new - 1) % n_new],
+            );
+            if let Some(face) = self.faces[f as usize].as_mut() {
+                face.twins[len] = next_face;
+                face.twins[len + 1] = prev_face;
+            }
+            // The outer faces now border the new face.
+            for k in 0..len {
+                let (u, w) = (cycle[(e0 + k) % m], cycle[(e0 + k + 1) % m]);
+                let g = outer[(e0 + k) % m];
+                let slot = (0..self.n_edges(g)).find(|&e| self.edge(g, e) == (w, u));
+                match (slot, self.faces[g as usize].as_mut()) {
+                    (Some(e), Some(face)) => face.twins[e] = f,
+                    _ => return Err(internal("horizon edge missing in its outer face")),
+                }
             }
         }
         orphans.retain(|&q| q != pi);
@@ -393,8 +403,7 @@ impl<'a> Builder<'a> {
                 while k < region.len() {
                     let fv = region[k];
                     for e in 0..self.n_edges(fv) {
-                        let (eu, ew) = self.edge(fv, e);
-                        let g = self.twin(eu, ew)?;
+                        let g = self.twin(fv, e)?;
                         if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
@@ -408,8 +417,7 @@ impl<'a> Builder<'a> {
                 for k in 0..n_visible {
                     let fv = region[k];
                     for e in 0..self.n_edges(fv) {
-                        let (eu, ew) = self.edge(fv, e);
-                        let g = self.twin(eu, ew)?;
+                        let g = self.twin(fv, e)?;
                         if !self.in_region[g as usize] && self.side(g, p) == 0 {
                             self.in_region[g as usize] = true;
                             region.push(g);
@@ -424,9 +432,8 @@ impl<'a> Builder<'a> {
                 while k < region.len() {
                     let fv = region[k];
                     for e in 0..self.n_edges(fv) {
-                        let (eu, ew) = self.edge(fv, e);
-                        let (u, w) = (eu, ew);
-                        let g = self.twin(u, w)?;
+                        let (u, w) = self.edge(fv, e);
+                        let g = self.twin(fv, e)?;
                         if self.in_region[g as usize] || self.side(g, p) != 0 {
                             continue;
                         }

@@ -460,12 +460,19 @@ fn extreme_first(pts: &mut Vec<P3>) {
     ];
     let mut front: Vec<usize> = Vec::new();
     for s in prefs {
-        let key = |p: &P3| [s[0] * p[0], s[1] * p[1], s[2] * p[2]];
         // Lexicographic extreme: axis x first, then y, then z; if only one
         // point has the extreme x and it is already taken, the next one is.
-        let mut order: Vec<usize> = (0..pts.len()).collect();
-        order.sort_by_key(|&i| std::cmp::Reverse(key(&pts[i])));
-        if let Some(&i) = order.iter().find(|i| !front.contains(i)) {
+        let key = |i: usize| {
+            let p = pts[i];
+            (
+                [s[0] * p[0], s[1] * p[1], s[2] * p[2]],
+                std::cmp::Reverse(i),
+            )
+        };
+        if let Some(i) = (0..pts.len())
+            .filter(|i| !front.contains(i))
+            .max_by_key(|&i| key(i))
+        {
             front.push(i);
         }
     }

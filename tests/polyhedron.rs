@@ -45,6 +45,19 @@ fn cylinder_tunnels_match_table_8_6() {
             "{:?}",
             z[0].face_sets
         );
+        // The component as an object of its own: the central cylinder.
+        let s2 = &z[0].object;
+        assert_eq!(s2.n_voxels(), voxels);
+        assert_eq!(s2.voxel_bbox(), z[0].bbox);
+        assert!(s2.voxels().all(|v| !o.contains(v)
+            && h.containment(chisel::voxel::voxel_centre(v))
+                != chisel::hull::Containment::Outside));
+        let h2 = hull(s2);
+        assert!(
+            h2.vertices()
+                .iter()
+                .all(|&c| s2.contains(c.map(|x| (x - 1) / 2)))
+        );
     }
 }
 

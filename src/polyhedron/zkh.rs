@@ -34,7 +34,7 @@ pub enum ZkhClass {
 }
 
 /// One background component inside the hull.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Zkh {
     /// Number of voxels.
     pub voxels: u64,
@@ -45,6 +45,11 @@ pub struct Zkh {
     pub face_sets: Vec<Vec<u32>>,
     /// Inclusive voxel-index bounding box (source volume indices).
     pub bbox: ([i64; 3], [i64; 3]),
+    /// The component as a digital object S' in the source volume's frame
+    /// (roles swapped: its voxels are background voxels of S), ready for
+    /// its own hull CH(S') (§4.4).
+    #[serde(skip)]
+    pub object: DigitalObject,
 }
 
 /// The ZKHs of `object` inside `hull` (a hull of the object's voxels), in
@@ -129,6 +134,17 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let adjacency = face_adjacency(hull);
     let mut out = Vec::with_capacity(n);
     for c in 0..n {
+        let (blo, bhi) = bbox[c];
+        let bdims: [usize; 3] = std::array::from_fn(|a| (bhi[a] - blo[a] + 1) as usize);
+        let mut mask = Vec::with_capacity(bdims.iter().product());
+        for z in blo[2]..=bhi[2] {
+            for y in blo[1]..=bhi[1] {
+                for x in blo[0]..=bhi[0] {
+                    mask.push(label(x - lo[0], y - lo[1], z - lo[2]) == c as u32 + 1);
+                }
+            }
+        }
+        let sub_object = DigitalObject::from_mask(bdims, &mask, object.frame())?.shifted(blo);
         let touched = if visible[c].iter().any(|&b| b) {
             &visible[c]
         } else {
@@ -146,6 +162,7 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
             class,
             face_sets,
             bbox: bbox[c],
+            object: sub_object,
         });
     }
     Ok(out)

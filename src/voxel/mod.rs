@@ -195,6 +195,16 @@ impl DigitalObject {
         })
     }
 
+    /// The same object with voxel indices moved by `offset` (for masks cut
+    /// out of a larger volume: local voxel `v` becomes `v + offset`); the
+    /// frame is the caller's.
+    pub fn shifted(mut self, offset: [i64; 3]) -> DigitalObject {
+        for a in 0..3 {
+            self.low[a] += offset[a];
+        }
+        self
+    }
+
     /// Number of voxels (3-cells) in S.
     pub fn n_voxels(&self) -> u64 {
         self.n_voxels

@@ -104,9 +104,9 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
                 }
                 let c = (l - 1) as usize;
                 let v = at(x, y, z);
-                for a in 0..3 {
-                    bbox[c].0[a] = bbox[c].0[a].min(v[a]);
-                    bbox[c].1[a] = bbox[c].1[a].max(v[a]);
+                for (a, &va) in v.iter().enumerate() {
+                    bbox[c].0[a] = bbox[c].0[a].min(va);
+                    bbox[c].1[a] = bbox[c].1[a].max(va);
                 }
                 // A corner shared by 8 voxels of the component is a convex
                 // combination of their centres: inside, nothing to learn.

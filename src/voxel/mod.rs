@@ -199,8 +199,8 @@ impl DigitalObject {
     /// out of a larger volume: local voxel `v` becomes `v + offset`); the
     /// frame is the caller's.
     pub fn shifted(mut self, offset: [i64; 3]) -> DigitalObject {
-        for a in 0..3 {
-            self.low[a] += offset[a];
+        for (l, o) in self.low.iter_mut().zip(offset) {
+            *l += o;
         }
         self
     }

@@ -197,3 +197,50 @@ fn real_ct_bone_components() {
     }
     assert_eq!(total, brute);
 }
+
+#[test]
+fn pressing_in_selects_the_faces_the_component_crosses() {
+    use chisel::polyhedron::faces_to_press;
+    // Tunnel through a cylinder: the top and bottom faces.
+    let o = object(&cylinder_tunnel(25, 10, 15).unwrap());
+    let h = hull(&o);
+    let z = background_components(&o, &h).unwrap();
+    let marked = faces_to_press(&h, &z[0]);
+    let mut expect: Vec<u32> = z[0].face_sets.iter().flatten().copied().collect();
+    expect.sort_unstable();
+    assert_eq!(marked, expect);
+    for &f in &marked {
+        assert_eq!(h.faces()[f as usize].plane.normal.map(i64::abs), [0, 0, 1]);
+    }
+    // A pit in the top face of a cube: only the top face.
+    let o = carved(9, |x, y, z| {
+        (4..=6).contains(&x) && (4..=6).contains(&y) && z >= 7
+    });
+    let h = hull(&o);
+    let z = background_components(&o, &h).unwrap();
+    let marked = faces_to_press(&h, &z[0]);
+    assert_eq!(marked.len(), 1);
+    assert_eq!(h.faces()[marked[0] as usize].plane.normal, [0, 0, 1]);
+    // A cavity: nothing to press.
+    let o = carved(9, |x, y, z| {
+        (4..=6).contains(&x) && (4..=6).contains(&y) && (4..=6).contains(&z)
+    });
+    let h = hull(&o);
+    let z = background_components(&o, &h).unwrap();
+    assert!(faces_to_press(&h, &z[0]).is_empty());
+    // A groove along the top edge region of a cube touches the top face
+    // only along its interior: the x = max face is crossed too when the
+    // groove runs out through it.
+    let o = carved(9, |x, y, z| x >= 5 && y == 5 && z == 9);
+    let h = hull(&o);
+    let z = background_components(&o, &h).unwrap();
+    let marked = faces_to_press(&h, &z[0]);
+    let normals: Vec<[i64; 3]> = marked
+        .iter()
+        .map(|&f| h.faces()[f as usize].plane.normal)
+        .collect();
+    assert!(
+        normals.contains(&[0, 0, 1]) && normals.contains(&[1, 0, 0]),
+        "{normals:?}"
+    );
+}

@@ -23,8 +23,9 @@
 //!   (the seed prints 23 460 voxels for the third, a transposition), and
 //!   1 200 / 14 595 / 42 420 background voxels inside the hull for the first
 //!   three. For the fourth the seed prints 87 135 where this rule gives
-//!   85 215 (= 15 × 5 681); no variant of the rule that keeps the other
-//!   figures gives 87 135.
+//!   85 215 (= 15 × 5 681); none of the variants tried (centre at a
+//!   corner or a voxel centre, strict or non-strict bounds) that keep the
+//!   other figures gives 87 135.
 //! - [`ellipsoid_dent`]: the seed does not state the dent's shape, and its
 //!   Table 8.4 figures (e.g. a = b = 10, c = 7: 2 664 voxels) are not
 //!   reproduced by this ellipsoid-minus-ball; it is a qualitative stand-in.

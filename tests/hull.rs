@@ -422,11 +422,61 @@ fn real_ct_bone_hull() {
 }
 
 #[test]
+fn corner_hulls_contain_the_voxel_cubes() {
+    for v in [
+        torus(40, 12).unwrap(),
+        ellipsoid_dent(9, 7, 6, 4).unwrap(),
+        digital_ball(21).unwrap(),
+    ] {
+        let o = object(&v);
+        let h = ConvexHull::of_object(&o, CandidateKind::ConvexCorners, HullOptions::default())
+            .unwrap();
+        let hs = h.half_spaces();
+        for vox in o.voxels() {
+            for k in 0..8i64 {
+                let c = chisel::voxel::voxel_corner([
+                    vox[0] + (k & 1),
+                    vox[1] + (k >> 1 & 1),
+                    vox[2] + (k >> 2 & 1),
+                ]);
+                assert!(hs.iter().all(|s| s.side(c) <= 0), "corner {c:?} outside");
+            }
+        }
+        // Vertices are even (0-cells) and the hull is a closed convex surface.
+        assert!(h.vertices().iter().all(|v| v.iter().all(|c| c % 2 == 0)));
+        assert_eq!(
+            h.n_vertices() as i64 - h.n_edges() as i64 + h.n_faces() as i64,
+            2
+        );
+        assert_eq!(h.volume6(), h.volume6_from_faces());
+    }
+}
+
+#[test]
+fn real_ct_skin_hull() {
+    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    let o =
+        DigitalObject::from_volume(&v, Selection::Threshold(500.0), Component::Largest).unwrap();
+    let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default()).unwrap();
+    eprintln!(
+        "headsq ≥ 500 largest: {} voxels, {} candidates, hull {} faces {} vertices",
+        o.n_voxels(),
+        h.stats().candidates,
+        h.n_faces(),
+        h.n_vertices()
+    );
+    check_hull(&o, &h, "headsq skin");
+    check_maximal(&h, "headsq skin");
+}
+
+#[test]
 fn real_frog_tissue_hulls() {
     let Some(v) = common::real_volume("froggy/frogtissue.mhd") else {
         return;
     };
-    for label in [2.0, 9.0, 14.0] {
+    for label in (1..=15).map(f64::from) {
         let o =
             DigitalObject::from_volume(&v, Selection::Label(label), Component::Largest).unwrap();
         let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default()).unwrap();

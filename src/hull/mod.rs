@@ -12,6 +12,10 @@
 //! facets of the hull (maximal, convex, no two coplanar neighbours, no vertex
 //! in the middle of an edge), so the face count is the minimum (Theorem TRM
 //! for digitally convex S); the construction is deterministic.
+//!
+//! With 6-neighbourhood local corners in lexicographic order (the seed's
+//! basic algorithm) the three policies reproduce all of seed Table 4.2 for
+//! the digital balls r = 12, 16, 20, 24 (see `phantom::voxel`).
 
 pub mod cells;
 mod incremental;

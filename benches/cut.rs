@@ -13,9 +13,9 @@ use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 use glam::DVec3;
 
-fn quick() -> bool {
-    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
-}
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
 
 /// A hollow, slightly bumpy ball (bone-like shell) sampled on n³.
 fn shell(n: usize) -> Volume {

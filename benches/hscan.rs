@@ -18,9 +18,9 @@ use chisel::hscan::gpu::{Arithmetic, HullScanInput};
 use chisel::hscan::{self, HalfSpace, VoxelBox};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
-fn quick() -> bool {
-    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
-}
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
 
 fn gcd(a: i64, b: i64) -> i64 {
     if b == 0 { a.abs() } else { gcd(b, a % b) }

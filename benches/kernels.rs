@@ -19,9 +19,9 @@ use chisel::normals::{self, NormalsInput};
 use chisel::{reduce, scan};
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
 
-fn quick() -> bool {
-    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
-}
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
 
 /// Bunny-sized and ~4 M (quick: tiny).
 fn sizes() -> Vec<usize> {

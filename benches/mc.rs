@@ -11,9 +11,9 @@ use chisel::surface::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 
-fn quick() -> bool {
-    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
-}
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
 
 /// A CT-like head phantom (i16, "Hounsfield-ish" 0..2000): soft tissue
 /// ellipsoid ~1000, a bone shell ~1600 with a jaw, air 0, some texture.

@@ -34,9 +34,9 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-fn quick() -> bool {
-    std::env::var("CHISEL_BENCH_QUICK").is_ok_and(|v| v == "1" || v == "true")
-}
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
 
 fn networks() -> Vec<(String, SpringNetwork)> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/fran_cut.vtk");

@@ -16,13 +16,19 @@ fn chisel(args: &[&str]) -> Output {
         .expect("run chisel")
 }
 
-fn ok_json(args: &[&str]) -> Value {
+/// Runs chisel and asserts it succeeded.
+fn ok(args: &[&str]) -> Output {
     let out = chisel(args);
     assert!(
         out.status.success(),
         "chisel {args:?} failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+    out
+}
+
+fn ok_json(args: &[&str]) -> Value {
+    let out = ok(args);
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
         panic!(
             "chisel {args:?}: stdout is not JSON ({e}): {}",
@@ -198,32 +204,22 @@ fn convert_round_trips_a_real_mesh_and_volume() {
     };
     let tmp = tempfile::tempdir().unwrap();
     let ply = tmp.path().join("fran.ply");
-    let out = chisel(&[
+    ok(&[
         "convert",
         path_str(&dir.join("fran_cut.vtk")),
         path_str(&ply),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let a = chisel::io::read_mesh(&dir.join("fran_cut.vtk")).unwrap();
     let b = chisel::io::read_mesh(&ply).unwrap();
     assert_eq!(a.positions, b.positions);
     assert_eq!(a.triangles, b.triangles);
 
     let nrrd = tmp.path().join("head.nrrd");
-    let out = chisel(&[
+    ok(&[
         "convert",
         path_str(&dir.join("headsq/quarter.nhdr")),
         path_str(&nrrd),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let a = chisel::io::read_volume(&dir.join("headsq/quarter.nhdr")).unwrap();
     let b = chisel::io::read_volume(&nrrd).unwrap();
     assert_eq!(a, b);
@@ -244,7 +240,7 @@ fn render_writes_a_png_of_a_real_mesh() {
     };
     let tmp = tempfile::tempdir().unwrap();
     let png = tmp.path().join("bunny.png");
-    let out = chisel(&[
+    ok(&[
         "render",
         path_str(&dir.join("bunny.ply")),
         "-o",
@@ -256,11 +252,6 @@ fn render_writes_a_png_of_a_real_mesh() {
         "--size",
         "128",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
 }
@@ -270,12 +261,7 @@ fn demo_runs_and_writes_its_outputs() {
     let Some(_gpu) = common::gpu() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("demo");
-    let out = chisel(&["demo", "--out", path_str(&out_dir)]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&["demo", "--out", path_str(&out_dir)]);
     let report: Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["relax_gpu"]["status"], "converged");

@@ -256,37 +256,10 @@ fn frogtissue_labels_and_label_13_components() {
     assert_eq!(s.dims, [500, 470, 136]);
     assert_eq!(s.voxels, 31_960_000);
     assert_eq!(s.zeros, 30_803_043);
-    let expected: Vec<LabelCount> = [
-        (0, 30_803_043),
-        (1, 35_279),
-        (2, 19_172),
-        (3, 38_129),
-        (4, 37_146),
-        (5, 16_085),
-        (6, 37_030),
-        (7, 27_807),
-        (8, 39_181),
-        (9, 51_297),
-        (10, 204_672),
-        (11, 47_626),
-        (12, 24_263),
-        (13, 440_722),
-        (14, 3_891),
-        (15, 133_880),
-        (16, 252),
-        (17, 38),
-        (20, 29),
-        (21, 4),
-        (23, 6),
-        (24, 239),
-        (25, 121),
-        (26, 16),
-        (27, 32),
-        (29, 40),
-    ]
-    .into_iter()
-    .map(|(value, voxels)| LabelCount { value, voxels })
-    .collect();
+    let expected: Vec<LabelCount> = common::FROG_LABELS
+        .into_iter()
+        .map(|(value, voxels)| LabelCount { value, voxels })
+        .collect();
     assert_eq!(s.labels.as_deref(), Some(expected.as_slice()));
 
     let c = label_components(&v, 13.0);

@@ -30,6 +30,37 @@ pub fn is_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
 }
 
+/// `froggy/frogtissue.mhd`: (label, voxels) of all 26 values of the full
+/// decode (`../shared/data/README.md` §4).
+pub const FROG_LABELS: [(i64, u64); 26] = [
+    (0, 30_803_043),
+    (1, 35_279),
+    (2, 19_172),
+    (3, 38_129),
+    (4, 37_146),
+    (5, 16_085),
+    (6, 37_030),
+    (7, 27_807),
+    (8, 39_181),
+    (9, 51_297),
+    (10, 204_672),
+    (11, 47_626),
+    (12, 24_263),
+    (13, 440_722),
+    (14, 3_891),
+    (15, 133_880),
+    (16, 252),
+    (17, 38),
+    (20, 29),
+    (21, 4),
+    (23, 6),
+    (24, 239),
+    (25, 121),
+    (26, 16),
+    (27, 32),
+    (29, 40),
+];
+
 /// A real-data file, or `None` (skip) as in [`data_dir`].
 pub fn data(rel: &str) -> Option<PathBuf> {
     data_dir().map(|d| d.join(rel))

@@ -225,7 +225,8 @@ pub(crate) trait Stepper {
 pub(crate) struct Setup {
     pub solver: Solver,
     pub params: StepParams,
-    /// Initial positions with the solver's w lane.
+    /// Initial state: #nodes displacements from rest (zero) with the
+    /// solver's w lane (the kernels' `pos_in`).
     pub positions: Vec<[f32; 4]>,
     /// #free external forces (zeros when unused).
     pub forces: Vec<[f32; 4]>,
@@ -278,7 +279,7 @@ impl Setup {
         for (row, m) in materials.iter_mut().zip(&net.materials) {
             *row = m.table_row();
         }
-        let mut positions = net.rest.clone();
+        let mut positions = vec![[0.0f32; 4]; net.n_nodes()];
         let (params, chebyshev) = match opts.solver {
             Solver::Explicit => {
                 let w = 1.0 / net.params.mass;
@@ -369,6 +370,7 @@ impl<'a> CpuStepper<'a> {
         kernel(
             &self.setup.params,
             &self.net.csr,
+            &self.net.rest,
             &self.setup.forces,
             src,
             dst,
@@ -380,11 +382,10 @@ impl<'a> CpuStepper<'a> {
 
 impl Stepper for CpuStepper<'_> {
     fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
+        let u = bone_displacements(self.net, bone)?;
         let nf = self.net.n_free;
         for buf in &mut self.pos {
-            for (dst, src) in buf[nf..].iter_mut().zip(bone) {
-                *dst = [src[0], src[1], src[2], 0.0];
-            }
+            buf[nf..].copy_from_slice(&u);
         }
         Ok(())
     }
@@ -413,8 +414,34 @@ impl Stepper for CpuStepper<'_> {
     }
 
     fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
-        Ok(self.pos[self.cur].clone())
+        Ok(absolute(self.net, &self.pos[self.cur]))
     }
+}
+
+/// The kernels' bone state: `u = target − x_rest` per bone node (#bone
+/// `[ux, uy, uz, 0]`) for `bone` (#bone absolute targets).
+pub(crate) fn bone_displacements(net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<Vec<[f32; 4]>> {
+    if bone.len() != net.n_bone() {
+        return Err(Error::InvalidInput(format!(
+            "{} bone positions for {} bone nodes",
+            bone.len(),
+            net.n_bone()
+        )));
+    }
+    Ok(bone
+        .iter()
+        .zip(net.bone_rest())
+        .map(|(b, r)| [b[0] - r[0], b[1] - r[1], b[2] - r[2], 0.0])
+        .collect())
+}
+
+/// Absolute positions `x = x_rest + u` (w lane kept) of a kernel state.
+pub(crate) fn absolute(net: &SpringNetwork, state: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    state
+        .iter()
+        .zip(&net.rest)
+        .map(|(u, r)| [r[0] + u[0], r[1] + u[1], r[2] + u[2], u[3]])
+        .collect()
 }
 
 fn sqrt_key(key: u32) -> f32 {

@@ -112,7 +112,7 @@ fn chebyshev_reaches_the_explicit_residual_on_1e5_nodes() {
     let plan = plan.resolve(&net, &Fragments::new()).unwrap();
     let opts = |solver| RelaxOptions {
         solver,
-        epsilon: Some(3e-7),
+        epsilon: Some(3e-8),
         max_iterations: 200_000,
         ..RelaxOptions::default()
     };

@@ -7,7 +7,11 @@
 //! - **converged**: max_i |v_i| < ε;
 //! - **stalled**: over a window of at least `window` (100) iterations the
 //!   positions changed by less than δ (max_i |x_i − x_i(window start)|)
-//!   while some |v_i| ≥ ε — the seed's oscillation case;
+//!   while some |v_i| ≥ ε — the seed's oscillation case — and max |v| did
+//!   not fall below [`STALL_DECAY`] × its value at the window start (a
+//!   state whose speed still decays is converging, however slowly its
+//!   positions move: declaring it stalled would stop above the noise
+//!   floor, as it did for the momentum solver on soft 10⁵-node networks);
 //! - **diverged**: a non-finite speed, or runaway growth: max |v|·Δt above
 //!   half the network's size (a node crossing half the model in one step;
 //!   the seed reads divergence as tearing);
@@ -30,6 +34,10 @@ use super::plan::{Iterations, ResolvedPlan};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
 use crate::{Error, Result};
+
+/// A window ends the relaxation as stalled only if max |v| stayed above
+/// this fraction of its value at the window start.
+pub const STALL_DECAY: f32 = 0.5;
 
 /// Which iteration relaxes the network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -484,21 +492,31 @@ fn run_increment(
             stepper.snapshot()?;
             let (mut it, mut since) = (0u32, 0u32);
             let mut window_change = None;
+            // max |v| at the start of the current window (None: the first).
+            let mut window_speed: Option<f32> = None;
             loop {
                 let n = opts.check_every.min(opts.max_iterations - it);
                 let window = it + n - since >= opts.window;
                 let probe = stepper.advance(n, window)?;
                 it += n;
                 let speed = sqrt_key(probe.keys[0]);
+                let mut still = false;
                 if window {
-                    window_change = Some(sqrt_key(probe.keys[1]));
+                    let change = sqrt_key(probe.keys[1]);
+                    window_change = Some(change);
                     since = it;
+                    // Stalled only without progress: a converging state's
+                    // speed falls geometrically, an oscillation's or a noise
+                    // floor's does not.
+                    still = change < setup.delta
+                        && window_speed.is_none_or(|s0| speed > STALL_DECAY * s0);
+                    window_speed = Some(speed);
                 }
                 let status = if diverged(speed) {
                     Some(Status::Diverged)
                 } else if speed < setup.epsilon {
                     Some(Status::Converged)
-                } else if window && window_change.is_some_and(|c| c < setup.delta) {
+                } else if still {
                     Some(Status::Stalled)
                 } else if it >= opts.max_iterations {
                     Some(Status::IterationLimit)

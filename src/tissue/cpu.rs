@@ -64,18 +64,8 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
     }
 }
 
-/// Entries per batch of [`gather`]: the per-spring terms of a batch are
-/// computed lane-wise (LLVM vectorises sqrt and division), then summed in
-/// CSR order.
-const LANES: usize = 8;
-
 /// Spring force sum g_i of eq. 4.4 for node `i` with rest position `x0`
 /// and displacement `u`, in CSR order: r_ij = (x0_i − x0_j) + (u_i − u_j).
-///
-/// Each spring term is computed exactly as the kernel's loop body does
-/// (IEEE sqrt and division are correctly rounded in every lane), and the
-/// terms with |r_ij| > 0 are added to g one after the other in CSR order,
-/// so batching changes no bit of the result.
 #[inline(always)]
 fn gather(
     x0: [f32; 3],
@@ -86,36 +76,22 @@ fn gather(
     materials: &[[f32; 4]; 16],
 ) -> [f32; 3] {
     let mut g = [0.0f32; 3];
-    for batch in row.chunks(LANES) {
-        let mut r = [[0.0f32; LANES]; 3];
-        let mut l = [0.0f32; LANES];
-        let mut mat = [[0.0f32; LANES]; 3];
-        for (k, &e) in batch.iter().enumerate() {
-            let (j, m, lk) = SpringCsr::unpack(e);
-            let (q0, q) = (rest[j], pos_in[j]);
-            for c in 0..3 {
-                r[c][k] = (x0[c] - q0[c]) + (u[c] - q[c]);
-                mat[c][k] = materials[m][c];
-            }
-            l[k] = lk;
-        }
-        let mut len = [0.0f32; LANES];
-        let mut s = [0.0f32; LANES];
-        for k in 0..LANES {
-            len[k] = (r[0][k] * r[0][k] + r[1][k] * r[1][k] + r[2][k] * r[2][k]).sqrt();
-            let ext = len[k] - l[k];
+    for &e in row {
+        let (j, m, l) = SpringCsr::unpack(e);
+        let (q0, q) = (rest[j], pos_in[j]);
+        let r = [
+            (x0[0] - q0[0]) + (u[0] - q[0]),
+            (x0[1] - q0[1]) + (u[1] - q[1]),
+            (x0[2] - q0[2]) + (u[2] - q[2]),
+        ];
+        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        if len > 0.0 {
+            let mat = materials[m];
+            let ext = len - l;
             // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
-            let f = mat[0][k] * ext + mat[1][k] * (ext - mat[2][k] * l[k]).max(0.0);
-            s[k] = f / len[k];
-        }
-        for k in 0..batch.len() {
-            if len[k] > 0.0 {
-                g = [
-                    g[0] + s[k] * r[0][k],
-                    g[1] + s[k] * r[1][k],
-                    g[2] + s[k] * r[2][k],
-                ];
-            }
+            let f = mat[0] * ext + mat[1] * (ext - mat[2] * l).max(0.0);
+            let s = f / len;
+            g = [g[0] + s * r[0], g[1] + s * r[1], g[2] + s * r[2]];
         }
     }
     g

@@ -146,6 +146,7 @@ impl<'g> GpuStepper<'g> {
         )
     }
 
+    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
     fn from_parts(
         gpu: &'g Gpu,
         kernel: Kernel,

@@ -94,18 +94,20 @@ fn demo_relaxation_on_the_gpu_matches_the_cpu() {
 /// at ~3·10⁻⁴ per iteration, so its |v| < ε criterion fires long before the
 /// positions settle (max |v| ≈ λ e / γ is tiny for tiny λ). Chebyshev runs
 /// to its own stop (ε = 5e-8, at the f32 floor of its pseudo-velocity).
-/// Both must agree within 1 % of the largest displacement, with Chebyshev
-/// in ≥ 4× fewer iterations.
 ///
-/// Known limit, measured: a single 1 mm increment buckles the skin below
-/// the chin into a fold with two stable states (≈ 480 nodes differ by
-/// > 0.1 mm; energies 2.70261e-4 vs 2.70419e-4, both residuals at the f32
-/// floor); the explicit dynamics and the momentum iteration land in
-/// different ones (1.28 mm apart). That is non-uniqueness of the static
-/// problem, not precision: such moves need the plan's increments.
-/// Takes minutes at the test profile, hence ignored by default.
+/// Known limit, measured: the static problem is not unique here. A few
+/// subcutis nodes next to the moved bone have two stable states (adjacent
+/// nodes pass each other: measured 5 nodes differ by > 0.1 mm, max
+/// 0.29 mm); the explicit dynamics and the momentum iteration land in
+/// different ones, Chebyshev's with the lower energy. A single 1 mm
+/// increment buckles the skin below the chin the same way (≈ 480 nodes,
+/// 1.28 mm). That is non-uniqueness, not precision (both residuals at the
+/// f32 floor). So the test asserts: all but 1 % of the nodes agree within
+/// 1 % of the largest displacement, Chebyshev's equilibrium has no higher
+/// spring energy than the explicit one, and Chebyshev needs ≥ 4× fewer
+/// iterations. Takes ~1.5 min at the test profile, hence ignored.
 #[test]
-#[ignore = "minutes on 2 cores at the test profile; run with --ignored"]
+#[ignore = "~1.5 min on 2 busy cores at the test profile; run with --ignored"]
 fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
     let Some(face) = common::real_mesh("fran_cut.vtk") else {
         return;
@@ -145,20 +147,35 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
         "{:?}",
         b.status
     );
-    let dist = (0..net.n_free)
+    let dist: Vec<f32> = (0..net.n_free)
         .map(|i| {
             Vec3::from_slice(&a.positions[i][..3]).distance(Vec3::from_slice(&b.positions[i][..3]))
         })
-        .fold(0.0, f32::max);
+        .collect();
+    let max_dist = dist.iter().copied().fold(0.0, f32::max);
+    let disp = a.max_displacement;
+    let off = dist.iter().filter(|&&d| d > 1e-2 * disp).count();
+    let energy = |r: &chisel::tissue::RelaxReport| -> f64 {
+        let x = |i: u32| Vec3::from_slice(&r.positions[i as usize][..3]).as_dvec3();
+        net.springs
+            .iter()
+            .map(|s| {
+                let m = &net.materials[s.material as usize];
+                let l = s.rest as f64;
+                let e = x(s.a).distance(x(s.b)) - l;
+                let knee = (e - m.knee as f64 * l).max(0.0);
+                0.5 * m.c1 as f64 * e * e + 0.5 * (m.c2 - m.c1) as f64 * knee * knee
+            })
+            .sum()
+    };
+    let (e_a, e_b) = (energy(&a), energy(&b));
     eprintln!(
-        "1e5 nodes: dist {dist:e}, max displacement {:e}, explicit {} it ({:?}), chebyshev {} it ({:?})",
-        a.max_displacement, a.iterations, a.status, b.iterations, b.status
+        "1e5 nodes: max dist {max_dist:e}, {off} nodes off by > 1 % of the max displacement {disp:e}; \
+         energy explicit {e_a:e}, chebyshev {e_b:e}; explicit {} it, chebyshev {} it ({:?})",
+        a.iterations, b.iterations, b.status
     );
-    assert!(a.max_displacement > 1e-4);
-    assert!(
-        dist < 1e-2 * a.max_displacement,
-        "{dist} vs {}",
-        a.max_displacement
-    );
+    assert!(disp > 1e-4);
+    assert!(off * 100 < net.n_free, "{off} of {} nodes", net.n_free);
+    assert!(e_b <= e_a * (1.0 + 1e-6), "{e_b} vs {e_a}");
     assert!(b.iterations * 4 < a.iterations);
 }

@@ -49,7 +49,7 @@ impl SpringClass {
 }
 
 /// A spring law: force magnitude `c1·e + (c2 − c1)·max(e − knee·l, 0)` for
-/// extension `e = |r| − l` (seed §4.1.2, biphasic after [WT90]). With
+/// extension `e = |r| − l` (seed §4.1.2, biphasic after \[WT90\]). With
 /// `c2 = c1` it is a linear spring; the force is continuous in `e`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

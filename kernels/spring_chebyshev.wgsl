@@ -7,16 +7,20 @@
 // past the per-dimension limit (shared/dispatch). Bone nodes are fixed.
 // Buffers:
 //   params:    n_free; use_forces (0/1); h = pseudo time step; momentum = β;
-//              gain = α / h; materials[16] = (c1, c2 − c1, knee, 0)
+//              gain = α / h
+//   materials: rows[16] = (c1, c2 − c1, knee strain, 0) per material
 //   offsets:   #free + 1 u32, CSR row starts into entries
 //   entries:   #entries vec2<u32>: x = neighbour id | material << 28,
 //              y = bits of the rest length l_ij (f32); rows sorted by id
+//   rest:      #nodes vec4<f32>, xyz = rest position x_rest,i
 //   forces:    #free vec4<f32>, external force f_i (read when use_forces = 1)
-//   pos_in:    #nodes vec4<f32>, xyz = position, w = 1 / D_i (D_i = Σ_j c_max)
+//   pos_in:    #nodes vec4<f32>, xyz = displacement u_i = x_i − x_rest,i,
+//              w = 1 / D_i (D_i = Σ_j c_max); see spring_step.wgsl for why
+//              the state is kept as displacements
 //   pos_out:   #nodes vec4<f32>, written for the free nodes only (w copied)
 //   vel:       #free vec4<f32>, xyz = last update / h, updated in place
 // Per node i: g_i as in spring_step (eq. 4.4, biphasic law), then
-//   r_i = (f_i − g_i) / D_i;  v_i ← β v_i + (α/h) r_i;  x_i ← x_i + h v_i.
+//   r_i = (f_i − g_i) / D_i;  v_i ← β v_i + (α/h) r_i;  u_i ← u_i + h v_i.
 // Mirror: tissue::cpu::spring_chebyshev (same operations in the same order).
 
 #import dispatch
@@ -27,7 +31,11 @@ struct Params {
     h: f32,
     momentum: f32,
     gain: f32,
-    materials: array<vec4<f32>, 16>,
+}
+
+// One row per material: (c1, c2 − c1, knee strain, 0).
+struct Materials {
+    rows: array<vec4<f32>, 16>,
 }
 
 const WG_SIZE: u32 = 256u;
@@ -35,12 +43,14 @@ const INDEX_MASK: u32 = 0x0fffffffu;
 const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> offsets: array<u32>;
-@group(0) @binding(2) var<storage, read> entries: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read> forces: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> pos_in: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(1) var<uniform> materials: Materials;
+@group(0) @binding(2) var<storage, read> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> entries: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read> rest: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> forces: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> pos_in: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> pos_out: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
@@ -50,14 +60,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         return;
     }
     let p = pos_in[ix];
-    let x = p.xyz;
+    let u = p.xyz;
+    let x0 = rest[ix].xyz;
     var g = vec3<f32>(0.0);
     let end = offsets[ix + 1u];
     for (var k = offsets[ix]; k < end; k++) {
         let e = entries[k];
-        let m = params.materials[e.x >> 28u];
+        let m = materials.rows[e.x >> 28u];
         let l = bitcast<f32>(e.y);
-        let r = x - pos_in[e.x & INDEX_MASK].xyz;
+        let j = e.x & INDEX_MASK;
+        // r_ij = x_i − x_j, summed as (rest difference) + (displacement
+        // difference): both small, so no absolute-coordinate rounding.
+        let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
         let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
         if len > 0.0 {
             let ext = len - l;
@@ -75,7 +89,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     let v_raw = params.momentum * v + params.gain * r;
     // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
     let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
-    let x_new = x + params.h * v_new;
-    pos_out[ix] = vec4<f32>(x_new, p.w);
+    let u_new = u + params.h * v_new;
+    pos_out[ix] = vec4<f32>(u_new, p.w);
     vel[ix] = vec4<f32>(v_new, 0.0);
 }

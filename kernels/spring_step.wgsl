@@ -5,24 +5,31 @@
 // Dispatch: one invocation per free node (epidermis, then subcutis), WG_SIZE
 // per workgroup, 2-D grid past the per-dimension limit (shared/dispatch).
 // Bone nodes are fixed (B_i = 0) and not dispatched; the host keeps their
-// positions equal in both position buffers.
+// displacements equal in both position buffers.
+// State as displacements from rest (u_i = x_i − x_rest,i): mathematically
+// identical to eq. 4.4–4.7 in x (x_i − x_j = (x_rest,i − x_rest,j) +
+// (u_i − u_j), and x ← x + Δt v ⇔ u ← u + Δt v), but every rounded
+// quantity is small: the f32 noise floor is set by |u| (mm), not by the
+// absolute coordinates (0.1 m), so soft sliding modes settle ~10–100× closer
+// to the exact equilibrium.
 // Buffers:
-//   params:    n_free; use_forces (0/1); dt = Δt; damping = γ; gain unused;
-//              materials[16] = (c1, c2 − c1, knee strain, 0) per material
+//   params:    n_free; use_forces (0/1); dt = Δt; damping = γ; gain unused
+//   materials: rows[16] = (c1, c2 − c1, knee strain, 0) per material
 //   offsets:   #free + 1 u32, CSR row starts into entries
 //   entries:   #entries vec2<u32>: x = neighbour id | material << 28,
 //              y = bits of the rest length l_ij (f32); rows sorted by id
+//   rest:      #nodes vec4<f32>, xyz = rest position x_rest,i
 //   forces:    #free vec4<f32>, external force f_i in xyz (read when
 //              use_forces = 1)
-//   pos_in:    #nodes vec4<f32>, xyz = position x_i, w = B_i / m_i
+//   pos_in:    #nodes vec4<f32>, xyz = displacement u_i, w = B_i / m_i
 //   pos_out:   #nodes vec4<f32>, written for the free nodes only (w copied)
 //   vel:       #free vec4<f32>, xyz = velocity v_i, updated in place (each
 //              invocation reads and writes only its own node)
-// Per node i:  r_ij = x_i − x_j,
+// Per node i:  r_ij = (x_rest,i − x_rest,j) + (u_i − u_j),
 //   g_i = Σ_j f(|r_ij| − l_ij) / |r_ij| · r_ij                     (eq. 4.4)
 //   with the biphasic law f(e) = c1 e + (c2 − c1) max(e − knee l, 0),
 //   a_i = (f_i − γ v_i − g_i) · B_i / m_i                           (eq. 4.5)
-//   v_i ← v_i + Δt a_i;  x_i ← x_i + Δt v_i                         (eq. 4.7)
+//   v_i ← v_i + Δt a_i;  u_i ← u_i + Δt v_i                         (eq. 4.7)
 //   (velocity components below VELOCITY_FLUSH = 1e-30 are set to 0)
 // Mirror: tissue::cpu::spring_step (same operations in the same order).
 
@@ -34,7 +41,11 @@ struct Params {
     dt: f32,
     damping: f32,
     gain: f32,
-    materials: array<vec4<f32>, 16>,
+}
+
+// One row per material: (c1, c2 − c1, knee strain, 0).
+struct Materials {
+    rows: array<vec4<f32>, 16>,
 }
 
 const WG_SIZE: u32 = 256u;
@@ -42,12 +53,14 @@ const INDEX_MASK: u32 = 0x0fffffffu;
 const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> offsets: array<u32>;
-@group(0) @binding(2) var<storage, read> entries: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read> forces: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> pos_in: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> pos_out: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> vel: array<vec4<f32>>;
+@group(0) @binding(1) var<uniform> materials: Materials;
+@group(0) @binding(2) var<storage, read> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> entries: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read> rest: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> forces: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read> pos_in: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> pos_out: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
@@ -57,15 +70,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         return;
     }
     let p = pos_in[ix];
-    let x = p.xyz;
+    let u = p.xyz;
+    let x0 = rest[ix].xyz;
     // eq. 4.4, summed in CSR order.
     var g = vec3<f32>(0.0);
     let end = offsets[ix + 1u];
     for (var k = offsets[ix]; k < end; k++) {
         let e = entries[k];
-        let m = params.materials[e.x >> 28u];
+        let m = materials.rows[e.x >> 28u];
         let l = bitcast<f32>(e.y);
-        let r = x - pos_in[e.x & INDEX_MASK].xyz;
+        let j = e.x & INDEX_MASK;
+        // r_ij = x_i − x_j, summed as (rest difference) + (displacement
+        // difference): both small, so no absolute-coordinate rounding.
+        let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
         let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
         if len > 0.0 {
             let ext = len - l;
@@ -83,7 +100,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     let v_raw = v + params.dt * a;
     // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
     let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
-    let x_new = x + params.dt * v_new;
-    pos_out[ix] = vec4<f32>(x_new, p.w);
+    let u_new = u + params.dt * v_new;
+    pos_out[ix] = vec4<f32>(u_new, p.w);
     vel[ix] = vec4<f32>(v_new, 0.0);
 }

@@ -9,6 +9,7 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use chisel::gpu::{Kernel, Shader, preprocess};
+use chisel::tissue::gpu as tissue;
 use chisel::{hscan, normals, reduce, scan, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 use wgpu::BufferBindingType as B;
@@ -301,6 +302,49 @@ fn host(kernel: Kernel) -> Host {
                 ),
             }
         }
+        Kernel::SpringStep | Kernel::SpringChebyshev => Host {
+            bindings: tissue::STEP_BINDINGS,
+            wg_size: tissue::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&tissue::Params {
+                    n_free: 0xD1,
+                    use_forces: 0xD2,
+                    dt: f32::from_bits(0xD3),
+                    damping: f32::from_bits(0xD4),
+                    gain: f32::from_bits(0xD5),
+                }),
+                if kernel == Kernel::SpringStep {
+                    vec![
+                        ("n_free", 0xD1),
+                        ("use_forces", 0xD2),
+                        ("dt", 0xD3),
+                        ("damping", 0xD4),
+                        ("gain", 0xD5),
+                    ]
+                } else {
+                    vec![
+                        ("n_free", 0xD1),
+                        ("use_forces", 0xD2),
+                        ("h", 0xD3),
+                        ("momentum", 0xD4),
+                        ("gain", 0xD5),
+                    ]
+                },
+            ),
+        },
+        Kernel::TissueReduceMax => Host {
+            bindings: tissue::REDUCE_BINDINGS,
+            wg_size: tissue::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&tissue::ReduceParams {
+                    n: 0xE1,
+                    mode: 0xE2,
+                }),
+                vec![("n", 0xE1), ("mode", 0xE2)],
+            ),
+        },
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its host binding table to tests/shaders.rs::host",

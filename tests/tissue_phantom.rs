@@ -6,7 +6,7 @@ mod common;
 use chisel::Backend;
 use chisel::tissue::phantom::{self, FRAN_CHIN_ADVANCE_TOML, FRAN_GRID, HeadPhantom};
 use chisel::tissue::{
-    Fragments, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status, relax,
+    Fragments, Iterations, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status, relax,
 };
 use glam::Vec3;
 
@@ -89,75 +89,93 @@ fn demo_relaxation_on_the_gpu_matches_the_cpu() {
 /// ~10⁵ nodes: fran_cut's grid refined 4× (102,483 nodes), on the CPU
 /// mirror (the GPU case of this size and larger is in `benches/relax.rs`).
 ///
-/// Both solvers reach the same static residual (f64 oracle) and Chebyshev
-/// needs ≥ 2× fewer iterations. Known limit (measured: max distance 1.2 mm
-/// for a 4.4 mm largest displacement): at this refinement the tangential
-/// (sliding) modes are so soft (λ ≈ 1e-3 c) that the f32 noise of absolute
-/// coordinates (~1e-7 in force) leaves them undetermined to ~0.1–1 mm; both
-/// solvers stop at that floor in different places. Storing displacements
-/// from rest instead of absolute positions would lower the floor ~16×.
-/// Takes ~4 min at the test profile, hence ignored by default.
+/// A 0.25 mm chin increment. The explicit scheme runs a fixed 16,000
+/// iterations: at this size its softest (overdamped sliding) modes relax
+/// at ~3·10⁻⁴ per iteration, so its |v| < ε criterion fires long before the
+/// positions settle (max |v| ≈ λ e / γ is tiny for tiny λ). Chebyshev runs
+/// to its own stop (ε = 5e-8, at the f32 floor of its pseudo-velocity).
+///
+/// Known limit, measured: the static problem is not unique here. A few
+/// subcutis nodes next to the moved bone have two stable states (adjacent
+/// nodes pass each other: measured 5 nodes differ by > 0.1 mm, max
+/// 0.29 mm); the explicit dynamics and the momentum iteration land in
+/// different ones, Chebyshev's with the lower energy. A single 1 mm
+/// increment buckles the skin below the chin the same way (≈ 480 nodes,
+/// 1.28 mm). That is non-uniqueness, not precision (both residuals at the
+/// f32 floor). So the test asserts: all but 1 % of the nodes agree within
+/// 1 % of the largest displacement, Chebyshev's equilibrium has no higher
+/// spring energy than the explicit one, and Chebyshev needs ≥ 4× fewer
+/// iterations. Takes ~1.5 min at the test profile, hence ignored.
 #[test]
-#[ignore = "~4 min on 2 cores at the test profile; run with --ignored"]
-fn chebyshev_reaches_the_explicit_residual_on_1e5_nodes() {
+#[ignore = "~1.5 min on 2 busy cores at the test profile; run with --ignored"]
+fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
     let Some(face) = common::real_mesh("fran_cut.vtk") else {
         return;
     };
     let fine = phantom::refine_grid(&face, FRAN_GRID.0, FRAN_GRID.1, 4).unwrap();
     let net = SpringNetwork::build(&fine, None, &NetworkParams::default()).unwrap();
     assert!(net.n_nodes() > 100_000);
-    let mut plan = Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").unwrap();
-    plan.steps[0].translate = plan.steps[0].translate.map(|c| c / 4.0);
-    plan.steps[0].increments = 1;
-    let plan = plan.resolve(&net, &Fragments::new()).unwrap();
+    let plan = |iterations| {
+        let mut plan = Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").unwrap();
+        plan.steps[0].translate = plan.steps[0].translate.map(|c| c / 16.0);
+        plan.steps[0].increments = 1;
+        plan.steps[0].iterations = iterations;
+        plan.resolve(&net, &Fragments::new()).unwrap()
+    };
     let opts = |solver| RelaxOptions {
         solver,
-        epsilon: Some(3e-7),
-        max_iterations: 200_000,
+        epsilon: Some(5e-8),
+        max_iterations: 20_000,
         ..RelaxOptions::default()
     };
-    let a = relax(&net, &plan, &opts(Solver::Explicit), Backend::Cpu).unwrap();
-    let b = relax(&net, &plan, &opts(Solver::Chebyshev), Backend::Cpu).unwrap();
-    for r in [&a, &b] {
-        assert!(
-            matches!(r.status, Status::Converged | Status::Stalled),
-            "{:?}",
-            r.status
-        );
-    }
-    let dist = (0..net.n_free)
+    let a = relax(
+        &net,
+        &plan(Iterations::Fixed(16_000)),
+        &opts(Solver::Explicit),
+        Backend::Cpu,
+    )
+    .unwrap();
+    let b = relax(
+        &net,
+        &plan(Iterations::Converge),
+        &opts(Solver::Chebyshev),
+        Backend::Cpu,
+    )
+    .unwrap();
+    assert!(
+        matches!(b.status, Status::Converged | Status::Stalled),
+        "{:?}",
+        b.status
+    );
+    let dist: Vec<f32> = (0..net.n_free)
         .map(|i| {
             Vec3::from_slice(&a.positions[i][..3]).distance(Vec3::from_slice(&b.positions[i][..3]))
         })
-        .fold(0.0, f32::max);
-    let residual = |r: &chisel::tissue::RelaxReport| {
-        let x: Vec<glam::DVec3> = r
-            .positions
+        .collect();
+    let max_dist = dist.iter().copied().fold(0.0, f32::max);
+    let disp = a.max_displacement;
+    let off = dist.iter().filter(|&&d| d > 1e-2 * disp).count();
+    let energy = |r: &chisel::tissue::RelaxReport| -> f64 {
+        let x = |i: u32| Vec3::from_slice(&r.positions[i as usize][..3]).as_dvec3();
+        net.springs
             .iter()
-            .map(|p| Vec3::from_slice(&p[..3]).as_dvec3())
-            .collect();
-        let g = chisel::tissue::oracle::spring_forces(&net, &x);
-        g[..net.n_free]
-            .iter()
-            .map(|v| v.length())
-            .fold(0.0, f64::max)
+            .map(|s| {
+                let m = &net.materials[s.material as usize];
+                let l = s.rest as f64;
+                let e = x(s.a).distance(x(s.b)) - l;
+                let knee = (e - m.knee as f64 * l).max(0.0);
+                0.5 * m.c1 as f64 * e * e + 0.5 * (m.c2 - m.c1) as f64 * knee * knee
+            })
+            .sum()
     };
+    let (e_a, e_b) = (energy(&a), energy(&b));
     eprintln!(
-        "statuses {:?} {:?}; residual explicit {:e}, chebyshev {:e}",
-        a.status,
-        b.status,
-        residual(&a),
-        residual(&b)
+        "1e5 nodes: max dist {max_dist:e}, {off} nodes off by > 1 % of the max displacement {disp:e}; \
+         energy explicit {e_a:e}, chebyshev {e_b:e}; explicit {} it, chebyshev {} it ({:?})",
+        a.iterations, b.iterations, b.status
     );
-    eprintln!(
-        "1e5 nodes: dist {dist:e}, max displacement {:e}, explicit {} it, chebyshev {} it",
-        a.max_displacement, a.iterations, b.iterations
-    );
-    assert!(a.max_displacement > 5e-4);
-    assert!(
-        dist < 2.5e-3 * a.max_displacement,
-        "{dist} vs {}",
-        a.max_displacement
-    );
-    assert!(b.iterations * 2 < a.iterations);
+    assert!(disp > 1e-4);
+    assert!(off * 100 < net.n_free, "{off} of {} nodes", net.n_free);
+    assert!(e_b <= e_a * (1.0 + 1e-6), "{e_b} vs {e_a}");
+    assert!(b.iterations * 4 < a.iterations);
 }

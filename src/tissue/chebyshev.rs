@@ -168,7 +168,7 @@ fn smallest_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Estimates the spectral interval of D⁻¹K at rest: λ_max = 2
-/// (Gershgorin), λ_min = [`MU_SAFETY`] × the smallest Ritz value of
+/// (Gershgorin), λ_min = `MU_SAFETY` × the smallest Ritz value of
 /// Lanczos on D^{-1/2} K D^{-1/2} (plain Lanczos, which is reliable for
 /// the extreme eigenvalues; deterministic start vector).
 pub fn estimate_spectrum(net: &SpringNetwork) -> Spectrum {

@@ -11,8 +11,15 @@ use rayon::prelude::*;
 use super::network::SpringCsr;
 use crate::parity::Tolerance;
 
-/// Nodes per rayon task.
+/// Nodes per rayon task of the reduction mirror.
 const CHUNK: usize = 512;
+
+/// Nodes per rayon task of the step mirrors for `n` nodes: about eight
+/// tasks per thread (load balance on a shared machine), at least 64 and at
+/// most 2048 nodes (task overhead vs. cache-sized work).
+fn grain(n: usize) -> usize {
+    (n / (8 * rayon::current_num_threads())).clamp(64, 2048)
+}
 
 /// Velocity components below this magnitude are flushed to zero after each
 /// update (kernel and mirror alike): subnormal floats are 100× slower on
@@ -57,19 +64,26 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
     }
 }
 
-/// Spring force sum g_i of eq. 4.4 for node `i` at `x`, in CSR order.
+/// Spring force sum g_i of eq. 4.4 for node `i` with rest position `x0`
+/// and displacement `u`, in CSR order: r_ij = (x0_i − x0_j) + (u_i − u_j).
 #[inline(always)]
 fn gather(
-    x: [f32; 3],
+    x0: [f32; 3],
+    u: [f32; 3],
     row: &[[u32; 2]],
+    rest: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     materials: &[[f32; 4]; 16],
 ) -> [f32; 3] {
     let mut g = [0.0f32; 3];
     for &e in row {
         let (j, m, l) = SpringCsr::unpack(e);
-        let q = pos_in[j];
-        let r = [x[0] - q[0], x[1] - q[1], x[2] - q[2]];
+        let (q0, q) = (rest[j], pos_in[j]);
+        let r = [
+            (x0[0] - q0[0]) + (u[0] - q[0]),
+            (x0[1] - q0[1]) + (u[1] - q[1]),
+            (x0[2] - q0[2]) + (u[2] - q[2]),
+        ];
         let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
         if len > 0.0 {
             let mat = materials[m];
@@ -88,11 +102,13 @@ fn flush(v: f32) -> f32 {
     if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
 }
 
-/// Runs `update(i, x, w, g, v, f) -> (x', v')` over the free nodes.
+/// Runs `update(u, w, g, v, f) -> (u', v')` over the free nodes.
+#[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
 #[inline(always)]
 fn for_free_nodes(
     p: &StepParams,
     csr: &SpringCsr,
+    rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     pos_out: &mut [[f32; 4]],
@@ -100,56 +116,69 @@ fn for_free_nodes(
     update: impl Fn([f32; 3], f32, [f32; 3], [f32; 3], [f32; 3]) -> ([f32; 3], [f32; 3]) + Sync,
 ) {
     let n = p.n_free as usize;
+    let chunk = grain(n);
     pos_out[..n]
-        .par_chunks_mut(CHUNK)
-        .zip(vel[..n].par_chunks_mut(CHUNK))
+        .par_chunks_mut(chunk)
+        .zip(vel[..n].par_chunks_mut(chunk))
         .enumerate()
         .for_each(|(c, (po, ve))| {
             for (k, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
-                let i = c * CHUNK + k;
+                let i = c * chunk + k;
                 let p_i = pos_in[i];
-                let x = [p_i[0], p_i[1], p_i[2]];
+                let u = [p_i[0], p_i[1], p_i[2]];
+                let x0 = [rest[i][0], rest[i][1], rest[i][2]];
                 let row = &csr.entries[csr.offsets[i] as usize..csr.offsets[i + 1] as usize];
-                let g = gather(x, row, pos_in, &p.materials);
+                let g = gather(x0, u, row, rest, pos_in, &p.materials);
                 let f = if p.use_forces {
                     let f = forces[i];
                     [f[0], f[1], f[2]]
                 } else {
                     [0.0; 3]
                 };
-                let (x2, v2) = update(x, p_i[3], g, [v[0], v[1], v[2]], f);
-                *out = [x2[0], x2[1], x2[2], p_i[3]];
+                let (u2, v2) = update(u, p_i[3], g, [v[0], v[1], v[2]], f);
+                *out = [u2[0], u2[1], u2[2], p_i[3]];
                 *v = [v2[0], v2[1], v2[2], 0.0];
             }
         });
 }
 
 /// Mirror of `spring_step.wgsl`: one semi-implicit Euler step (eq. 4.4–4.7)
-/// of every free node. `pos_in`/`pos_out`: #nodes `[x, y, z, w]` with
-/// `w = B_i / m_i`; only the first `n_free` of `pos_out` are written (the
-/// caller keeps the fixed nodes equal in both buffers). `vel`: #free
-/// `[vx, vy, vz, 0]`, updated in place. `forces`: #free external forces
-/// (read only when `use_forces`).
+/// of every free node, on displacements from rest. `rest`: #nodes rest
+/// positions `[x, y, z, _]`. `pos_in`/`pos_out`: #nodes displacements
+/// `[ux, uy, uz, w]` (u = x − x_rest) with `w = B_i / m_i`; only the first
+/// `n_free` of `pos_out` are written (the caller keeps the fixed nodes
+/// equal in both buffers). `vel`: #free `[vx, vy, vz, 0]`, updated in
+/// place. `forces`: #free external forces (read only when `use_forces`).
 pub fn spring_step(
     p: &StepParams,
     csr: &SpringCsr,
+    rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
     let (dt, gamma) = (p.dt, p.damping);
-    for_free_nodes(p, csr, forces, pos_in, pos_out, vel, |x, w, g, v, f| {
-        let mut x2 = [0.0f32; 3];
-        let mut v2 = [0.0f32; 3];
-        for k in 0..3 {
-            // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; x += Δt v.
-            let a = (f[k] - gamma * v[k] - g[k]) * w;
-            v2[k] = flush(v[k] + dt * a);
-            x2[k] = x[k] + dt * v2[k];
-        }
-        (x2, v2)
-    });
+    for_free_nodes(
+        p,
+        csr,
+        rest,
+        forces,
+        pos_in,
+        pos_out,
+        vel,
+        |u, w, g, v, f| {
+            let mut u2 = [0.0f32; 3];
+            let mut v2 = [0.0f32; 3];
+            for k in 0..3 {
+                // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; u += Δt v.
+                let a = (f[k] - gamma * v[k] - g[k]) * w;
+                v2[k] = flush(v[k] + dt * a);
+                u2[k] = u[k] + dt * v2[k];
+            }
+            (u2, v2)
+        },
+    );
 }
 
 /// Mirror of `spring_chebyshev.wgsl`: one stationary Chebyshev (second-order
@@ -159,22 +188,32 @@ pub fn spring_step(
 pub fn spring_chebyshev(
     p: &StepParams,
     csr: &SpringCsr,
+    rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
     let (h, beta, gain) = (p.dt, p.damping, p.gain);
-    for_free_nodes(p, csr, forces, pos_in, pos_out, vel, |x, w, g, v, f| {
-        let mut x2 = [0.0f32; 3];
-        let mut v2 = [0.0f32; 3];
-        for k in 0..3 {
-            let r = (f[k] - g[k]) * w;
-            v2[k] = flush(beta * v[k] + gain * r);
-            x2[k] = x[k] + h * v2[k];
-        }
-        (x2, v2)
-    });
+    for_free_nodes(
+        p,
+        csr,
+        rest,
+        forces,
+        pos_in,
+        pos_out,
+        vel,
+        |u, w, g, v, f| {
+            let mut u2 = [0.0f32; 3];
+            let mut v2 = [0.0f32; 3];
+            for k in 0..3 {
+                let r = (f[k] - g[k]) * w;
+                v2[k] = flush(beta * v[k] + gain * r);
+                u2[k] = u[k] + h * v2[k];
+            }
+            (u2, v2)
+        },
+    );
 }
 
 /// Order-preserving key of a non-negative float: its bits without the sign

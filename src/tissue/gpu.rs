@@ -13,40 +13,72 @@ use super::relax::{Probe, Setup, Solver, Stepper};
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::{Error, Result};
 
-const WG_SIZE: u32 = 256;
+/// Invocations per workgroup (`WG_SIZE` in all three kernels).
+pub const WG_SIZE: u32 = 256;
 /// Workgroups of the first reduction stage (≤ WG_SIZE so one workgroup
 /// finishes the second stage).
 const REDUCE_GROUPS: u32 = 256;
 /// Most iterations recorded into one command buffer.
 const MAX_PER_SUBMIT: u32 = 512;
 
-/// `Params` of `spring_step.wgsl` / `spring_chebyshev.wgsl` (same layout).
+/// `spring_step.wgsl` / `spring_chebyshev.wgsl` bindings as bound here
+/// (params, materials, offsets, entries, rest, forces, pos_in, pos_out, vel).
+pub const STEP_BINDINGS: &[wgpu::BufferBindingType] = &[
+    wgpu::BufferBindingType::Uniform,
+    wgpu::BufferBindingType::Uniform,
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: false },
+    wgpu::BufferBindingType::Storage { read_only: false },
+];
+
+/// `tissue_reduce_max.wgsl` bindings as bound here (params, vel, pos, snap,
+/// part_in, part_out).
+pub const REDUCE_BINDINGS: &[wgpu::BufferBindingType] = &[
+    wgpu::BufferBindingType::Uniform,
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: true },
+    wgpu::BufferBindingType::Storage { read_only: false },
+];
+
+/// `Params` of `spring_step.wgsl` / `spring_chebyshev.wgsl` (same layout;
+/// the Chebyshev kernel names `dt` `h` and `damping` `momentum`).
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
-pub struct StepUniform {
+pub struct Params {
     pub n_free: u32,
     pub use_forces: u32,
     pub dt: f32,
     pub damping: f32,
     pub gain: f32,
-    pub materials: [Vec4; 16],
 }
 
-impl From<&StepParams> for StepUniform {
+/// `Materials` of the step kernels: one `(c1, c2 − c1, knee, 0)` row per
+/// material.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct Materials {
+    pub rows: [Vec4; 16],
+}
+
+impl From<&StepParams> for Params {
     fn from(p: &StepParams) -> Self {
-        StepUniform {
+        Params {
             n_free: p.n_free,
             use_forces: u32::from(p.use_forces),
             dt: p.dt,
             damping: p.damping,
             gain: p.gain,
-            materials: p.materials.map(Vec4::from_array),
         }
     }
 }
 
 /// `Params` of `tissue_reduce_max.wgsl`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
-pub struct ReduceUniform {
+pub struct ReduceParams {
     pub n: u32,
     pub mode: u32,
 }
@@ -60,12 +92,12 @@ fn kernel_of(solver: Solver) -> Kernel {
 
 /// Buffers only the bind groups reference (kept alive with them).
 type KeepAlive = (
-    UniformBuffer<StepUniform>,
+    (UniformBuffer<Params>, UniformBuffer<Materials>),
     GpuArray<u32>,
     GpuArray<[u32; 2]>,
-    GpuArray<[f32; 4]>,
+    [GpuArray<[f32; 4]>; 2],
     GpuArray<[u32; 2]>,
-    [UniformBuffer<ReduceUniform>; 2],
+    [UniformBuffer<ReduceParams>; 2],
 );
 
 /// Free-node positions and velocities after one step.
@@ -91,6 +123,8 @@ pub struct GpuStepper<'g> {
     reduce_bind: [wgpu::BindGroup; 2],
     reduce_final: wgpu::BindGroup,
     cur: usize,
+    /// Host copy of the rest positions (state ↔ absolute positions).
+    rest: Vec<[f32; 4]>,
     // Kept alive for the bind groups.
     _buffers: KeepAlive,
 }
@@ -105,34 +139,53 @@ impl<'g> GpuStepper<'g> {
             kernel_of(setup.solver),
             &setup.params,
             &net.csr,
+            &net.rest,
             &setup.forces,
             &setup.positions,
             &vec![[0.0; 4]; net.n_free],
         )
     }
 
+    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
     fn from_parts(
         gpu: &'g Gpu,
         kernel: Kernel,
         params: &StepParams,
         csr: &SpringCsr,
+        rest: &[[f32; 4]],
         forces: &[[f32; 4]],
         positions: &[[f32; 4]],
         velocities: &[[f32; 4]],
     ) -> Result<Self> {
         let n_free = params.n_free;
         let nf = n_free as usize;
-        if csr.offsets.len() != nf + 1 || velocities.len() != nf || forces.len() != nf {
+        if csr.offsets.len() != nf + 1
+            || velocities.len() != nf
+            || forces.len() != nf
+            || rest.len() != positions.len()
+            || positions.len() < nf
+        {
             return Err(Error::InvalidInput(format!(
-                "tissue GPU state: {} offsets, {} velocities, {} forces for {nf} free nodes",
+                "tissue GPU state: {} offsets, {} velocities, {} forces, {} rest and {} \
+                 state positions for {nf} free nodes",
                 csr.offsets.len(),
                 velocities.len(),
-                forces.len()
+                forces.len(),
+                rest.len(),
+                positions.len()
             )));
         }
-        let uniform = UniformBuffer::new(gpu, "spring_step.params", &StepUniform::from(params))?;
+        let uniform = UniformBuffer::new(gpu, "spring_step.params", &Params::from(params))?;
+        let materials = UniformBuffer::new(
+            gpu,
+            "spring_step.materials",
+            &Materials {
+                rows: params.materials.map(Vec4::from_array),
+            },
+        )?;
         let offsets = GpuArray::from_slice(gpu, "spring_step.offsets", &csr.offsets)?;
         let entries = GpuArray::from_slice(gpu, "spring_step.entries", &csr.entries)?;
+        let rest_buf = GpuArray::from_slice(gpu, "spring_step.rest", rest)?;
         let forces = GpuArray::from_slice(gpu, "spring_step.forces", forces)?;
         let mut second = positions.to_vec();
         second[..nf].fill([f32::NAN; 4]);
@@ -154,12 +207,12 @@ impl<'g> GpuStepper<'g> {
             UniformBuffer::new(
                 gpu,
                 "tissue_reduce_max.params0",
-                &ReduceUniform { n: n_free, mode: 0 },
+                &ReduceParams { n: n_free, mode: 0 },
             )?,
             UniformBuffer::new(
                 gpu,
                 "tissue_reduce_max.params1",
-                &ReduceUniform {
+                &ReduceParams {
                     n: n_reduce_groups,
                     mode: 1,
                 },
@@ -181,8 +234,10 @@ impl<'g> GpuStepper<'g> {
                 &step_pipeline,
                 &[
                     uniform.binding(),
+                    materials.binding(),
                     offsets.binding(),
                     entries.binding(),
+                    rest_buf.binding(),
                     forces.binding(),
                     pos[src].binding(),
                     pos[1 - src].binding(),
@@ -234,7 +289,15 @@ impl<'g> GpuStepper<'g> {
             reduce_bind,
             reduce_final,
             cur: 0,
-            _buffers: (uniform, offsets, entries, forces, partials, reduce_params),
+            rest: rest.to_vec(),
+            _buffers: (
+                (uniform, materials),
+                offsets,
+                entries,
+                [rest_buf, forces],
+                partials,
+                reduce_params,
+            ),
         })
     }
 
@@ -314,7 +377,19 @@ impl<'g> GpuStepper<'g> {
 
 impl Stepper for GpuStepper<'_> {
     fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
-        let data: Vec<[f32; 4]> = bone.iter().map(|b| [b[0], b[1], b[2], 0.0]).collect();
+        let bone_rest = &self.rest[(self.n_free as usize).min(self.rest.len())..];
+        if bone.len() != bone_rest.len() {
+            return Err(Error::InvalidInput(format!(
+                "{} bone positions for {} bone nodes",
+                bone.len(),
+                bone_rest.len()
+            )));
+        }
+        let data: Vec<[f32; 4]> = bone
+            .iter()
+            .zip(bone_rest)
+            .map(|(b, r)| [b[0] - r[0], b[1] - r[1], b[2] - r[2], 0.0])
+            .collect();
         if data.is_empty() {
             return Ok(());
         }
@@ -366,24 +441,41 @@ impl Stepper for GpuStepper<'_> {
     }
 
     fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
-        self.pos[self.cur].read(self.gpu)
+        let state = self.pos[self.cur].read(self.gpu)?;
+        Ok(state
+            .iter()
+            .zip(&self.rest)
+            .map(|(u, r)| [r[0] + u[0], r[1] + u[1], r[2] + u[2], u[3]])
+            .collect())
     }
 }
 
 /// One dispatch of `spring_step` (or `spring_chebyshev` for
-/// `Solver::Chebyshev`) on explicit inputs, for parity tests: returns the
-/// free part of `pos_out` (NaN where the kernel did not write) and the
-/// updated velocities.
+/// `Solver::Chebyshev`) on explicit inputs (the buffers of
+/// [`super::cpu::spring_step`]; `pos_in` holds displacements from `rest`),
+/// for parity tests: returns the free part of `pos_out` (NaN where the
+/// kernel did not write) and the updated velocities.
+#[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
 pub fn step_once(
     gpu: &Gpu,
     solver: Solver,
     params: &StepParams,
     csr: &SpringCsr,
+    rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     vel: &[[f32; 4]],
 ) -> Result<StepOutput> {
-    let mut s = GpuStepper::from_parts(gpu, kernel_of(solver), params, csr, forces, pos_in, vel)?;
+    let mut s = GpuStepper::from_parts(
+        gpu,
+        kernel_of(solver),
+        params,
+        csr,
+        rest,
+        forces,
+        pos_in,
+        vel,
+    )?;
     let mut encoder = gpu.encoder(s.kernel.name());
     s.record_steps(&mut encoder, 1);
     gpu.submit_and_wait(encoder)?;
@@ -422,6 +514,7 @@ pub fn tissue_reduce_max(
         Kernel::SpringStep,
         &params,
         &csr,
+        &vec![<[f32; 4]>::zeroed(); n],
         &vec![<[f32; 4]>::zeroed(); n],
         pos,
         vel,

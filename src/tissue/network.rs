@@ -49,7 +49,7 @@ impl SpringClass {
 }
 
 /// A spring law: force magnitude `c1·e + (c2 − c1)·max(e − knee·l, 0)` for
-/// extension `e = |r| − l` (seed §4.1.2, biphasic after [WT90]). With
+/// extension `e = |r| − l` (seed §4.1.2, biphasic after \[WT90\]). With
 /// `c2 = c1` it is a linear spring; the force is continuous in `e`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -752,11 +752,12 @@ impl SpringNetwork {
     }
 
     /// The bytes one iteration of the step kernels must move at least:
-    /// per free node the row offset (4), own position and velocity read
-    /// (32), position and velocity written (32); per CSR entry 8 bytes.
-    /// Neighbour positions are assumed cached (compulsory traffic only).
+    /// per free node the row offset (4), own rest position, displacement
+    /// and velocity read (48), displacement and velocity written (32); per
+    /// CSR entry 8 bytes. Neighbour rest positions and displacements are
+    /// assumed cached (compulsory traffic only).
     pub fn bytes_per_iteration(&self) -> u64 {
-        self.n_free as u64 * (4 + 32 + 32) + self.csr.entries.len() as u64 * 8
+        self.n_free as u64 * (4 + 48 + 32) + self.csr.entries.len() as u64 * 8
     }
 
     /// Spectral bounds of D⁻¹K at rest, computed once (Lanczos, see

@@ -7,7 +7,11 @@
 //! - **converged**: max_i |v_i| < ε;
 //! - **stalled**: over a window of at least `window` (100) iterations the
 //!   positions changed by less than δ (max_i |x_i − x_i(window start)|)
-//!   while some |v_i| ≥ ε — the seed's oscillation case;
+//!   while some |v_i| ≥ ε — the seed's oscillation case — and max |v| did
+//!   not fall below [`STALL_DECAY`] × its value at the window start (a
+//!   state whose speed still decays is converging, however slowly its
+//!   positions move: declaring it stalled would stop above the noise
+//!   floor, as it did for the momentum solver on soft 10⁵-node networks);
 //! - **diverged**: a non-finite speed, or runaway growth: max |v|·Δt above
 //!   half the network's size (a node crossing half the model in one step;
 //!   the seed reads divergence as tearing);
@@ -30,6 +34,10 @@ use super::plan::{Iterations, ResolvedPlan};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
 use crate::{Error, Result};
+
+/// A window ends the relaxation as stalled only if max |v| stayed above
+/// this fraction of its value at the window start.
+pub const STALL_DECAY: f32 = 0.5;
 
 /// Which iteration relaxes the network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -225,7 +233,8 @@ pub(crate) trait Stepper {
 pub(crate) struct Setup {
     pub solver: Solver,
     pub params: StepParams,
-    /// Initial positions with the solver's w lane.
+    /// Initial state: #nodes displacements from rest (zero) with the
+    /// solver's w lane (the kernels' `pos_in`).
     pub positions: Vec<[f32; 4]>,
     /// #free external forces (zeros when unused).
     pub forces: Vec<[f32; 4]>,
@@ -278,7 +287,7 @@ impl Setup {
         for (row, m) in materials.iter_mut().zip(&net.materials) {
             *row = m.table_row();
         }
-        let mut positions = net.rest.clone();
+        let mut positions = vec![[0.0f32; 4]; net.n_nodes()];
         let (params, chebyshev) = match opts.solver {
             Solver::Explicit => {
                 let w = 1.0 / net.params.mass;
@@ -369,6 +378,7 @@ impl<'a> CpuStepper<'a> {
         kernel(
             &self.setup.params,
             &self.net.csr,
+            &self.net.rest,
             &self.setup.forces,
             src,
             dst,
@@ -380,11 +390,10 @@ impl<'a> CpuStepper<'a> {
 
 impl Stepper for CpuStepper<'_> {
     fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
+        let u = bone_displacements(self.net, bone)?;
         let nf = self.net.n_free;
         for buf in &mut self.pos {
-            for (dst, src) in buf[nf..].iter_mut().zip(bone) {
-                *dst = [src[0], src[1], src[2], 0.0];
-            }
+            buf[nf..].copy_from_slice(&u);
         }
         Ok(())
     }
@@ -413,8 +422,34 @@ impl Stepper for CpuStepper<'_> {
     }
 
     fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
-        Ok(self.pos[self.cur].clone())
+        Ok(absolute(self.net, &self.pos[self.cur]))
     }
+}
+
+/// The kernels' bone state: `u = target − x_rest` per bone node (#bone
+/// `[ux, uy, uz, 0]`) for `bone` (#bone absolute targets).
+pub(crate) fn bone_displacements(net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<Vec<[f32; 4]>> {
+    if bone.len() != net.n_bone() {
+        return Err(Error::InvalidInput(format!(
+            "{} bone positions for {} bone nodes",
+            bone.len(),
+            net.n_bone()
+        )));
+    }
+    Ok(bone
+        .iter()
+        .zip(net.bone_rest())
+        .map(|(b, r)| [b[0] - r[0], b[1] - r[1], b[2] - r[2], 0.0])
+        .collect())
+}
+
+/// Absolute positions `x = x_rest + u` (w lane kept) of a kernel state.
+pub(crate) fn absolute(net: &SpringNetwork, state: &[[f32; 4]]) -> Vec<[f32; 4]> {
+    state
+        .iter()
+        .zip(&net.rest)
+        .map(|(u, r)| [r[0] + u[0], r[1] + u[1], r[2] + u[2], u[3]])
+        .collect()
 }
 
 fn sqrt_key(key: u32) -> f32 {
@@ -457,21 +492,31 @@ fn run_increment(
             stepper.snapshot()?;
             let (mut it, mut since) = (0u32, 0u32);
             let mut window_change = None;
+            // max |v| at the start of the current window (None: the first).
+            let mut window_speed: Option<f32> = None;
             loop {
                 let n = opts.check_every.min(opts.max_iterations - it);
                 let window = it + n - since >= opts.window;
                 let probe = stepper.advance(n, window)?;
                 it += n;
                 let speed = sqrt_key(probe.keys[0]);
+                let mut still = false;
                 if window {
-                    window_change = Some(sqrt_key(probe.keys[1]));
+                    let change = sqrt_key(probe.keys[1]);
+                    window_change = Some(change);
                     since = it;
+                    // Stalled only without progress: a converging state's
+                    // speed falls geometrically, an oscillation's or a noise
+                    // floor's does not.
+                    still = change < setup.delta
+                        && window_speed.is_none_or(|s0| speed > STALL_DECAY * s0);
+                    window_speed = Some(speed);
                 }
                 let status = if diverged(speed) {
                     Some(Status::Diverged)
                 } else if speed < setup.epsilon {
                     Some(Status::Converged)
-                } else if window && window_change.is_some_and(|c| c < setup.delta) {
+                } else if still {
                     Some(Status::Stalled)
                 } else if it >= opts.max_iterations {
                     Some(Status::IterationLimit)

@@ -183,7 +183,13 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
             ..RelaxOptions::default()
         };
         let dt = chisel::tissue::explicit::choose_dt(&net, None, false).unwrap();
-        let mut pos = iterate(&net, &moved_bone(&net), &opts, 3, Backend::Cpu).unwrap();
+        // The kernels' state: displacements from rest.
+        let mut pos: Vec<[f32; 4]> = iterate(&net, &moved_bone(&net), &opts, 3, Backend::Cpu)
+            .unwrap()
+            .iter()
+            .zip(&net.rest)
+            .map(|(p, r)| [p[0] - r[0], p[1] - r[1], p[2] - r[2], p[3]])
+            .collect();
         let diag = net.diagonal();
         for (i, p) in pos.iter_mut().enumerate().take(net.n_free) {
             p[0] += 1e-3 * diag * ((i * 31 % 17) as f32 / 17.0 - 0.5);
@@ -220,9 +226,19 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
             Solver::Explicit => cpu::spring_step,
             Solver::Chebyshev => cpu::spring_chebyshev,
         };
-        kernel(&params, &net.csr, &forces, &pos, &mut cpu_pos, &mut cpu_vel);
-        let (gpu_pos, gpu_vel) =
-            tissue_gpu::step_once(gpu, solver, &params, &net.csr, &forces, &pos, &vel).unwrap();
+        kernel(
+            &params,
+            &net.csr,
+            &net.rest,
+            &forces,
+            &pos,
+            &mut cpu_pos,
+            &mut cpu_vel,
+        );
+        let (gpu_pos, gpu_vel) = tissue_gpu::step_once(
+            gpu, solver, &params, &net.csr, &net.rest, &forces, &pos, &vel,
+        )
+        .unwrap();
         assert_eq!(find_sentinel(&gpu_pos, [f32::NAN; 4]), None, "{name}");
         let what = format!("{} {name} one step", solver.name());
         compare_vec(

@@ -34,6 +34,7 @@
 // Mirror: tissue::cpu::spring_step (same operations in the same order).
 
 #import dispatch
+#import spring_network
 
 struct Params {
     n_free: u32,
@@ -43,24 +44,9 @@ struct Params {
     gain: f32,
 }
 
-// One row per material: (c1, c2 − c1, knee strain, 0).
-struct Materials {
-    rows: array<vec4<f32>, 16>,
-}
-
 const WG_SIZE: u32 = 256u;
-const INDEX_MASK: u32 = 0x0fffffffu;
-const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<uniform> materials: Materials;
-@group(0) @binding(2) var<storage, read> offsets: array<u32>;
-@group(0) @binding(3) var<storage, read> entries: array<vec2<u32>>;
-@group(0) @binding(4) var<storage, read> rest: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> forces: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> pos_in: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> pos_out: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
@@ -70,37 +56,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         return;
     }
     let p = pos_in[ix];
-    let u = p.xyz;
-    let x0 = rest[ix].xyz;
-    // eq. 4.4, summed in CSR order.
-    var g = vec3<f32>(0.0);
-    let end = offsets[ix + 1u];
-    for (var k = offsets[ix]; k < end; k++) {
-        let e = entries[k];
-        let m = materials.rows[e.x >> 28u];
-        let l = bitcast<f32>(e.y);
-        let j = e.x & INDEX_MASK;
-        // r_ij = x_i − x_j, summed as (rest difference) + (displacement
-        // difference): both small, so no absolute-coordinate rounding.
-        let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
-        let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
-        if len > 0.0 {
-            let ext = len - l;
-            let f = m.x * ext + m.y * max(ext - m.z * l, 0.0);
-            let s = f / len;
-            g = g + s * r;
-        }
-    }
-    var f_ext = vec3<f32>(0.0);
-    if params.use_forces != 0u {
-        f_ext = forces[ix].xyz;
-    }
+    // eq. 4.4–4.7.
+    let g = spring_force(ix, rest[ix].xyz, p.xyz);
     let v = vel[ix].xyz;
-    let a = (f_ext - params.damping * v - g) * p.w;
-    let v_raw = v + params.dt * a;
-    // Flush tiny components to zero (no subnormals; see VELOCITY_FLUSH).
-    let v_new = select(v_raw, vec3<f32>(0.0), abs(v_raw) < vec3<f32>(VELOCITY_FLUSH));
-    let u_new = u + params.dt * v_new;
-    pos_out[ix] = vec4<f32>(u_new, p.w);
-    vel[ix] = vec4<f32>(v_new, 0.0);
+    let a = (external_force(ix, params.use_forces) - params.damping * v - g) * p.w;
+    advance(ix, p, v + params.dt * a, params.dt);
 }

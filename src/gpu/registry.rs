@@ -106,6 +106,10 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../kernels/shared/dispatch.wgsl"),
     ),
     (
+        "spring_network",
+        include_str!("../../kernels/shared/spring_network.wgsl"),
+    ),
+    (
         "order_key",
         include_str!("../../kernels/shared/order_key.wgsl"),
     ),

@@ -204,11 +204,22 @@ fn convert_round_trips_a_real_mesh_and_volume() {
     };
     let tmp = tempfile::tempdir().unwrap();
     let ply = tmp.path().join("fran.ply");
+    let png = tmp.path().join("fran.png");
+    let preview: &[&str] = if common::gpu().is_some() {
+        &["--preview", path_str(&png)]
+    } else {
+        &[]
+    };
     ok(&[
-        "convert",
-        path_str(&dir.join("fran_cut.vtk")),
-        path_str(&ply),
-    ]);
+        &[
+            "convert",
+            path_str(&dir.join("fran_cut.vtk")),
+            path_str(&ply),
+        ],
+        preview,
+    ]
+    .concat());
+    assert_eq!(png.is_file(), !preview.is_empty());
     let a = chisel::io::read_mesh(&dir.join("fran_cut.vtk")).unwrap();
     let b = chisel::io::read_mesh(&ply).unwrap();
     assert_eq!(a.positions, b.positions);

@@ -12,11 +12,18 @@ pub struct Args {
     input: PathBuf,
     /// Output file; its extension picks the format (written atomically).
     output: PathBuf,
+    /// Meshes: also write a shaded preview PNG of the result.
+    #[arg(long)]
+    preview: Option<PathBuf>,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     match (is_volume(&args.input), is_volume(&args.output)) {
         (true, true) => {
+            anyhow::ensure!(
+                args.preview.is_none(),
+                "--preview draws meshes; use `chisel mc --preview` for a volume's surface"
+            );
             let v = crate::io::read_volume(&args.input)?;
             crate::io::write_volume(&args.output, &v)?;
             global.note(format!(
@@ -42,6 +49,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 ));
             }
             crate::io::write_mesh(&args.output, &m)?;
+            if let Some(path) = &args.preview {
+                let opts = crate::render::RenderOptions {
+                    views: vec![crate::render::View::Front, crate::render::View::Iso],
+                    title: args
+                        .output
+                        .file_name()
+                        .map(|n| n.to_string_lossy().into_owned()),
+                    ..Default::default()
+                };
+                crate::render::render_png(&global.gpu()?, &m, &opts, path)?;
+            }
             global.note(format!(
                 "wrote {} ({} vertices, {} triangles)",
                 args.output.display(),

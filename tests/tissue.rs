@@ -315,6 +315,7 @@ fn rotation_increments_are_exact_fractions() {
     let net = SpringNetwork::build(&grid(3, 3), None, &NetworkParams::default()).unwrap();
     let plan = Plan {
         name: None,
+        cuts: Vec::new(),
         steps: vec![Step {
             name: None,
             select: Selector::Vertices(vec![8]),
@@ -540,6 +541,7 @@ fn one_step_plan(
 ) -> chisel::tissue::ResolvedPlan {
     Plan {
         name: None,
+        cuts: Vec::new(),
         steps: vec![Step {
             name: Some("move".into()),
             select: Selector::Vertices((0..net.n_bone() as u32).step_by(3).collect()),

@@ -1,10 +1,13 @@
 //! `chisel demo`: the main job on embedded generated data.
 //!
-//! A head phantom (skin over a skull whose mandible is a separate
-//! fragment) → layered spring network (seed 000 ch. 4) → the jaw-advance
-//! plan relaxed on the GPU → the same plan on the CPU mirror for a parity
-//! check → relaxed skin with per-vertex displacement, before/after preview
-//! and a JSON report in the output folder.
+//! A CT-like head phantom (soft tissue over a skull whose mandible is fused
+//! to the skull base) → skin and bone surfaces by marching cubes on the GPU
+//! (checked against the CPU: the same triangles) → a plane osteotomy
+//! through both rami frees the jaw, capped → layered spring network over
+//! the bone (seed 000 ch. 4) → the jaw advanced 6 mm and the tissue relaxed
+//! on the GPU → the same plan on the CPU mirror as a parity check → relaxed
+//! skin, moved bone, the phantom CT, before/after previews and a JSON
+//! report in the output folder.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -12,11 +15,13 @@ use std::time::Instant;
 use serde_json::json;
 
 use super::Global;
-use super::relax::{Job, before_mesh, run_job, write_preview};
+use super::relax::{Job, before_mesh, bone_before_after, run_job, write_preview};
 use crate::parity::Backend;
-use crate::render::View;
-use crate::tissue::phantom::{HeadPhantom, head_phantom};
-use crate::tissue::{NetworkParams, RelaxOptions, Solver, SpringNetwork};
+use crate::render::{Facing, View};
+use crate::surface::{McOptions, Surface};
+use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
+use crate::tissue::phantom::{ct_demo_plan, ct_head_phantom};
+use crate::tissue::{CtLayers, Fragments, NetworkParams, RelaxOptions, Solver};
 
 /// Arguments of `chisel demo`.
 #[derive(Debug, clap::Args)]
@@ -24,44 +29,87 @@ pub struct Args {
     /// Output folder (created if missing).
     #[arg(short, long, default_value = "chisel-demo")]
     out: PathBuf,
-    /// Phantom resolution (latitude bands of the skin, ≥ 8).
-    #[arg(long, default_value_t = 24)]
-    resolution: usize,
+    /// Voxel size of the CT phantom, mm (1–8; smaller = finer surfaces, more nodes).
+    #[arg(long, default_value_t = 4.0)]
+    voxel: f32,
     /// Solver for the GPU run.
-    #[arg(long, default_value = "explicit")]
+    #[arg(long, default_value = "chebyshev")]
     solver: Solver,
     /// Print the report as JSON on stdout too.
     #[arg(long)]
     json: bool,
 }
 
+/// Skin and bone levels of the phantom (as for the VTK CT head).
+const SKIN_LEVEL: f32 = 500.0;
+const BONE_LEVEL: f32 = 1150.0;
+
+/// Triangles as sorted, rotation-normalised triples of grid edge ids (the
+/// backend-independent identity of a marching-cubes surface).
+fn canonical_triangles(s: &Surface) -> Vec<[u64; 3]> {
+    let mut out: Vec<[u64; 3]> = s
+        .mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let e = t.map(|v| s.vertex_edges[v as usize]);
+            let k = (0..3).min_by_key(|&k| e[k]).unwrap_or(0);
+            [e[k], e[(k + 1) % 3], e[(k + 2) % 3]]
+        })
+        .collect();
+    out.sort_unstable();
+    out
+}
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out).map_err(|e| crate::Error::io(&args.out, e))?;
-    let bar = global.progress(5, "demo");
+    let bar = global.progress(7, "demo");
     let mut timings = serde_json::Map::new();
     let mut stage = |name: &str, t: Instant| {
         timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
     };
 
     let t = Instant::now();
-    let phantom = head_phantom(args.resolution)?;
-    let params = NetworkParams {
-        origin: Some(phantom.origin.to_array()),
-        ..Default::default()
-    };
-    let network = SpringNetwork::build(&phantom.skin, Some(&phantom.skull), &params)?;
-    let job = Job {
-        skin: phantom.skin.clone(),
-        network,
-        plan: HeadPhantom::demo_plan()?,
-        fragments: phantom.fragments(),
-    };
-    stage("build", t);
+    let volume = ct_head_phantom(args.voxel)?;
+    let plan = ct_demo_plan()?;
+    stage("phantom", t);
     bar.inc(1);
 
     let t = Instant::now();
     let gpu = global.gpu()?;
     stage("gpu_open", t);
+    bar.inc(1);
+
+    let t = Instant::now();
+    let mc = |level: f32, backend| {
+        let iso = crate::surface::IsoSpec::Level(level);
+        crate::surface::marching_cubes(&volume, iso, &McOptions::default(), backend)
+    };
+    let (skin_gpu, bone_gpu) = (
+        mc(SKIN_LEVEL, Backend::Gpu(&gpu))?,
+        mc(BONE_LEVEL, Backend::Gpu(&gpu))?,
+    );
+    let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, SKIN_LEVEL, BONE_LEVEL)?;
+    stage("marching_cubes_gpu", t);
+    let t = Instant::now();
+    let mc_same = canonical_triangles(&skin_gpu) == canonical_triangles(&mc(SKIN_LEVEL, Backend::Cpu)?)
+        && canonical_triangles(&bone_gpu) == canonical_triangles(&mc(BONE_LEVEL, Backend::Cpu)?);
+    stage("marching_cubes_cpu_check", t);
+    bar.inc(1);
+
+    let t = Instant::now();
+    let params = NetworkParams {
+        subcutis_depth: Some(CT_SUBCUTIS_DEPTH),
+        ..Default::default()
+    };
+    let job = Job::build(
+        layers.skin.clone(),
+        Some(layers.bone.clone()),
+        plan,
+        Fragments::new(),
+        &params,
+    )?;
+    stage("cut_and_network", t);
     bar.inc(1);
 
     let opts = RelaxOptions {
@@ -87,18 +135,30 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let relaxed = gpu_report.skin_mesh(&job.network);
-    let mesh_path = args.out.join("relaxed_skin.ply");
-    crate::io::write_mesh(&mesh_path, &relaxed)?;
-    let skull_path = args.out.join("skull.ply");
-    crate::io::write_mesh(&skull_path, &phantom.skull)?;
-    let preview_path = args.out.join("before_after.png");
+    let out = |name: &str| args.out.join(name);
+    crate::io::write_mesh(&out("relaxed_skin.ply"), &relaxed)?;
+    let (bone_before, bone_after) = bone_before_after(&job, &gpu_report)
+        .ok_or_else(|| anyhow::anyhow!("the demo network has no bone mesh"))?;
+    crate::io::write_mesh(&out("bone_moved.ply"), &bone_after)?;
+    crate::io::write_volume(&out("head_ct.nrrd"), &volume)?;
+    let facing = Facing::Axes;
+    let views = vec![View::Front, View::Right];
+    let title = "chisel demo: jaw osteotomy, 6 mm advance, tissue relaxed on the GPU (mm)";
     write_preview(
         &gpu,
-        &before_mesh(&job.skin),
-        &relaxed,
-        vec![View::Front, View::Right],
-        "chisel demo: jaw advance 6 mm, tissue relaxed on the GPU (mm)".into(),
-        &preview_path,
+        (&before_mesh(&job.skin), &relaxed),
+        views.clone(),
+        facing,
+        format!("{title} — skin"),
+        &out("before_after.png"),
+    )?;
+    write_preview(
+        &gpu,
+        (&bone_before, &bone_after),
+        views,
+        facing,
+        format!("{title} — bone"),
+        &out("bone_before_after.png"),
     )?;
     stage("write_outputs", t);
     bar.inc(1);
@@ -109,17 +169,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "adapter": gpu.describe(),
         "features": gpu.features,
         "phantom": {
-            "resolution": args.resolution,
-            "skin_vertices": phantom.skin.n_vertices(),
-            "skin_triangles": phantom.skin.n_triangles(),
-            "skull_vertices": phantom.skull.n_vertices(),
-            "jaw_vertices": phantom.jaw_vertices.len(),
+            "dims": volume.dims,
+            "voxel_mm": args.voxel,
+            "levels": { "skin": SKIN_LEVEL, "bone": BONE_LEVEL },
         },
+        "ct": layers.figures,
+        "marching_cubes_gpu_equals_cpu": mc_same,
+        "cut": job.cut,
         "network": {
             "nodes": job.network.n_nodes(),
             "free_nodes": job.network.n_free,
             "springs": job.network.springs.len(),
             "springs_per_class": job.network.class_counts(),
+            "subcutis_depth": params.subcutis_depth,
         },
         "relax_gpu": gpu_report,
         "parity": {
@@ -128,17 +190,28 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "same_status_and_iterations": same_status,
             "max_epidermis_distance": max_gpu_cpu,
         },
-        "outputs": { "mesh": mesh_path, "skull": skull_path, "preview": preview_path },
+        "outputs": {
+            "skin": out("relaxed_skin.ply"),
+            "bone": out("bone_moved.ply"),
+            "ct": out("head_ct.nrrd"),
+            "preview": out("before_after.png"),
+            "bone_preview": out("bone_before_after.png"),
+        },
         "timings_s": timings,
     });
-    let report_path = args.out.join("report.json");
+    let report_path = out("report.json");
     super::report::write_json(&report_path, &report)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     }
     global.note(format!(
-        "demo: {} nodes, GPU {:?} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
+        "demo: CT {:?} → skin {} / bone {} vertices (GPU marching cubes {}), jaw cut free; \
+         {} nodes, GPU {:?} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
          CPU mirror {} (max |Δ| {:.2e} mm); wrote {}",
+        volume.dims,
+        layers.figures.skin_vertices,
+        layers.figures.bone_vertices,
+        if mc_same { "= CPU" } else { "DIFFERS from CPU" },
         job.network.n_nodes(),
         gpu_report.status,
         gpu_report.iterations,
@@ -148,6 +221,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         max_gpu_cpu,
         args.out.display()
     ));
+    anyhow::ensure!(mc_same, "GPU and CPU marching cubes gave different triangles");
     anyhow::ensure!(
         same_status,
         "GPU and CPU mirror ended differently: {:?}/{} vs {:?}/{}",

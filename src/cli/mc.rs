@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use super::{BackendArg, Global};
+use super::{BackendArg, Global, ViewAxes};
 use crate::parity::Backend;
 use crate::render::{RenderOptions, View};
 use crate::surface::{IsoSpec, McOptions, marching_cubes};
@@ -37,6 +37,8 @@ pub struct Args {
     /// Preview PNG.
     #[arg(long)]
     preview: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewAxes,
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -96,6 +98,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             width: 384,
             height: 384,
             title: Some(format!("chisel mc: {}", args.volume.display())),
+            facing: args.view.facing()?,
             ..Default::default()
         };
         crate::render::render_png(g, &surface.mesh, &opts, path)?;

@@ -43,6 +43,45 @@ pub struct Global {
     quiet: bool,
 }
 
+/// Preview axes: which world directions are up and front in the views
+/// (default: +y up, front chosen by [`crate::render::Facing::Auto`]).
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ViewAxes {
+    /// World direction that is up in the previews `x,y,z` (headsq: 0,0,-1).
+    #[arg(long, value_delimiter = ',', num_args = 1, requires = "view_front")]
+    view_up: Option<Vec<f32>>,
+    /// World direction the front view looks from `x,y,z` (headsq: 0,-1,0).
+    #[arg(long, value_delimiter = ',', num_args = 1, requires = "view_up")]
+    view_front: Option<Vec<f32>>,
+}
+
+impl ViewAxes {
+    /// The facing rule these options ask for.
+    pub fn facing(&self) -> anyhow::Result<crate::render::Facing> {
+        let v = |name: &str, a: &Option<Vec<f32>>| -> anyhow::Result<Option<glam::Vec3>> {
+            match a.as_deref() {
+                None => Ok(None),
+                Some(&[x, y, z]) if glam::Vec3::new(x, y, z).length() > 0.0 => {
+                    Ok(Some(glam::Vec3::new(x, y, z)))
+                }
+                Some(o) => anyhow::bail!("--{name} takes a non-zero x,y,z; got {o:?}"),
+            }
+        };
+        Ok(
+            match (v("view-up", &self.view_up)?, v("view-front", &self.view_front)?) {
+                (Some(up), Some(front)) => {
+                    anyhow::ensure!(
+                        up.normalize().cross(front.normalize()).length() > 1e-3,
+                        "--view-up and --view-front must not be parallel"
+                    );
+                    crate::render::Facing::Anatomical { up, front }
+                }
+                _ => crate::render::Facing::Auto,
+            },
+        )
+    }
+}
+
 /// Where data-parallel work runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BackendArg {

@@ -1,38 +1,60 @@
-//! `chisel relax MESH --plan PLAN`: builds the layered spring network over
-//! the bone (seed 000 ch. 4), runs the surgery plan and writes the relaxed
-//! skin with per-vertex displacement, a before/after preview and a report.
+//! `chisel relax MESH --plan PLAN` / `chisel relax --ct VOLUME --skin L
+//! --bone L --plan PLAN`: takes the epidermis and bone from meshes or from a
+//! CT (marching cubes), cuts the bone by the plan's knives, builds the
+//! layered spring network over it (seed 000 ch. 4), runs the surgery plan
+//! and writes the relaxed skin with per-vertex displacement, the moved
+//! bone, before/after previews and a report.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::json;
 
-use super::{BackendArg, Global};
+use super::{BackendArg, Global, ViewAxes};
+use glam::Vec3;
+
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
-use crate::render::{Panel, RenderOptions, View};
+use crate::render::{Facing, Panel, RenderOptions, View};
+use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
 use crate::tissue::{
-    Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork,
+    Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork, cut_bone,
+    layers_from_ct,
 };
 
 /// Arguments of `chisel relax`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Epidermis mesh (any format `chisel stats` reads).
-    mesh: PathBuf,
-    /// Surgery plan, TOML or JSON (see `src/tissue/plans/` for examples).
+    /// Epidermis mesh (any format `chisel stats` reads); omit with `--ct`.
+    #[arg(required_unless_present = "ct", conflicts_with = "ct")]
+    mesh: Option<PathBuf>,
+    /// CT volume: the epidermis is its surface at `--skin`, the bone its
+    /// surface at `--bone` (marching cubes).
+    #[arg(long, requires_all = ["skin", "bone"])]
+    ct: Option<PathBuf>,
+    /// Skin iso-level of the `--ct` volume (headsq: 500).
+    #[arg(long, requires = "ct")]
+    skin: Option<f32>,
+    /// With `--ct`: the bone iso-level (headsq: 1150). Otherwise a bone mesh;
+    /// without it the bone layer is the skin scaled by 0.7 about the origin.
+    #[arg(long)]
+    bone: Option<String>,
+    /// Surgery plan, TOML or JSON (see `src/tissue/plans/` for examples);
+    /// its `[[cut]]` knives cut the bone before the network is built.
     #[arg(long)]
     plan: PathBuf,
-    /// Bone mesh; without it the bone layer is the skin scaled by 0.7 about the origin.
-    #[arg(long)]
-    bone: Option<PathBuf>,
     /// Origin O of the layer construction `x,y,z` (default: SPEC §1.1 rule).
     #[arg(long, value_delimiter = ',')]
     origin: Option<Vec<f32>>,
+    /// Subcutis at this fraction of the way from each skin vertex to the
+    /// nearest bone vertex (needs a bone; default 0.5 with `--ct`, else
+    /// the seed's 0.8 scaling about O).
+    #[arg(long)]
+    subcutis_depth: Option<f32>,
     /// Solver: `explicit` (the seed's damped dynamics) or `chebyshev` (accelerated equilibrium).
     #[arg(long, default_value = "explicit")]
     solver: Solver,
-    /// Where the relaxation runs.
+    /// Where marching cubes and the relaxation run.
     #[arg(long, value_enum, default_value = "gpu")]
     backend: BackendArg,
     /// Time step Δt (default: 0.9 × the stability limit).
@@ -47,9 +69,17 @@ pub struct Args {
     /// Relaxed skin (PLY/VTK keep the `displacement` field), written atomically.
     #[arg(short, long)]
     output: PathBuf,
-    /// Before/after preview PNG with a displacement colour map.
+    /// The bone after the plan (cut and moved), with its `displacement`.
+    #[arg(long)]
+    bone_output: Option<PathBuf>,
+    /// Before/after preview PNG of the skin with a displacement colour map.
     #[arg(long)]
     preview: Option<PathBuf>,
+    /// Before/after preview PNG of the bone (moved fragments coloured).
+    #[arg(long)]
+    bone_preview: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewAxes,
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -61,9 +91,54 @@ pub struct Args {
 /// A relaxation's inputs, ready to run.
 pub struct Job {
     pub skin: TriMesh,
+    /// The bone mesh after the plan's cuts (`None`: the scaled skin).
+    pub bone: Option<TriMesh>,
     pub network: SpringNetwork,
     pub plan: Plan,
     pub fragments: Fragments,
+    /// What the plan's cuts did (`None` without cuts).
+    pub cut: Option<serde_json::Value>,
+}
+
+impl Job {
+    /// Cuts `bone` with the plan's knives (fragments named after the cuts,
+    /// merged with `fragments`) and builds the network over the result.
+    pub fn build(
+        skin: TriMesh,
+        bone: Option<TriMesh>,
+        plan: Plan,
+        mut fragments: Fragments,
+        params: &NetworkParams,
+    ) -> anyhow::Result<Job> {
+        let (bone, cut) = match (bone, plan.cuts.is_empty()) {
+            (bone, true) => (bone, None),
+            (None, false) => anyhow::bail!(
+                "the plan cuts the bone ({} `[[cut]]`), which needs a bone mesh (--bone or --ct)",
+                plan.cuts.len()
+            ),
+            (Some(b), false) => {
+                let cut = cut_bone(&b, &plan.cuts)?;
+                let report = json!({
+                    "pieces": cut.pieces,
+                    "fragments": cut.fragments.iter()
+                        .map(|(k, v)| (k.clone(), json!(v.len())))
+                        .collect::<serde_json::Map<_, _>>(),
+                    "knives": cut.stats,
+                });
+                fragments.extend(cut.fragments);
+                (Some(cut.mesh), Some(report))
+            }
+        };
+        let network = SpringNetwork::build(&skin, bone.as_ref(), params)?;
+        Ok(Job {
+            skin,
+            bone,
+            network,
+            plan,
+            fragments,
+            cut,
+        })
+    }
 }
 
 /// Runs `job` on `backend`, with a spinner, returning the report.
@@ -90,24 +165,57 @@ pub fn run_job(
     Ok(report?)
 }
 
-/// The input skin with a zero `displacement` field (the "before" panel).
-pub fn before_mesh(skin: &TriMesh) -> TriMesh {
+/// `mesh` with a `displacement` field: zero, or |p − before| per vertex.
+fn with_displacement(mesh: &TriMesh, before: Option<&[Vec3]>) -> TriMesh {
+    let values = match before {
+        None => vec![0.0; mesh.n_vertices()],
+        Some(b) => mesh
+            .positions
+            .iter()
+            .zip(b)
+            .map(|(p, q)| p.distance(*q))
+            .collect(),
+    };
     TriMesh {
-        positions: skin.positions.clone(),
-        triangles: skin.triangles.clone(),
+        positions: mesh.positions.clone(),
+        triangles: mesh.triangles.clone(),
         scalars: vec![ScalarField {
             name: "displacement".into(),
-            values: vec![0.0; skin.n_vertices()],
+            values,
         }],
     }
 }
 
-/// Writes the before/after preview (shared framing and colour range).
+/// The input skin with a zero `displacement` field (the "before" panel).
+pub fn before_mesh(skin: &TriMesh) -> TriMesh {
+    with_displacement(skin, None)
+}
+
+/// The bone mesh before and after the plan, each with its `displacement`
+/// (bone nodes are the network's nodes `2n..`, in bone-mesh order).
+pub fn bone_before_after(job: &Job, report: &RelaxReport) -> Option<(TriMesh, TriMesh)> {
+    let bone = job.bone.as_ref()?;
+    let first = 2 * job.skin.n_vertices();
+    let moved = TriMesh {
+        positions: report.positions[first..first + bone.n_vertices()]
+            .iter()
+            .map(|p| Vec3::new(p[0], p[1], p[2]))
+            .collect(),
+        triangles: bone.triangles.clone(),
+        scalars: Vec::new(),
+    };
+    Some((
+        with_displacement(bone, None),
+        with_displacement(&moved, Some(&bone.positions)),
+    ))
+}
+
+/// Writes a before/after preview (shared framing and colour range).
 pub fn write_preview(
     gpu: &crate::Gpu,
-    before: &TriMesh,
-    after: &TriMesh,
+    (before, after): (&TriMesh, &TriMesh),
     views: Vec<View>,
+    facing: Facing,
     title: String,
     path: &Path,
 ) -> anyhow::Result<()> {
@@ -129,42 +237,77 @@ pub fn write_preview(
         views,
         scalars: Some("displacement".into()),
         title: Some(title),
+        facing,
         ..Default::default()
     };
     crate::render::render_panels(gpu, &panels, &opts)?.save_png(path)?;
     Ok(())
 }
 
+fn vec3_arg(name: &str, v: Option<&[f32]>) -> anyhow::Result<Option<Vec3>> {
+    match v {
+        None => Ok(None),
+        Some(&[x, y, z]) => Ok(Some(Vec3::new(x, y, z))),
+        Some(o) => anyhow::bail!("--{name} takes x,y,z; got {} numbers", o.len()),
+    }
+}
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
-    let skin = crate::io::read_mesh(&args.mesh)?;
-    let bone = args.bone.as_deref().map(crate::io::read_mesh).transpose()?;
-    let origin = match args.origin.as_deref() {
-        None => None,
-        Some(&[x, y, z]) => Some([x, y, z]),
-        Some(o) => anyhow::bail!("--origin takes x,y,z; got {} numbers", o.len()),
+    let gpu = match args.backend {
+        BackendArg::Gpu => Some(global.gpu()?),
+        BackendArg::Cpu => None,
+    };
+    let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let (skin, bone, ct) = match (&args.ct, &args.mesh) {
+        (Some(ct), _) => {
+            let (Some(skin_level), Some(bone_text)) = (args.skin, args.bone.as_deref()) else {
+                anyhow::bail!("--ct needs --skin LEVEL and --bone LEVEL");
+            };
+            let bone_level: f32 = bone_text.parse().map_err(|_| {
+                anyhow::anyhow!("with --ct, --bone is the bone iso-level; got `{bone_text}`")
+            })?;
+            let volume = crate::io::read_volume(ct)?;
+            let layers = layers_from_ct(&volume, skin_level, bone_level, backend)?;
+            global.note(format!(
+                "CT: skin {} vertices (largest of {} groups), bone {} vertices in {} groups",
+                layers.figures.skin_vertices,
+                layers.figures.skin_groups,
+                layers.figures.bone_vertices,
+                layers.figures.bone_groups
+            ));
+            (layers.skin, Some(layers.bone), Some(layers.figures))
+        }
+        (None, Some(mesh)) => {
+            let skin = crate::io::read_mesh(mesh)?;
+            let bone = args
+                .bone
+                .as_deref()
+                .map(|b| crate::io::read_mesh(Path::new(b)))
+                .transpose()?;
+            (skin, bone, None)
+        }
+        (None, None) => anyhow::bail!("give an epidermis MESH or --ct VOLUME"),
     };
     let params = NetworkParams {
-        origin,
+        origin: vec3_arg("origin", args.origin.as_deref())?.map(|o| o.to_array()),
+        subcutis_depth: args
+            .subcutis_depth
+            .or(ct.as_ref().map(|_| CT_SUBCUTIS_DEPTH)),
         ..Default::default()
     };
-    let network = SpringNetwork::build(&skin, bone.as_ref(), &params)?;
     let plan = Plan::from_path(&args.plan)?;
+    let job = Job::build(skin, bone, plan, Fragments::new(), &params)?;
     let build_s = t.elapsed().as_secs_f64();
     global.note(format!(
-        "network: {} nodes ({} free), {} springs; plan `{}` with {} steps",
-        network.n_nodes(),
-        network.n_free,
-        network.springs.len(),
+        "network: {} nodes ({} free), {} springs; plan `{}` with {} cuts, {} steps",
+        job.network.n_nodes(),
+        job.network.n_free,
+        job.network.springs.len(),
         args.plan.display(),
-        plan.steps.len()
+        job.plan.cuts.len(),
+        job.plan.steps.len()
     ));
-    let job = Job {
-        skin,
-        network,
-        plan,
-        fragments: Fragments::new(),
-    };
     let opts = RelaxOptions {
         solver: args.solver,
         dt: args.dt,
@@ -172,15 +315,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         max_iterations: args.max_iterations,
         ..Default::default()
     };
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
-    let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let report = run_job(global, &job, &opts, backend)?;
     let relaxed = report.skin_mesh(&job.network);
     crate::io::write_mesh(&args.output, &relaxed)?;
-    if let Some(path) = &args.preview {
+    let bones = bone_before_after(&job, &report);
+    if let Some(path) = &args.bone_output {
+        let Some((_, after)) = &bones else {
+            anyhow::bail!("--bone-output needs a bone mesh (--bone or --ct)");
+        };
+        crate::io::write_mesh(path, after)?;
+    }
+    let facing = args.view.facing()?;
+    let title = job.plan.name.clone().unwrap_or_default();
+    if args.preview.is_some() || args.bone_preview.is_some() {
         let opened;
         let preview_gpu = match &gpu {
             Some(g) => g,
@@ -189,33 +336,53 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 &opened
             }
         };
-        write_preview(
-            preview_gpu,
-            &before_mesh(&job.skin),
-            &relaxed,
-            vec![View::Front, View::Right],
-            format!(
-                "chisel relax: {}",
-                job.plan.name.clone().unwrap_or_default()
-            ),
-            path,
-        )?;
+        if let Some(path) = &args.preview {
+            write_preview(
+                preview_gpu,
+                (&before_mesh(&job.skin), &relaxed),
+                vec![View::Front, View::Right],
+                facing,
+                format!("chisel relax: {title} — skin (displacement)"),
+                path,
+            )?;
+        }
+        if let Some(path) = &args.bone_preview {
+            let Some((before, after)) = &bones else {
+                anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
+            };
+            write_preview(
+                preview_gpu,
+                (before, after),
+                vec![View::Front, View::Right],
+                facing,
+                format!("chisel relax: {title} — bone (displacement)"),
+                path,
+            )?;
+        }
     }
     let value = json!({
         "command": "relax",
         "mesh": args.mesh,
+        "ct": ct.as_ref().map(|figures| json!({ "volume": args.ct, "figures": figures })),
         "bone": args.bone,
         "plan": args.plan,
+        "cut": job.cut,
         "network": {
             "nodes": job.network.n_nodes(),
             "free_nodes": job.network.n_free,
             "springs": job.network.springs.len(),
             "springs_per_class": job.network.class_counts(),
             "origin": job.network.origin,
+            "subcutis_depth": params.subcutis_depth,
             "build_seconds": build_s,
         },
         "relax": report,
-        "outputs": { "mesh": args.output, "preview": args.preview },
+        "outputs": {
+            "mesh": args.output,
+            "bone": args.bone_output,
+            "preview": args.preview,
+            "bone_preview": args.bone_preview,
+        },
     });
     global.note(format!(
         "{:?} after {} iterations ({:.2} s, {:.0} it/s); max displacement {:.4}; wrote {}",

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use super::Global;
+use super::{Global, ViewAxes};
 use crate::render::{RenderOptions, View};
 
 /// Arguments of `chisel render`.
@@ -25,6 +25,8 @@ pub struct Args {
     /// Pixel size of each view.
     #[arg(long, default_value_t = 512)]
     size: u32,
+    #[command(flatten)]
+    view: ViewAxes,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
@@ -42,6 +44,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default(),
         ),
+        facing: args.view.facing()?,
         ..Default::default()
     };
     crate::render::render_png(&gpu, &mesh, &opts, &args.output)?;

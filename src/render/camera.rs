@@ -33,11 +33,27 @@ impl Frame {
         }
     }
 
+    /// `up` and `front` made orthonormal (front loses its part along up);
+    /// the fixed axes when either is zero or they are parallel.
+    pub fn anatomical(up: Vec3, front: Vec3) -> Self {
+        let up = up.normalize_or_zero();
+        let front = (front - front.dot(up) * up).normalize_or_zero();
+        if up == Vec3::ZERO || front == Vec3::ZERO {
+            return Frame::axes();
+        }
+        Frame {
+            up,
+            front,
+            right: up.cross(front),
+        }
+    }
+
     /// The frame for `meshes` under `facing`; [`Facing::Auto`] asks the
     /// first mesh (the "before" of a panel row) for its facing.
     pub fn for_meshes(meshes: &[&TriMesh], facing: Facing) -> Self {
         match facing {
             Facing::Axes => Frame::axes(),
+            Facing::Anatomical { up, front } => Frame::anatomical(up, front),
             Facing::Auto => {
                 meshes
                     .first()
@@ -230,6 +246,26 @@ mod tests {
             let got = open_surface_facing(&cap(axis, outward)).expect("open cap");
             assert!(got.distance(want) < 1e-4, "outward={outward}: {got}");
         }
+    }
+
+    #[test]
+    fn anatomical_frame_follows_the_given_axes() {
+        // headsq: slice 1 is the top (up −z), row 0 anterior (front −y).
+        let f = Frame::anatomical(Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.0, -1.0, 0.3));
+        assert_eq!(f.up, Vec3::NEG_Z);
+        assert!(f.front.distance(Vec3::NEG_Y) < 1e-6);
+        assert!(f.right.distance(Vec3::NEG_Z.cross(Vec3::NEG_Y)) < 1e-6);
+        let m = cap(Vec3::X, true);
+        let g = Frame::for_meshes(
+            &[&m],
+            Facing::Anatomical {
+                up: Vec3::NEG_Z,
+                front: Vec3::NEG_Y,
+            },
+        );
+        assert_eq!(g, f);
+        assert_eq!(Frame::anatomical(Vec3::Y, Vec3::Y * 3.0), Frame::axes());
+        assert_eq!(Frame::anatomical(Vec3::ZERO, Vec3::X), Frame::axes());
     }
 
     #[test]

@@ -31,7 +31,8 @@
 //! face looks toward ≈ (+0.81, 0, −0.59), and that is where its `front`
 //! camera sits (its scan axis is y, so the face is upright, chin at −y). Closed or nearly closed meshes (footbones, the bunny, whose
 //! holes are small) keep the fixed axes above. [`Facing::Axes`] always uses
-//! the fixed axes.
+//! the fixed axes; [`Facing::Anatomical`] takes `up` and `front` from the
+//! caller (a CT volume's patient axes, e.g. headsq: up −z, front −y).
 //!
 //! # Layout
 //! Each view is a `width`×`height` cell: its name (with the panel caption)
@@ -53,6 +54,8 @@ mod text;
 use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
+
+use glam::Vec3;
 
 use crate::mesh::TriMesh;
 use crate::{Error, Gpu, Result};
@@ -138,13 +141,17 @@ impl FromStr for View {
 }
 
 /// How view names map to world directions (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Facing {
     /// +y up; `front` faces the bulging side of an open surface, else +z.
     #[default]
     Auto,
     /// +y up, `front` looks from +z, always.
     Axes,
+    /// Given world directions: `up` is image-up in the side views, `front`
+    /// points from the object toward the front camera (made orthogonal to
+    /// `up`). Both non-zero and not parallel, else the fixed axes are used.
+    Anatomical { up: Vec3, front: Vec3 },
 }
 
 /// What to draw and how big.

@@ -73,7 +73,8 @@ impl ChebyshevCoefficients {
 }
 
 /// y = D^{-1/2} K D^{-1/2} x on the free nodes (3 dofs each), K the
-/// linearised stiffness at rest: Σ c1 r̂ r̂ᵀ per spring, fixed nodes as
+/// linearised stiffness at rest: Σ c1 r̂ r̂ᵀ per spring (c1·I for a spring
+/// of rest length 0), fixed nodes as
 /// Dirichlet (zero) neighbours.
 fn apply(net: &SpringNetwork, inv_sqrt_d: &[f64], x: &[f64], y: &mut [f64]) {
     let nf = net.n_free;
@@ -96,9 +97,6 @@ fn apply(net: &SpringNetwork, inv_sqrt_d: &[f64], x: &[f64], y: &mut [f64]) {
                 (pi[2] - pj[2]) as f64,
             ];
             let len2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-            if len2 == 0.0 {
-                continue;
-            }
             let xj = if j < nf {
                 [
                     x[3 * j] * inv_sqrt_d[j],
@@ -110,6 +108,14 @@ fn apply(net: &SpringNetwork, inv_sqrt_d: &[f64], x: &[f64], y: &mut [f64]) {
             };
             let d = [xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]];
             let c = net.materials[m].c1 as f64;
+            if len2 == 0.0 {
+                // A spring of rest length 0 (coincident nodes) pulls back
+                // along any separation: stiffness c·I, not c·r̂r̂ᵀ.
+                for k in 0..3 {
+                    acc[k] += c * d[k];
+                }
+                continue;
+            }
             let proj = c * (r[0] * d[0] + r[1] * d[1] + r[2] * d[2]) / len2;
             for k in 0..3 {
                 acc[k] += proj * r[k];

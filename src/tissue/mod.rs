@@ -6,6 +6,8 @@
 //! ```text
 //! TriMesh (epidermis) [+ TriMesh (bone)] ──SpringNetwork::build──▶ SpringNetwork
 //!     (layers, 5 spring classes, eq. 4.1 k-d tree links, CSR on the host)
+//! Volume (CT) ──ct::layers_from_ct (marching cubes)──▶ epidermis + bone
+//! bone + Plan.cuts ──fragments::cut_bone (scalpels, caps)──▶ bone + Fragments
 //! Plan (TOML/JSON) ──Plan::resolve(network, fragments)──▶ ResolvedPlan
 //! relax(network, plan, options, Backend) ──▶ RelaxReport
 //!     per increment: bone targets → K iterations of spring_step /
@@ -30,7 +32,9 @@
 
 pub mod chebyshev;
 pub mod cpu;
+pub mod ct;
 pub mod explicit;
+pub mod fragments;
 pub mod gpu;
 mod kdtree;
 pub mod network;
@@ -43,6 +47,8 @@ pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
     default_origin,
 };
+pub use ct::{CtLayers, layers_from_ct};
+pub use fragments::{BoneCut, CutBone, KnifeSpec, cut_bone};
 pub use plan::{Fragments, Iterations, Plan, ResolvedPlan, Rotation, Selector, Step};
 pub use relax::{
     IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,

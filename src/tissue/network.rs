@@ -161,6 +161,17 @@ pub struct NetworkParams {
     /// `scale` of eq. 4.1 (projection of q_i toward O before the nearest
     /// bone search); `None` = `bone_scale / subcutis_scale`.
     pub projection_scale: Option<f32>,
+    /// Subcutis between skin and a real bone (seed outlook (4): the bone
+    /// must lie behind the subcutis): q_i = p_i + d·|b_i − p_i|·ν_i, b_i
+    /// the bone vertex nearest to p_i, ν_i the unit vertex normal turned
+    /// toward b_i, d ∈ (0, 1). Along the normal the dermis link p_i–q_i
+    /// resists motion out of the skin's plane (toward b_i it can lie
+    /// almost in that plane where the bone is off to the side), and q_i
+    /// stays inside the ball about p_i that holds no bone vertex, so it
+    /// does not pass through the bone. Eq. 4.1 then searches the bone vertex nearest to
+    /// q_i itself (s = 1). Needs a bone mesh; `None` = the seed's scaling
+    /// about O (for CT skulls that can put the subcutis inside the cranium).
+    pub subcutis_depth: Option<f32>,
     /// Per-class spring laws.
     pub stiffness: Stiffness,
     /// Per-region overrides.
@@ -178,6 +189,7 @@ impl Default for NetworkParams {
             subcutis_scale: 0.8,
             bone_scale: 0.7,
             projection_scale: None,
+            subcutis_depth: None,
             stiffness: Stiffness::default(),
             regions: Vec::new(),
             mass: 1.0,
@@ -439,14 +451,40 @@ impl SpringNetwork {
                 "network would have {n_nodes} nodes; at most {MAX_NODES} are supported"
             )));
         }
+        let tree = KdTree::new(bone_pos.iter().map(|&p| dvec(p)).collect());
         let mut rest: Vec<[f32; 4]> = Vec::with_capacity(n_nodes);
         rest.extend(epidermis.positions.iter().map(|p| [p.x, p.y, p.z, 0.0]));
-        rest.extend(
-            epidermis
-                .positions
-                .iter()
-                .map(|&p| scaled(p, params.subcutis_scale)),
-        );
+        match params.subcutis_depth {
+            None => rest.extend(
+                epidermis
+                    .positions
+                    .iter()
+                    .map(|&p| scaled(p, params.subcutis_scale)),
+            ),
+            Some(d) => {
+                if bone.is_none() || !(d.is_finite() && d > 0.0 && d < 1.0) {
+                    return Err(Error::InvalidInput(format!(
+                        "subcutis_depth needs a bone mesh and a value in (0, 1), got {d}{}",
+                        if bone.is_none() { " without a bone mesh" } else { "" }
+                    )));
+                }
+                let normals = crate::normals::vertex_normals(epidermis, crate::parity::Backend::Cpu)?;
+                let placed: Vec<[f32; 4]> = epidermis
+                    .positions
+                    .par_iter()
+                    .zip(&normals)
+                    .map(|(&p, n)| {
+                        let p = p.as_dvec3();
+                        let b = tree.nearest(p).map_or(p, |k| dvec(bone_pos[k as usize]));
+                        let n = DVec3::new(n[0] as f64, n[1] as f64, n[2] as f64);
+                        let inward = if n.dot(b - p) < 0.0 { -n } else { n };
+                        let q = p + inward * (d as f64 * p.distance(b));
+                        [q.x as f32, q.y as f32, q.z as f32, 0.0]
+                    })
+                    .collect();
+                rest.extend(placed);
+            }
+        }
         rest.extend_from_slice(&bone_pos);
 
         let surface_edges = unique_edges(&epidermis.triangles);
@@ -455,15 +493,17 @@ impl SpringNetwork {
         let bone_ring = one_rings(n_bone, &bone_edges);
 
         // eq. 4.1: nearest bone vertex to O + s·(q_i − O).
-        let s = params
-            .projection_scale
-            .unwrap_or(params.bone_scale / params.subcutis_scale) as f64;
+        let s = match params.subcutis_depth {
+            Some(_) => 1.0,
+            None => params
+                .projection_scale
+                .unwrap_or(params.bone_scale / params.subcutis_scale) as f64,
+        };
         if !(s.is_finite() && s > 0.0) {
             return Err(Error::InvalidInput(format!(
                 "projection_scale must be finite and > 0, got {s}"
             )));
         }
-        let tree = KdTree::new(bone_pos.iter().map(|&p| dvec(p)).collect());
         let nearest: Vec<u32> = (0..n)
             .into_par_iter()
             .map(|i| {

@@ -1,7 +1,8 @@
-//! Generated inputs for the tissue model: the demo's head phantom (skin
-//! over a skull with a separable jaw), its jaw-advance plan, example plans
-//! for `fran_cut`, and refinement of structured scan grids (the benchmark
-//! networks).
+//! Generated inputs for the tissue model: the demo's CT-like head volume
+//! (soft tissue over a skull whose mandible is fused to it at the joints)
+//! with its osteotomy plan, a mesh head phantom (skin over a skull with a
+//! separable jaw), example plans for `fran_cut` and `headsq`, and
+//! refinement of structured scan grids (the benchmark networks).
 //!
 //! Conventions of the phantom: millimetres, +y up, +z anterior (the face),
 //! +x the patient's left.
@@ -9,10 +10,19 @@
 use std::f32::consts::PI;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::plan::{Fragments, Plan};
 use crate::mesh::TriMesh;
+use crate::volume::{Volume, VolumeData};
 use crate::{Error, Result};
+
+/// The demo's plan on [`ct_head_phantom`]: a plane osteotomy through both
+/// rami frees the mandible (`[[cut]]` "jaw"), which advances 6 mm.
+pub const CT_DEMO_PLAN_TOML: &str = include_str!("plans/ct_phantom_jaw_advance.toml");
+/// Chin advance on the CT head `headsq/quarter.nhdr` (skin 500, bone 1150):
+/// a bounded cut frees the front of the mandible, which moves 5 mm forward.
+pub const HEADSQ_CHIN_ADVANCE_TOML: &str = include_str!("plans/headsq_chin_advance.toml");
 
 /// Jaw advance for the head phantom: the `jaw` fragment 6 mm forward in 6
 /// increments, each relaxed to convergence.
@@ -279,4 +289,125 @@ mod tests {
         assert!((b - a).cross(c - a).z > 0.0);
         assert!(refine_grid(&m, 4, 4, 2).is_err());
     }
+}
+
+/// CT numbers of [`ct_head_phantom`]: air, soft tissue and bone (the
+/// levels 500 and 1150 of the VTK CT head separate them as in `headsq`).
+pub const CT_AIR: f32 = 0.0;
+pub const CT_SOFT_TISSUE: f32 = 1000.0;
+pub const CT_BONE: f32 = 2000.0;
+
+/// Approximate signed distance to the ellipsoid `centre`, half-axes `a`
+/// (exact on the axes; negative inside).
+fn sd_ellipsoid(p: Vec3, centre: Vec3, a: Vec3) -> f32 {
+    ((p - centre) / a).length().mul_add(a.min_element(), -a.min_element())
+}
+
+/// Signed distance to the capsule (segment `a`–`b`, radius `r`).
+fn sd_capsule(p: Vec3, a: Vec3, b: Vec3, r: f32) -> f32 {
+    let (pa, ba) = (p - a, b - a);
+    let t = (pa.dot(ba) / ba.length_squared()).clamp(0.0, 1.0);
+    (pa - ba * t).length() - r
+}
+
+/// Polynomial smooth minimum of two signed distances (blend width `k`).
+fn smin(a: f32, b: f32, k: f32) -> f32 {
+    let h = (k - (a - b).abs()).max(0.0) / k;
+    a.min(b) - h * h * k * 0.25
+}
+
+/// Signed distance of the mandible: the front half of a torus (centre
+/// (0, −72, 8), radii 38 / 8 mm) and two rami (capsules of radius 7 mm)
+/// up to the skull base.
+fn sd_mandible(p: Vec3) -> f32 {
+    let q = p - Vec3::new(0.0, -72.0, 8.0);
+    let arch = if q.z >= 0.0 {
+        let ring = Vec3::new(q.x, 0.0, q.z).length() - 38.0;
+        (ring * ring + q.y * q.y).sqrt() - 8.0
+    } else {
+        f32::INFINITY
+    };
+    let ramus = |side: f32| {
+        sd_capsule(
+            p,
+            Vec3::new(38.0 * side, -72.0, 8.0),
+            Vec3::new(40.0 * side, -28.0, -6.0),
+            7.0,
+        )
+    };
+    arch.min(ramus(1.0)).min(ramus(-1.0))
+}
+
+/// Signed distance of the skin: a head ellipsoid (72 × 90 × 90 mm about
+/// (0, 20, −5)) blended with 12 mm of soft tissue around the mandible and
+/// with a neck (capsule of radius 48 mm down to y = −100), plus a nose.
+fn sd_skin(p: Vec3) -> f32 {
+    let head = sd_ellipsoid(p, Vec3::new(0.0, 20.0, -5.0), Vec3::new(72.0, 90.0, 90.0));
+    let jaw = sd_mandible(p) - 12.0;
+    let neck = sd_capsule(
+        p,
+        Vec3::new(0.0, -40.0, -12.0),
+        Vec3::new(0.0, -100.0, -12.0),
+        48.0,
+    );
+    let nose = sd_ellipsoid(p, Vec3::new(0.0, 2.0, 85.0), Vec3::new(11.0, 20.0, 15.0));
+    smin(smin(head, jaw, 16.0), neck, 20.0).min(nose)
+}
+
+/// Signed distance of the skull: a 6 mm cranial shell (outer ellipsoid
+/// 64 × 72 × 80 mm about (0, 28, −8), bottom at y = −44), the mandible
+/// (see [`sd_mandible`]), whose rami fuse with the skull base as the joints
+/// do at a bone threshold, and a cervical spine (capsule of radius 9 mm
+/// from the skull base down the neck), fused to the skull base too.
+fn sd_bone(p: Vec3) -> f32 {
+    let outer = sd_ellipsoid(p, Vec3::new(0.0, 28.0, -8.0), Vec3::new(64.0, 72.0, 80.0));
+    let cranium = (outer + 3.0).abs() - 3.0;
+    let spine = sd_capsule(
+        p,
+        Vec3::new(0.0, -36.0, -38.0),
+        Vec3::new(0.0, -130.0, -32.0),
+        9.0,
+    );
+    cranium.min(sd_mandible(p)).min(spine)
+}
+
+/// A CT-like head volume with `voxel` mm isotropic samples (1 ≤ voxel ≤
+/// 8): air [`CT_AIR`], soft tissue [`CT_SOFT_TISSUE`] inside the skin,
+/// [`CT_BONE`] inside the skull, each boundary a one-voxel linear ramp
+/// (partial-volume blur), so marching cubes at 500 / 1150 finds the skin
+/// and the bone like on `headsq`. Millimetres, +y up, +z anterior (the
+/// face), +x the patient's left; the volume spans the head with two
+/// samples of air around it, `i16` samples.
+pub fn ct_head_phantom(voxel: f32) -> Result<Volume> {
+    if !(voxel.is_finite() && (1.0..=8.0).contains(&voxel)) {
+        return Err(Error::InvalidInput(format!(
+            "CT phantom voxel size must be in [1, 8] mm, got {voxel}"
+        )));
+    }
+    let lo = Vec3::new(-75.0, -150.0, -97.0) - 2.0 * voxel;
+    let hi = Vec3::new(75.0, 112.0, 102.0) + 2.0 * voxel;
+    let dims = ((hi - lo) / voxel).ceil().as_uvec3() + 1;
+    let [nx, ny, nz] = dims.to_array().map(|d| d as usize);
+    let ramp = |sd: f32| (0.5 - sd / voxel).clamp(0.0, 1.0);
+    let mut data = vec![0i16; nx * ny * nz];
+    data.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slab)| {
+        for (k, v) in slab.iter_mut().enumerate() {
+            let p = lo + Vec3::new((k % nx) as f32, (k / nx) as f32, z as f32) * voxel;
+            let value = CT_AIR
+                + (CT_SOFT_TISSUE - CT_AIR) * ramp(sd_skin(p))
+                + (CT_BONE - CT_SOFT_TISSUE) * ramp(sd_bone(p));
+            *v = value.round() as i16;
+        }
+    });
+    Volume::new(
+        [nx, ny, nz],
+        [voxel as f64; 3],
+        lo.as_dvec3().to_array(),
+        VolumeData::I16(data),
+    )
+}
+
+/// The demo plan on [`ct_head_phantom`], parsed.
+pub fn ct_demo_plan() -> Result<Plan> {
+    Plan::from_toml_str(CT_DEMO_PLAN_TOML, "ct_phantom_jaw_advance.toml")
 }

@@ -19,7 +19,8 @@
 //! Selectors: `sphere = { center, radius }`, `box = { min, max }`,
 //! `half_space = { point, normal }` (keeps `(x − point)·normal ≥ 0`),
 //! `vertices = [ids]` (bone-layer vertex ids) and `fragment = "name"`
-//! (bone vertex ids supplied by the caller, e.g. from `cut`).
+//! (bone vertex ids of a fragment freed by a `[[cut]]` of the plan, see
+//! [`super::fragments`], or supplied by the caller).
 //! Unknown keys are errors. Selections are made on the bone layer as it
 //! stands when the step starts (after the earlier steps' moves).
 
@@ -29,6 +30,7 @@ use std::path::Path;
 use glam::{DQuat, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
+use super::fragments::BoneCut;
 use super::network::SpringNetwork;
 use crate::{Error, Position, Result};
 
@@ -220,6 +222,11 @@ pub struct Plan {
     /// Label for reports.
     #[serde(default)]
     pub name: Option<String>,
+    /// Scalpel cuts of the bone mesh that free named fragments, run
+    /// before the network is built (`[[cut]]` in TOML, `"cuts"` or `"cut"`
+    /// in JSON; see [`super::fragments`]).
+    #[serde(default, rename = "cut", alias = "cuts")]
+    pub cuts: Vec<BoneCut>,
     /// The steps (`[[step]]` in TOML, `"steps"` or `"step"` in JSON).
     #[serde(rename = "step", alias = "steps")]
     pub steps: Vec<Step>,
@@ -289,6 +296,7 @@ impl Plan {
         if self.steps.is_empty() {
             return Err(Error::InvalidInput("plan has no steps".into()));
         }
+        super::fragments::validate_cuts(&self.cuts)?;
         for (i, s) in self.steps.iter().enumerate() {
             let what = format!("plan step {} `{}`", i + 1, self.step_name(i));
             let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));

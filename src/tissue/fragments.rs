@@ -1,0 +1,321 @@
+//! Bone fragments cut free by a plan's scalpels (SPEC §5.3 "hand a piece
+//! to the tissue model as a bone fragment to move"; seed 004 §3).
+//!
+//! A plan may open with `[[cut]]` tables. Each names a fragment, a knife
+//! (plane, bounded rectangle or sphere, as `chisel cut` takes them), the
+//! side of the knife whose pieces form the fragment, and optionally a
+//! geometric selector the pieces' centroids must lie in:
+//!
+//! ```toml
+//! [[cut]]
+//! name = "jaw"                                  # select = { fragment = "jaw" }
+//! knife = { plane = { point = [0.0, -40.0, 0.0], normal = [0.0, -1.0, 0.0] } }
+//! side = "positive"                             # in front of the normal
+//! within = { box = { min = [-60.0, -90.0, -10.0], max = [60.0, -40.0, 70.0] } }
+//! ```
+//!
+//! Cuts run in order on the bone mesh before the network is built: every
+//! piece of the previous cut is cut again (pieces keep the fragments they
+//! belonged to), capped with the knife surface unless `cap = false`, so the
+//! moved fragment's cut face is bone surface too. The resulting bone mesh
+//! is the pieces one after another (vertices along a cut are duplicated,
+//! one copy per side), so a fragment moves without dragging its neighbour.
+
+use std::collections::BTreeMap;
+
+use glam::{DVec3, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::plan::{Fragments, Selector};
+use crate::cut::{CutOptions, CutStats, Knife, Side, cut_mesh};
+use crate::mesh::{ScalarField, TriMesh};
+use crate::{Error, Result};
+
+/// A knife of a plan cut (mesh units).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum KnifeSpec {
+    /// Infinite plane through `point`; positive side = where `normal` points.
+    Plane { point: [f32; 3], normal: [f32; 3] },
+    /// Bounded rectangle: centre, normal, in-plane axis `u`, half extents
+    /// along `u` and `v = normal × u`.
+    Rect {
+        center: [f32; 3],
+        normal: [f32; 3],
+        u: [f32; 3],
+        half_extents: [f32; 2],
+    },
+    /// Sphere; the negative side is the inside.
+    Sphere { center: [f32; 3], radius: f32 },
+}
+
+impl KnifeSpec {
+    /// The scalpel.
+    pub fn knife(&self) -> Knife {
+        let v = |a: &[f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+        match self {
+            KnifeSpec::Plane { point, normal } => Knife::Plane {
+                point: v(point),
+                normal: v(normal),
+            },
+            KnifeSpec::Rect {
+                center,
+                normal,
+                u,
+                half_extents,
+            } => Knife::Rect {
+                centre: v(center),
+                normal: v(normal),
+                u_axis: v(u),
+                half_extents: half_extents.map(f64::from),
+            },
+            KnifeSpec::Sphere { center, radius } => Knife::Sphere {
+                centre: v(center),
+                radius: *radius as f64,
+            },
+        }
+    }
+}
+
+/// Which side of the knife a fragment takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KeepSide {
+    /// In front of the plane / rectangle normal, outside the sphere.
+    Positive,
+    /// Behind the plane / rectangle, inside the sphere.
+    Negative,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// One `[[cut]]` of a plan: a knife and the fragment it frees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoneCut {
+    /// Fragment name (for `select = { fragment = "name" }`), unique in the plan.
+    pub name: String,
+    /// The scalpel.
+    pub knife: KnifeSpec,
+    /// The side whose pieces form the fragment.
+    pub side: KeepSide,
+    /// Only pieces whose area centroid lies in this sphere, box or half-space.
+    #[serde(default)]
+    pub within: Option<Selector>,
+    /// Close the pieces with the knife surface (default true).
+    #[serde(default = "yes")]
+    pub cap: bool,
+}
+
+impl BoneCut {
+    /// Checks the name, the knife's numbers and the `within` selector;
+    /// `what` names the cut in errors.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        if self.name.trim().is_empty() {
+            return Err(Error::InvalidInput(format!("{what}: `name` is empty")));
+        }
+        let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
+        let ok = match &self.knife {
+            KnifeSpec::Plane { point, normal } => {
+                finite(point) && finite(normal) && Vec3::from_array(*normal) != Vec3::ZERO
+            }
+            KnifeSpec::Rect {
+                center,
+                normal,
+                u,
+                half_extents,
+            } => {
+                finite(center)
+                    && finite(normal)
+                    && finite(u)
+                    && half_extents.iter().all(|h| h.is_finite() && *h > 0.0)
+                    && Vec3::from_array(*normal)
+                        .cross(Vec3::from_array(*u))
+                        .length()
+                        > 0.0
+            }
+            KnifeSpec::Sphere { center, radius } => {
+                finite(center) && radius.is_finite() && *radius > 0.0
+            }
+        };
+        if !ok {
+            return Err(Error::InvalidInput(format!(
+                "{what}: knife {:?} needs finite numbers, a non-zero normal (not parallel to u), \
+                 positive half extents / radius",
+                self.knife
+            )));
+        }
+        if let Some(w) = &self.within {
+            w.validate(&format!("{what} `within`"))?;
+            if w.contains(Vec3::ZERO).is_none() {
+                return Err(Error::InvalidInput(format!(
+                    "{what}: `within` takes a sphere, box or half_space, got {w:?}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One piece of the cut bone.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PieceInfo {
+    /// Its vertices in the bone mesh: `first_vertex..first_vertex + vertices`.
+    pub first_vertex: u32,
+    pub vertices: u32,
+    pub triangles: u32,
+    /// Area-weighted centroid (mesh units).
+    pub centroid: [f32; 3],
+    /// Fragments it belongs to (plan cut names).
+    pub fragments: Vec<String>,
+}
+
+/// The bone after a plan's cuts.
+#[derive(Debug, Clone)]
+pub struct CutBone {
+    /// The pieces one after another, with a per-vertex scalar `fragment`
+    /// (1 + index of the last plan cut whose fragment holds the vertex, 0 = none).
+    pub mesh: TriMesh,
+    /// Fragment name → bone vertex ids (ascending).
+    pub fragments: Fragments,
+    /// Per piece, in mesh order.
+    pub pieces: Vec<PieceInfo>,
+    /// Per cut, what the scalpel did (tree nodes and triangles tested, caps).
+    pub stats: Vec<CutStats>,
+}
+
+fn centroid(mesh: &TriMesh) -> DVec3 {
+    let (mut sum, mut area) = (DVec3::ZERO, 0.0);
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3());
+        let w = (b - a).cross(c - a).length();
+        sum += (a + b + c) * (w / 3.0);
+        area += w;
+    }
+    if area > 0.0 {
+        sum / area
+    } else {
+        mesh.positions.iter().map(|p| p.as_dvec3()).sum::<DVec3>()
+            / mesh.positions.len().max(1) as f64
+    }
+}
+
+/// Validates every cut and checks that names are unique.
+pub fn validate_cuts(cuts: &[BoneCut]) -> Result<()> {
+    for (i, c) in cuts.iter().enumerate() {
+        let what = format!("plan cut {} `{}`", i + 1, c.name);
+        c.validate(&what)?;
+        if cuts[..i].iter().any(|d| d.name == c.name) {
+            return Err(Error::InvalidInput(format!(
+                "{what}: the name is used by an earlier cut"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Runs `cuts` in order on `bone` (each cuts every piece of the previous
+/// one) and names the fragments. Errors: invalid or duplicate cut names, a
+/// cut whose fragment is empty (names the knife, side and `within`).
+pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
+    bone.validate()?;
+    validate_cuts(cuts)?;
+    let mut pieces: Vec<(TriMesh, Vec<usize>)> = vec![(bone.clone(), Vec::new())];
+    let mut stats = Vec::with_capacity(cuts.len());
+    for (ci, c) in cuts.iter().enumerate() {
+        let knife = c.knife.knife();
+        let opts = CutOptions { cap: c.cap };
+        let want = match c.side {
+            KeepSide::Positive => Side::Positive,
+            KeepSide::Negative => Side::Negative,
+        };
+        let mut next = Vec::with_capacity(pieces.len());
+        let mut total = CutStats::default();
+        let mut taken = 0usize;
+        for (mesh, member) in &pieces {
+            let r = cut_mesh(mesh, &knife, &opts)?;
+            add_stats(&mut total, &r.stats);
+            for (p, side) in r.pieces.into_iter().zip(r.sides) {
+                let mut m = member.clone();
+                let inside = c
+                    .within
+                    .as_ref()
+                    .is_none_or(|w| w.contains(centroid(&p).as_vec3()) == Some(true));
+                if side == want && inside {
+                    m.push(ci);
+                    taken += 1;
+                }
+                next.push((p, m));
+            }
+        }
+        if taken == 0 {
+            return Err(Error::InvalidInput(format!(
+                "plan cut {} `{}`: no bone piece lies on the {:?} side of {:?}{}",
+                ci + 1,
+                c.name,
+                c.side,
+                c.knife,
+                c.within
+                    .as_ref()
+                    .map(|w| format!(" with its centroid in {w:?}"))
+                    .unwrap_or_default()
+            )));
+        }
+        stats.push(total);
+        pieces = next;
+    }
+
+    let mut mesh = TriMesh::default();
+    let mut label = Vec::new();
+    let mut ids: BTreeMap<String, Vec<u32>> = BTreeMap::new();
+    let mut infos = Vec::with_capacity(pieces.len());
+    for (p, member) in &pieces {
+        let first = mesh.positions.len() as u32;
+        let n = p.positions.len() as u32;
+        mesh.positions.extend_from_slice(&p.positions);
+        mesh.triangles
+            .extend(p.triangles.iter().map(|t| t.map(|i| i + first)));
+        label.extend(std::iter::repeat_n(
+            member.last().map_or(0.0, |&c| (c + 1) as f32),
+            n as usize,
+        ));
+        for &c in member {
+            ids.entry(cuts[c].name.clone())
+                .or_default()
+                .extend(first..first + n);
+        }
+        infos.push(PieceInfo {
+            first_vertex: first,
+            vertices: n,
+            triangles: p.triangles.len() as u32,
+            centroid: centroid(p).as_vec3().to_array(),
+            fragments: member.iter().map(|&c| cuts[c].name.clone()).collect(),
+        });
+    }
+    mesh.scalars.push(ScalarField {
+        name: "fragment".into(),
+        values: label,
+    });
+    Ok(CutBone {
+        mesh,
+        fragments: ids,
+        pieces: infos,
+        stats,
+    })
+}
+
+fn add_stats(a: &mut CutStats, b: &CutStats) {
+    a.nodes_visited += b.nodes_visited;
+    a.nodes_total += b.nodes_total;
+    a.triangles_tested += b.triangles_tested;
+    a.triangles_total += b.triangles_total;
+    a.triangles_split += b.triangles_split;
+    a.triangles_partial += b.triangles_partial;
+    a.cut_vertices += b.cut_vertices;
+    a.loops_capped += b.loops_capped;
+    a.curves_open += b.curves_open;
+    a.locate_seconds += b.locate_seconds;
+    a.assemble_seconds += b.assemble_seconds;
+}

@@ -278,7 +278,34 @@ fn demo_runs_and_writes_its_outputs() {
     assert_eq!(report["relax_gpu"]["status"], "converged");
     assert_eq!(report["parity"]["same_status_and_iterations"], true);
     assert!(report["parity"]["max_epidermis_distance"].as_f64().unwrap() < 1e-3);
-    assert!(out_dir.join("before_after.png").is_file());
+    assert_eq!(report["marching_cubes_gpu_equals_cpu"], true);
+    assert_eq!(report["ct"]["skin_groups"], 1);
+    assert!(report["cut"]["fragments"]["jaw"].as_u64().unwrap() > 100);
+    for f in ["before_after.png", "bone_before_after.png", "head_ct.nrrd"] {
+        assert!(out_dir.join(f).is_file(), "{f}");
+    }
+    let bone = chisel::io::read_mesh(&out_dir.join("bone_moved.ply")).unwrap();
+    let moved = bone
+        .scalar("displacement")
+        .unwrap()
+        .values
+        .iter()
+        .filter(|&&d| (d - 6.0).abs() < 1e-3)
+        .count();
+    assert_eq!(
+        moved as u64,
+        report["cut"]["fragments"]["jaw"].as_u64().unwrap()
+    );
+    let ct = chisel::io::read_volume(&out_dir.join("head_ct.nrrd")).unwrap();
+    assert_eq!(
+        ct.dims.to_vec(),
+        report["phantom"]["dims"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_u64().unwrap() as usize)
+            .collect::<Vec<_>>()
+    );
     let mesh = chisel::io::read_mesh(&out_dir.join("relaxed_skin.ply")).unwrap();
     let d = mesh.scalar("displacement").expect("displacement field");
     let max = d.values.iter().copied().fold(0.0f32, f32::max);
@@ -393,6 +420,182 @@ fn relax_rejects_a_bad_plan_clearly() {
         ],
         "bad_plan.toml",
     );
+    assert!(!out.exists());
+}
+
+/// The CT → tissue pipeline on the real CT head: skin and bone by marching
+/// cubes, the lower mandible cut free by the plan's knife and advanced
+/// 5 mm, the tissue relaxed (CPU mirror; the kernels' parity is proven in
+/// `tests/parity`), previews in the CT's anatomical axes.
+#[test]
+fn relax_ct_headsq_chin_advance_end_to_end() {
+    let Some(_gpu) = common::gpu() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/src/tissue/plans/headsq_chin_advance.toml"
+    );
+    let ct = dir.join("headsq/quarter.nhdr");
+    let out = |name: &str| tmp.path().join(name);
+    let (skin, bone, preview, bone_preview) = (
+        out("skin.ply"),
+        out("bone.ply"),
+        out("skin.png"),
+        out("bone.png"),
+    );
+    let v = ok_json(&[
+        "relax",
+        "--ct",
+        path_str(&ct),
+        "--skin",
+        "500",
+        "--bone",
+        "1150",
+        "--plan",
+        plan,
+        "--solver",
+        "chebyshev",
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&skin),
+        "--bone-output",
+        path_str(&bone),
+        "--preview",
+        path_str(&preview),
+        "--bone-preview",
+        path_str(&bone_preview),
+        "--view-up",
+        "0,0,-1",
+        "--view-front",
+        "0,-1,0",
+        "--json",
+    ]);
+    assert_eq!(v["relax"]["status"], "converged");
+    assert_eq!(v["ct"]["figures"]["skin_groups"], 26);
+    assert_eq!(v["ct"]["figures"]["bone_groups"], 76);
+    assert_eq!(v["network"]["subcutis_depth"], 0.5);
+    let chin = v["cut"]["fragments"]["chin"].as_u64().unwrap();
+    assert!(chin > 1000, "{chin} chin vertices");
+    assert_eq!(v["cut"]["knives"][0]["curves_open"], 0);
+    // The fragment moved by 5 mm, nothing else of the bone.
+    let bone_mesh = chisel::io::read_mesh(&bone).unwrap();
+    let d = &bone_mesh.scalar("displacement").unwrap().values;
+    let moved = d.iter().filter(|&&x| (x - 5.0).abs() < 1e-3).count();
+    let still = d.iter().filter(|&&x| x < 1e-4).count();
+    assert_eq!(moved as u64, chin);
+    assert_eq!(moved + still, d.len());
+    // The skin over the chin follows; the skin far from it stays.
+    let skin_mesh = chisel::io::read_mesh(&skin).unwrap();
+    let s = &skin_mesh.scalar("displacement").unwrap().values;
+    let max = s.iter().copied().fold(0.0f32, f32::max);
+    assert!(max > 3.0 && max < 10.0, "max skin displacement {max} mm");
+    let forehead = skin_mesh
+        .positions
+        .iter()
+        .zip(s)
+        .filter(|(p, _)| p.z < 40.0)
+        .map(|(_, &d)| d)
+        .fold(0.0f32, f32::max);
+    assert!(forehead < 0.1, "the upper head moved {forehead} mm");
+    for png in [&preview, &bone_preview] {
+        assert_eq!(&std::fs::read(png).unwrap()[1..4], b"PNG");
+    }
+}
+
+#[test]
+fn relax_ct_arguments_are_checked() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o.ply");
+    let ct = dir.join("headsq/quarter.nhdr");
+    let phantom_plan = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/src/tissue/plans/ct_phantom_jaw_advance.toml"
+    );
+    let run = chisel(&[
+        "relax",
+        "--ct",
+        path_str(&ct),
+        "--skin",
+        "500",
+        "--bone",
+        "skull.ply",
+        "--plan",
+        phantom_plan,
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&out),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--bone is the bone iso-level"));
+    // A plan that cuts the bone needs one.
+    let run = chisel(&[
+        "relax",
+        path_str(&dir.join("fran_cut.vtk")),
+        "--plan",
+        phantom_plan,
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&out),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("needs a bone mesh"));
+    // Skin above bone.
+    let run = chisel(&[
+        "relax",
+        "--ct",
+        path_str(&ct),
+        "--skin",
+        "1150",
+        "--bone",
+        "500",
+        "--plan",
+        phantom_plan,
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&out),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("skin < bone"));
+    // Usage errors: --skin without --ct, a mesh and --ct together.
+    for args in [
+        vec![
+            "relax",
+            "m.ply",
+            "--skin",
+            "500",
+            "--plan",
+            phantom_plan,
+            "-o",
+            "o.ply",
+        ],
+        vec![
+            "relax",
+            "m.ply",
+            "--ct",
+            "v.nrrd",
+            "--skin",
+            "1",
+            "--bone",
+            "2",
+            "--plan",
+            phantom_plan,
+            "-o",
+            "o.ply",
+        ],
+    ] {
+        let run = chisel(&args);
+        assert_eq!(run.status.code(), Some(2), "{args:?}");
+    }
     assert!(!out.exists());
 }
 

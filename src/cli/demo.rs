@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(short, long, default_value = "chisel-demo")]
     out: PathBuf,
     /// Voxel size of the CT phantom, mm (1–8; smaller = finer surfaces, more nodes).
-    #[arg(long, default_value_t = 4.0)]
+    #[arg(long, default_value_t = 5.0)]
     voxel: f32,
     /// Solver for the GPU run.
     #[arg(long, default_value = "chebyshev")]
@@ -92,7 +92,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, SKIN_LEVEL, BONE_LEVEL)?;
     stage("marching_cubes_gpu", t);
     let t = Instant::now();
-    let mc_same = canonical_triangles(&skin_gpu) == canonical_triangles(&mc(SKIN_LEVEL, Backend::Cpu)?)
+    let mc_same = canonical_triangles(&skin_gpu)
+        == canonical_triangles(&mc(SKIN_LEVEL, Backend::Cpu)?)
         && canonical_triangles(&bone_gpu) == canonical_triangles(&mc(BONE_LEVEL, Backend::Cpu)?);
     stage("marching_cubes_cpu_check", t);
     bar.inc(1);
@@ -149,7 +150,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         (&before_mesh(&job.skin), &relaxed),
         views.clone(),
         facing,
-        format!("{title} — skin"),
+        format!("{title} - skin"),
         &out("before_after.png"),
     )?;
     write_preview(
@@ -157,7 +158,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         (&bone_before, &bone_after),
         views,
         facing,
-        format!("{title} — bone"),
+        format!("{title} - bone"),
         &out("bone_before_after.png"),
     )?;
     stage("write_outputs", t);
@@ -221,7 +222,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         max_gpu_cpu,
         args.out.display()
     ));
-    anyhow::ensure!(mc_same, "GPU and CPU marching cubes gave different triangles");
+    anyhow::ensure!(
+        mc_same,
+        "GPU and CPU marching cubes gave different triangles"
+    );
     anyhow::ensure!(
         same_status,
         "GPU and CPU mirror ended differently: {:?}/{} vs {:?}/{}",

@@ -68,7 +68,10 @@ impl ViewAxes {
             }
         };
         Ok(
-            match (v("view-up", &self.view_up)?, v("view-front", &self.view_front)?) {
+            match (
+                v("view-up", &self.view_up)?,
+                v("view-front", &self.view_front)?,
+            ) {
                 (Some(up), Some(front)) => {
                     anyhow::ensure!(
                         up.normalize().cross(front.normalize()).length() > 1e-3,

@@ -43,12 +43,12 @@ pub mod phantom;
 pub mod plan;
 pub mod relax;
 
+pub use ct::{CtLayers, layers_from_ct};
+pub use fragments::{BoneCut, CutBone, KnifeSpec, cut_bone};
 pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
     default_origin,
 };
-pub use ct::{CtLayers, layers_from_ct};
-pub use fragments::{BoneCut, CutBone, KnifeSpec, cut_bone};
 pub use plan::{Fragments, Iterations, Plan, ResolvedPlan, Rotation, Selector, Step};
 pub use relax::{
     IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,

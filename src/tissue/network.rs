@@ -465,10 +465,15 @@ impl SpringNetwork {
                 if bone.is_none() || !(d.is_finite() && d > 0.0 && d < 1.0) {
                     return Err(Error::InvalidInput(format!(
                         "subcutis_depth needs a bone mesh and a value in (0, 1), got {d}{}",
-                        if bone.is_none() { " without a bone mesh" } else { "" }
+                        if bone.is_none() {
+                            " without a bone mesh"
+                        } else {
+                            ""
+                        }
                     )));
                 }
-                let normals = crate::normals::vertex_normals(epidermis, crate::parity::Backend::Cpu)?;
+                let normals =
+                    crate::normals::vertex_normals(epidermis, crate::parity::Backend::Cpu)?;
                 let placed: Vec<[f32; 4]> = epidermis
                     .positions
                     .par_iter()

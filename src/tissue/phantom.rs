@@ -300,7 +300,9 @@ pub const CT_BONE: f32 = 2000.0;
 /// Approximate signed distance to the ellipsoid `centre`, half-axes `a`
 /// (exact on the axes; negative inside).
 fn sd_ellipsoid(p: Vec3, centre: Vec3, a: Vec3) -> f32 {
-    ((p - centre) / a).length().mul_add(a.min_element(), -a.min_element())
+    ((p - centre) / a)
+        .length()
+        .mul_add(a.min_element(), -a.min_element())
 }
 
 /// Signed distance to the capsule (segment `a`–`b`, radius `r`).
@@ -390,15 +392,17 @@ pub fn ct_head_phantom(voxel: f32) -> Result<Volume> {
     let [nx, ny, nz] = dims.to_array().map(|d| d as usize);
     let ramp = |sd: f32| (0.5 - sd / voxel).clamp(0.0, 1.0);
     let mut data = vec![0i16; nx * ny * nz];
-    data.par_chunks_mut(nx * ny).enumerate().for_each(|(z, slab)| {
-        for (k, v) in slab.iter_mut().enumerate() {
-            let p = lo + Vec3::new((k % nx) as f32, (k / nx) as f32, z as f32) * voxel;
-            let value = CT_AIR
-                + (CT_SOFT_TISSUE - CT_AIR) * ramp(sd_skin(p))
-                + (CT_BONE - CT_SOFT_TISSUE) * ramp(sd_bone(p));
-            *v = value.round() as i16;
-        }
-    });
+    data.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(z, slab)| {
+            for (k, v) in slab.iter_mut().enumerate() {
+                let p = lo + Vec3::new((k % nx) as f32, (k / nx) as f32, z as f32) * voxel;
+                let value = CT_AIR
+                    + (CT_SOFT_TISSUE - CT_AIR) * ramp(sd_skin(p))
+                    + (CT_BONE - CT_SOFT_TISSUE) * ramp(sd_bone(p));
+                *v = value.round() as i16;
+            }
+        });
     Volume::new(
         [nx, ny, nz],
         [voxel as f64; 3],

@@ -49,6 +49,11 @@ fn assert_clean_error(args: &[&str], names: &str) {
     assert!(!stderr.contains("panicked"), "panic: {stderr}");
 }
 
+/// A plan shipped in `src/tissue/plans/`.
+fn plan_file(name: &str) -> String {
+    format!("{}/src/tissue/plans/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
 fn path_str(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
@@ -345,10 +350,8 @@ fn relax_fran_chin_advance_agrees_between_backends() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let plan = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/src/tissue/plans/fran_chin_advance.toml"
-    );
+    let plan = plan_file("fran_chin_advance.toml");
+    let plan = plan.as_str();
     let fran = dir.join("fran_cut.vtk");
     let mut reports = Vec::new();
     for backend in ["gpu", "cpu"] {
@@ -434,10 +437,8 @@ fn relax_ct_headsq_chin_advance_end_to_end() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let plan = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/src/tissue/plans/headsq_chin_advance.toml"
-    );
+    let plan = plan_file("headsq_chin_advance.toml");
+    let plan = plan.as_str();
     let ct = dir.join("headsq/quarter.nhdr");
     let out = |name: &str| tmp.path().join(name);
     let (skin, bone, preview, bone_preview) = (
@@ -514,88 +515,34 @@ fn relax_ct_arguments_are_checked() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("o.ply");
     let ct = dir.join("headsq/quarter.nhdr");
-    let phantom_plan = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/src/tissue/plans/ct_phantom_jaw_advance.toml"
-    );
-    let run = chisel(&[
-        "relax",
-        "--ct",
-        path_str(&ct),
-        "--skin",
-        "500",
-        "--bone",
-        "skull.ply",
-        "--plan",
-        phantom_plan,
-        "--backend",
-        "cpu",
-        "-o",
-        path_str(&out),
-    ]);
-    assert_eq!(run.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("--bone is the bone iso-level"));
-    // A plan that cuts the bone needs one.
-    let run = chisel(&[
-        "relax",
-        path_str(&dir.join("fran_cut.vtk")),
-        "--plan",
-        phantom_plan,
-        "--backend",
-        "cpu",
-        "-o",
-        path_str(&out),
-    ]);
-    assert_eq!(run.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("needs a bone mesh"));
-    // Skin above bone.
-    let run = chisel(&[
-        "relax",
-        "--ct",
-        path_str(&ct),
-        "--skin",
-        "1150",
-        "--bone",
-        "500",
-        "--plan",
-        phantom_plan,
-        "--backend",
-        "cpu",
-        "-o",
-        path_str(&out),
-    ]);
-    assert_eq!(run.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("skin < bone"));
-    // Usage errors: --skin without --ct, a mesh and --ct together.
-    for args in [
-        vec![
-            "relax",
-            "m.ply",
-            "--skin",
-            "500",
-            "--plan",
-            phantom_plan,
-            "-o",
-            "o.ply",
-        ],
-        vec![
-            "relax",
-            "m.ply",
-            "--ct",
-            "v.nrrd",
-            "--skin",
-            "1",
-            "--bone",
-            "2",
-            "--plan",
-            phantom_plan,
-            "-o",
-            "o.ply",
-        ],
-    ] {
+    let fran = dir.join("fran_cut.vtk");
+    let plan = plan_file("ct_phantom_jaw_advance.toml");
+    // Runs `relax INPUT.. --plan P --backend cpu -o OUT` and checks the exit code and message.
+    let fails = |input: &[&str], code: i32, says: &str| {
+        let mut args = vec!["relax"];
+        args.extend_from_slice(input);
+        args.extend(["--plan", &plan, "--backend", "cpu", "-o", path_str(&out)]);
         let run = chisel(&args);
-        assert_eq!(run.status.code(), Some(2), "{args:?}");
-    }
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(code), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    };
+    let ct_args = |skin: &'static str, bone: &'static str| {
+        vec!["--ct", path_str(&ct), "--skin", skin, "--bone", bone]
+    };
+    fails(
+        &ct_args("500", "skull.ply"),
+        1,
+        "--bone is the bone iso-level",
+    );
+    fails(&ct_args("1150", "500"), 1, "skin < bone");
+    // A plan that cuts the bone needs one.
+    fails(&[path_str(&fran)], 1, "needs a bone mesh");
+    // Usage errors: --skin without --ct, a mesh and --ct together.
+    fails(&[path_str(&fran), "--skin", "500"], 2, "--ct");
+    let mut both = ct_args("500", "1150");
+    both.insert(0, path_str(&fran));
+    fails(&both, 2, "cannot be used with");
     assert!(!out.exists());
 }
 

@@ -9,8 +9,10 @@
 mod convert;
 mod cut;
 mod demo;
+mod hull;
 mod info;
 mod mc;
+mod phantom;
 mod relax;
 mod render;
 mod report;
@@ -108,6 +110,10 @@ enum Command {
     Cut(cut::Args),
     /// Relax the soft tissue over the bone after a surgery plan (spring network, GPU or CPU).
     Relax(relax::Args),
+    /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
+    Hull(hull::Args),
+    /// Write a test object volume: the seed's balls, cylinders, tori, dented ellipsoids; the CT head.
+    Phantom(phantom::Args),
     /// Render a mesh to a PNG preview (shaded, views, wireframe, scalar colour map).
     Render(render::Args),
     /// The main job on embedded generated data: phantom → GPU kernels → previews + report.
@@ -161,6 +167,8 @@ pub fn main() -> ExitCode {
         Command::Mc(a) => mc::run(&cli.global, a),
         Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
+        Command::Hull(a) => hull::run(&cli.global, a),
+        Command::Phantom(a) => phantom::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),
         Command::Demo(a) => demo::run(&cli.global, a),
     };

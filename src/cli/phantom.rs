@@ -1,0 +1,109 @@
+//! `chisel phantom KIND ... -o VOLUME`: the seed's test objects (seed 003
+//! Tables 4.1/4.2, 8.6/8.7, §8.1) and the demo's CT-like head as volumes
+//! (object voxels 1, background 0; the head in CT numbers).
+
+use std::path::PathBuf;
+
+use serde_json::json;
+
+use super::Global;
+use crate::phantom::voxel;
+
+/// The objects.
+#[derive(Debug, Clone, clap::Subcommand)]
+pub enum Kind {
+    /// Digital ball of combinatorial radius R (radius R/2 voxels), centre at a cell corner.
+    Ball {
+        #[arg(long)]
+        r: u32,
+    },
+    /// Axis-aligned cube of A³ voxels.
+    Cube {
+        #[arg(long)]
+        a: u32,
+    },
+    /// Cylinder of height H along z with a central cylindrical tunnel (diameters in voxels).
+    CylinderTunnel {
+        #[arg(long)]
+        outer: u32,
+        #[arg(long)]
+        inner: u32,
+        #[arg(long, default_value_t = 15)]
+        height: u32,
+    },
+    /// Torus about z (combinatorial major radius R, tube radius r).
+    Torus {
+        #[arg(long)]
+        major: u32,
+        #[arg(long)]
+        minor: u32,
+    },
+    /// Ellipsoid (semi-axes A, B, C voxels) with a spherical dent at the +z pole.
+    EllipsoidDent {
+        #[arg(long)]
+        a: u32,
+        #[arg(long)]
+        b: u32,
+        #[arg(long)]
+        c: u32,
+        #[arg(long)]
+        dent: u32,
+    },
+    /// The demo's CT-like head (air 0, soft tissue 1000, bone 2000; mm).
+    Head {
+        #[arg(long, default_value_t = 5.0)]
+        voxel: f32,
+    },
+}
+
+/// Arguments of `chisel phantom`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    kind: Kind,
+    /// Output volume (nrrd, nhdr, mha, mhd, nii, nii.gz), written atomically.
+    #[arg(short, long, global = true)]
+    output: Option<PathBuf>,
+    /// Print the report on stdout.
+    #[arg(long, global = true)]
+    json: bool,
+}
+
+pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    let Some(output) = &args.output else {
+        anyhow::bail!("give the output volume with -o FILE");
+    };
+    let volume = match args.kind {
+        Kind::Ball { r } => voxel::digital_ball(r)?,
+        Kind::Cube { a } => voxel::cube(a)?,
+        Kind::CylinderTunnel {
+            outer,
+            inner,
+            height,
+        } => voxel::cylinder_tunnel(outer, inner, height)?,
+        Kind::Torus { major, minor } => voxel::torus(major, minor)?,
+        Kind::EllipsoidDent { a, b, c, dent } => voxel::ellipsoid_dent(a, b, c, dent)?,
+        Kind::Head { voxel } => crate::tissue::phantom::ct_head_phantom(voxel)?,
+    };
+    crate::io::write_volume(output, &volume)?;
+    let stats = crate::volume::VolumeStats::of(&volume);
+    let value = json!({
+        "command": "phantom",
+        "kind": format!("{:?}", args.kind),
+        "dims": volume.dims,
+        "spacing": volume.spacing,
+        "origin": volume.origin,
+        "stats": stats,
+        "output": output,
+    });
+    global.note(format!(
+        "{:?}: {:?} samples; wrote {}",
+        args.kind,
+        volume.dims,
+        output.display()
+    ));
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&value)?);
+    }
+    Ok(())
+}

@@ -86,42 +86,40 @@ fn demo_relaxation_on_the_gpu_matches_the_cpu() {
         .unwrap_or_else(|m| panic!("{m}"));
 }
 
-/// ~10⁵ nodes: fran_cut's grid refined 4× (102,483 nodes), on the CPU
-/// mirror (the GPU case of this size and larger is in `benches/relax.rs`).
+/// Max distance between the equilibria of the explicit scheme (a fixed
+/// `explicit_iterations`, far past its settling time) and of Chebyshev (run
+/// to its own stop), the largest displacement, and both iteration counts,
+/// for one chin increment of 4 mm / `div` on fran_cut's grid refined by
+/// `factor`.
 ///
-/// A 0.25 mm chin increment. The explicit scheme runs a fixed 16,000
-/// iterations: at this size its softest (overdamped sliding) modes relax
-/// at ~3·10⁻⁴ per iteration, so its |v| < ε criterion fires long before the
-/// positions settle (max |v| ≈ λ e / γ is tiny for tiny λ). Chebyshev runs
-/// to its own stop (ε = 5e-8, at the f32 floor of its pseudo-velocity).
-///
-/// Known limit, measured: the static problem is not unique here. A few
-/// subcutis nodes next to the moved bone have two stable states (adjacent
-/// nodes pass each other: measured 5 nodes differ by > 0.1 mm, max
-/// 0.29 mm); the explicit dynamics and the momentum iteration land in
-/// different ones, Chebyshev's with the lower energy. A single 1 mm
-/// increment buckles the skin below the chin the same way (≈ 480 nodes,
-/// 1.28 mm). That is non-uniqueness, not precision (both residuals at the
-/// f32 floor). So the test asserts: all but 1 % of the nodes agree within
-/// 1 % of the largest displacement, Chebyshev's equilibrium has no higher
-/// spring energy than the explicit one, and Chebyshev needs ≥ 4× fewer
-/// iterations. Takes ~1.5 min at the test profile, hence ignored.
-#[test]
-#[ignore = "~1.5 min on 2 busy cores at the test profile; run with --ignored"]
-fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
-    let Some(face) = common::real_mesh("fran_cut.vtk") else {
-        return;
-    };
-    let fine = phantom::refine_grid(&face, FRAN_GRID.0, FRAN_GRID.1, 4).unwrap();
+/// Why the increment shrinks with the spacing: the chin selection is an
+/// osteotomy, so its border is a step in the bone motion, and the muscle
+/// links (c = 3) drag the soft subcutis (c = 0.3) with their bone node. A
+/// step comparable to the subcutis spacing compresses the springs across
+/// the border by tens of percent, and a compressed spring with almost no
+/// transverse support (the dermis and muscle links are long and nearly
+/// parallel, and springs carry no bending) buckles: the static problem
+/// then has several stable states and two solvers may settle in different
+/// ones. Measured on the ×4 grid (0.67 mm row spacing) with a 0.25 mm
+/// step: the subcutis springs at the border were compressed by 23 % and
+/// rotated up to 85° between the two equilibria (max distance 0.29 mm =
+/// 63 % of the largest displacement, 5 nodes). The seed's own plans move
+/// bone in increments well below the tissue spacing (fran_cut: 0.5 mm
+/// steps on a 2.7 mm grid, where both solvers agree to 0.09 %); keeping
+/// that ratio (step ≈ 0.1–0.2 of the spacing) keeps each increment in one
+/// basin, and the equilibrium is unique again.
+fn refined_fran_chin(factor: usize, div: f32, explicit_iterations: u32) -> Option<Comparison> {
+    let face = common::real_mesh("fran_cut.vtk")?;
+    let fine = phantom::refine_grid(&face, FRAN_GRID.0, FRAN_GRID.1, factor).unwrap();
     let net = SpringNetwork::build(&fine, None, &NetworkParams::default()).unwrap();
-    assert!(net.n_nodes() > 100_000);
     let plan = |iterations| {
         let mut plan = Plan::from_toml_str(FRAN_CHIN_ADVANCE_TOML, "chin").unwrap();
-        plan.steps[0].translate = plan.steps[0].translate.map(|c| c / 16.0);
+        plan.steps[0].translate = plan.steps[0].translate.map(|c| c / div);
         plan.steps[0].increments = 1;
         plan.steps[0].iterations = iterations;
         plan.resolve(&net, &Fragments::new()).unwrap()
     };
+    // ε at the f32 floor of the pseudo-velocity of 0.1 m coordinates.
     let opts = |solver| RelaxOptions {
         solver,
         epsilon: Some(5e-8),
@@ -130,7 +128,7 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
     };
     let a = relax(
         &net,
-        &plan(Iterations::Fixed(16_000)),
+        &plan(Iterations::Fixed(explicit_iterations)),
         &opts(Solver::Explicit),
         Backend::Cpu,
     )
@@ -147,35 +145,67 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
         "{:?}",
         b.status
     );
-    let dist: Vec<f32> = (0..net.n_free)
+    let max_dist = (0..net.n_free)
         .map(|i| {
             Vec3::from_slice(&a.positions[i][..3]).distance(Vec3::from_slice(&b.positions[i][..3]))
         })
-        .collect();
-    let max_dist = dist.iter().copied().fold(0.0, f32::max);
-    let disp = a.max_displacement;
-    let off = dist.iter().filter(|&&d| d > 1e-2 * disp).count();
-    let energy = |r: &chisel::tissue::RelaxReport| -> f64 {
-        let x = |i: u32| Vec3::from_slice(&r.positions[i as usize][..3]).as_dvec3();
-        net.springs
-            .iter()
-            .map(|s| {
-                let m = &net.materials[s.material as usize];
-                let l = s.rest as f64;
-                let e = x(s.a).distance(x(s.b)) - l;
-                let knee = (e - m.knee as f64 * l).max(0.0);
-                0.5 * m.c1 as f64 * e * e + 0.5 * (m.c2 - m.c1) as f64 * knee * knee
-            })
-            .sum()
+        .fold(0.0, f32::max);
+    let c = Comparison {
+        nodes: net.n_nodes(),
+        max_dist,
+        max_disp: a.max_displacement,
+        explicit: a.iterations,
+        chebyshev: b.iterations,
     };
-    let (e_a, e_b) = (energy(&a), energy(&b));
-    eprintln!(
-        "1e5 nodes: max dist {max_dist:e}, {off} nodes off by > 1 % of the max displacement {disp:e}; \
-         energy explicit {e_a:e}, chebyshev {e_b:e}; explicit {} it, chebyshev {} it ({:?})",
-        a.iterations, b.iterations, b.status
-    );
-    assert!(disp > 1e-4);
-    assert!(off * 100 < net.n_free, "{off} of {} nodes", net.n_free);
-    assert!(e_b <= e_a * (1.0 + 1e-6), "{e_b} vs {e_a}");
-    assert!(b.iterations * 4 < a.iterations);
+    eprintln!("fran_cut ×{factor}, 4 mm / {div}: {c:?} ({:?})", b.status);
+    Some(c)
+}
+
+#[derive(Debug)]
+struct Comparison {
+    nodes: usize,
+    max_dist: f32,
+    max_disp: f32,
+    explicit: u64,
+    chebyshev: u64,
+}
+
+/// ~2.6·10⁴ nodes (fran_cut ×2, 1.35 mm rows), one 0.25 mm increment
+/// (step/spacing ≈ 0.19, as fran_cut's own plan): the CI-time version of
+/// the 10⁵-node case below. Measured: max distance 3.1·10⁻⁸ m = 0.008 % of
+/// the largest displacement (0.37 mm; the f32 floor of 0.1 m
+/// coordinates), Chebyshev 1,075 iterations vs 6,000 explicit; ~20 s of
+/// CPU at the test profile.
+#[test]
+fn chebyshev_reaches_the_explicit_equilibrium_on_a_refined_fran_cut() {
+    let Some(c) = refined_fran_chin(2, 16.0, 6_000) else {
+        return;
+    };
+    assert!(c.nodes > 25_000);
+    assert!(c.max_disp > 1e-4, "{c:?}");
+    assert!(c.max_dist < 1e-3 * c.max_disp, "{c:?}");
+    assert!(c.chebyshev * 4 < c.explicit, "{c:?}");
+}
+
+/// ~10⁵ nodes: fran_cut's grid refined 4× (102,483 nodes, 0.67 mm rows),
+/// one 4 mm / 64 = 62.5 µm increment, on the CPU mirror (the GPU case of
+/// this size and larger is in `benches/relax.rs`). The explicit scheme
+/// runs a fixed 16,000 iterations: at this size its softest (overdamped
+/// sliding) modes relax at ~3·10⁻⁴ per iteration, so its |v| < ε criterion
+/// fires long before the positions settle. Chebyshev runs to its own stop.
+/// Measured: max distance 2.2·10⁻⁷ m = 0.21 % of the largest displacement
+/// (0.10 mm; all other nodes within 3.4·10⁻⁸ m, the f32 floor), Chebyshev
+/// 1,350 iterations vs 16,000 explicit (11.9×). With a 0.25 mm increment
+/// instead (step/spacing 0.37) the solvers settled in different buckled
+/// states, 63 % apart — see [`refined_fran_chin`].
+#[test]
+#[ignore = "16,000 explicit iterations on 10⁵ nodes: minutes on 2 busy cores; run with --ignored"]
+fn chebyshev_reaches_the_explicit_equilibrium_on_1e5_nodes() {
+    let Some(c) = refined_fran_chin(4, 64.0, 16_000) else {
+        return;
+    };
+    assert!(c.nodes > 100_000);
+    assert!(c.max_disp > 2e-5, "{c:?}");
+    assert!(c.max_dist < 1e-2 * c.max_disp, "{c:?}");
+    assert!(c.chebyshev * 4 < c.explicit, "{c:?}");
 }

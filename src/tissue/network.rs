@@ -799,10 +799,13 @@ impl SpringNetwork {
     /// The bytes one iteration of the step kernels must move at least:
     /// per free node the row offset (4), own rest position, displacement
     /// and velocity read (48), displacement and velocity written (32); per
-    /// CSR entry 8 bytes. Neighbour rest positions and displacements are
-    /// assumed cached (compulsory traffic only).
+    /// CSR entry 8 bytes; the fixed nodes' rest positions and displacements
+    /// (32) read once. Other neighbour reads are assumed cached (compulsory
+    /// traffic only).
     pub fn bytes_per_iteration(&self) -> u64 {
-        self.n_free as u64 * (4 + 48 + 32) + self.csr.entries.len() as u64 * 8
+        self.n_free as u64 * (4 + 48 + 32)
+            + self.n_bone() as u64 * 32
+            + self.csr.entries.len() as u64 * 8
     }
 
     /// Spectral bounds of D⁻¹K at rest, computed once (Lanczos, see

@@ -138,7 +138,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     let t = Instant::now();
     let volume = crate::io::read_volume(&args.volume)?;
-    let object = DigitalObject::from_volume(&volume, selection, component)?;
+    let object = DigitalObject::from_volume(&volume, selection, component)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     stage("object", t);
     let kind = match (args.vertices, args.corners) {
         (VerticesArg::Corners, _) => CandidateKind::ConvexCorners,

@@ -94,7 +94,7 @@ fn rows(v: &Value) -> &Vec<Value> {
 }
 
 /// The row of the structure with `voxels` voxels (exactly one).
-fn row_of<'a>(v: &'a Value, voxels: u64) -> &'a Value {
+fn row_of(v: &Value, voxels: u64) -> &Value {
     let found: Vec<&Value> = rows(v)
         .iter()
         .filter(|r| r["object"]["voxels"] == voxels)

@@ -35,6 +35,17 @@
 //! hull (inside + on; 1 exactly when S has no ZKH) and `volume` = object
 //! voxels / Euclidean hull volume in voxels (above 1 for small objects:
 //! the hull passes through the outer voxel centres).
+//!
+//! **Report.** The selection, backend, adapter and GPU arithmetic, hull
+//! options; counts of structures, scanned, degenerate and skipped ones;
+//! ZKH totals by class; `rows` (one per scanned structure: id, label,
+//! 6-components, object voxels / facets / box, candidates, hull faces /
+//! vertices / edges / integers (eq. 8.2 and compact) / volume / area,
+//! scan box and inside / on / outside counts, convexity, ZKHs by class
+//! with count and voxels); `timings_s` per stage (read, label, adapter,
+//! then object, candidates, hull, scan, zkh summed over structures, and
+//! total). Reports of the two backends differ only in `backend`,
+//! `adapter`, `arithmetic` and `timings_s`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -169,10 +180,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         }
     );
     let label_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
     let gpu = match args.backend {
         BackendArg::Gpu => Some(global.gpu()?),
         BackendArg::Cpu => None,
     };
+    let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let frame = Frame {
         spacing: volume.spacing,
@@ -222,6 +235,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "timings_s": {
             "read": read_s,
             "label": label_s,
+            "adapter": adapter_s,
             "object": times.object,
             "candidates": times.candidates,
             "hull": times.hull,

@@ -92,13 +92,10 @@ impl SelectArgs {
     }
 }
 
-/// Arguments of `chisel hull`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    /// Volume (any format `chisel stats` reads).
-    volume: PathBuf,
-    #[command(flatten)]
-    select: SelectArgs,
+/// How the hull is built: candidates, vertex cells, coplanar policy and
+/// insertion order (shared by `hull` and `scan`).
+#[derive(Debug, Clone, clap::Args)]
+pub(super) struct HullArgs {
     /// Candidates for vertices at voxel centres.
     #[arg(long, value_enum, default_value = "local26")]
     corners: CornersArg,
@@ -111,6 +108,56 @@ pub struct Args {
     /// Order in which candidates are inserted.
     #[arg(long, value_enum, default_value = "furthest")]
     order: OrderArg,
+}
+
+impl HullArgs {
+    /// The candidate kind (§4.1.2–4.1.3) these options ask for.
+    pub(super) fn kind(&self) -> CandidateKind {
+        match (self.vertices, self.corners) {
+            (VerticesArg::Corners, _) => CandidateKind::ConvexCorners,
+            (VerticesArg::Voxels, CornersArg::Local6) => CandidateKind::Local6,
+            (VerticesArg::Voxels, CornersArg::Local18) => CandidateKind::Local18,
+            (VerticesArg::Voxels, CornersArg::Local26) => CandidateKind::Local26,
+            (VerticesArg::Voxels, CornersArg::Convex) => CandidateKind::ConvexVoxels,
+        }
+    }
+
+    /// The hull options (§4.1.6, §4.1.8) these options ask for.
+    pub(super) fn options(&self) -> HullOptions {
+        HullOptions {
+            coplanar: match self.coplanar {
+                CoplanarArg::Merge => CoplanarPolicy::Merge,
+                CoplanarArg::Visible => CoplanarPolicy::Visible,
+                CoplanarArg::Invisible => CoplanarPolicy::Invisible,
+            },
+            order: match self.order {
+                OrderArg::Furthest => Order::Furthest,
+                OrderArg::Extreme => Order::ExtremeFirst,
+                OrderArg::Lexicographic => Order::Lexicographic,
+            },
+        }
+    }
+}
+
+/// The report's `object` entry: voxels, boundary facets, inclusive voxel
+/// bounding box (source indices).
+pub(super) fn object_json(object: &DigitalObject) -> serde_json::Value {
+    json!({
+        "voxels": object.n_voxels(),
+        "boundary_facets": object.n_boundary_facets(),
+        "voxel_bbox": object.voxel_bbox(),
+    })
+}
+
+/// Arguments of `chisel hull`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Volume (any format `chisel stats` reads).
+    volume: PathBuf,
+    #[command(flatten)]
+    select: SelectArgs,
+    #[command(flatten)]
+    hull: HullArgs,
     /// Hull as a triangle mesh (fan-triangulated faces, world units), written atomically.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -141,25 +188,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let object = DigitalObject::from_volume(&volume, selection, component)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     stage("object", t);
-    let kind = match (args.vertices, args.corners) {
-        (VerticesArg::Corners, _) => CandidateKind::ConvexCorners,
-        (VerticesArg::Voxels, CornersArg::Local6) => CandidateKind::Local6,
-        (VerticesArg::Voxels, CornersArg::Local18) => CandidateKind::Local18,
-        (VerticesArg::Voxels, CornersArg::Local26) => CandidateKind::Local26,
-        (VerticesArg::Voxels, CornersArg::Convex) => CandidateKind::ConvexVoxels,
-    };
-    let options = HullOptions {
-        coplanar: match args.coplanar {
-            CoplanarArg::Merge => CoplanarPolicy::Merge,
-            CoplanarArg::Visible => CoplanarPolicy::Visible,
-            CoplanarArg::Invisible => CoplanarPolicy::Invisible,
-        },
-        order: match args.order {
-            OrderArg::Furthest => Order::Furthest,
-            OrderArg::Extreme => Order::ExtremeFirst,
-            OrderArg::Lexicographic => Order::Lexicographic,
-        },
-    };
+    let kind = args.hull.kind();
+    let options = args.hull.options();
     let t = Instant::now();
     let candidates = object.candidates(kind);
     stage("candidates", t);
@@ -199,11 +229,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "command": "hull",
         "volume": args.volume,
         "dims": volume.dims,
-        "object": {
-            "voxels": object.n_voxels(),
-            "boundary_facets": object.n_boundary_facets(),
-            "voxel_bbox": object.voxel_bbox(),
-        },
+        "object": object_json(&object),
         "candidates": { "kind": format!("{kind:?}"), "count": candidates.len() },
         "hull": hull.summary(&frame),
         "zkh": zkh,

@@ -16,6 +16,7 @@ mod phantom;
 mod relax;
 mod render;
 mod report;
+mod scan;
 mod stats;
 
 use std::process::ExitCode;
@@ -112,6 +113,8 @@ enum Command {
     Relax(relax::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
+    /// Large-volume hull scan: hull, inside-hull counts and ZKH classes of every component or label.
+    Scan(scan::Args),
     /// Write a test object volume: the seed's balls, cylinders, tori, dented ellipsoids; the CT head.
     Phantom(phantom::Args),
     /// Render a mesh to a PNG preview (shaded, views, wireframe, scalar colour map).
@@ -168,6 +171,7 @@ pub fn main() -> ExitCode {
         Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
+        Command::Scan(a) => scan::run(&cli.global, a),
         Command::Phantom(a) => phantom::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),
         Command::Demo(a) => demo::run(&cli.global, a),

@@ -1,0 +1,516 @@
+//! `chisel scan VOLUME (--threshold T | --labels)`: the large-volume hull
+//! scan (SPEC §4.3, seed 003 §4.1–4.2). Every structure of the volume gets
+//! one report row: its exact convex hull (§4.1, cell list and eq. 8.2
+//! storage), the inside / on / outside counts of the hull's voxel bounding
+//! box (the per-row interval scan of [`crate::hscan`], `hull_rows` on the
+//! GPU or its CPU mirror, bit-exact either way) and its ZKHs summarised by
+//! class (Def. CO/CA/TU).
+//!
+//! **Structures.** With `--threshold T`: every 6-connected component of the
+//! samples `≥ T`, numbered in file order as `chisel hull --component N`
+//! numbers them. With `--labels`: every distinct non-zero sample value (NaN
+//! samples count as background); the object is *all* voxels of that label,
+//! which may form several 6-connected components (counted in the row) —
+//! one hull per tissue, so background and other tissues enclosed by it
+//! show up as its ZKHs; `--threshold T` plus `chisel hull --label L
+//! --component N` gives the per-component view. Structures with fewer
+//! than `--min-voxels` voxels are skipped and counted.
+//!
+//! **Degenerate structures.** Collinear voxel centres (a single voxel, a
+//! straight line of voxels) have no polygon and no polyhedron: their row
+//! says `"degenerate": "collinear"` and has no hull, scan or ZKHs. A flat
+//! structure gets its polygon hull (two opposite faces plus edge
+//! half-spaces) and its scan, but no ZKHs (a flat hull has no inside).
+//!
+//! **ZKHs.** [`crate::hscan::zkh::analyse`], which classifies from the
+//! scan's [`Classification`] (so the GPU scan feeds it directly) and finds
+//! incident faces only at corners outside the open row intervals. Faces
+//! visible from or coplanar with a 0-cell of the ZKH are incident (§4.2.3).
+//! The other implementation, [`crate::polyhedron::background_components`]
+//! (used by `chisel hull`), rescans every voxel against every face on the
+//! CPU and builds each ZKH as a [`DigitalObject`] for the modification
+//! steps, which a scan does not need.
+//!
+//! **Convexity.** Per row, `digital` = object voxels / voxels of the closed
+//! hull (inside + on; 1 exactly when S has no ZKH) and `volume` = object
+//! voxels / Euclidean hull volume in voxels (above 1 for small objects:
+//! the hull passes through the outer voxel centres).
+//!
+//! **Report.** The selection, backend, adapter and GPU arithmetic, hull
+//! options; counts of structures, scanned, degenerate and skipped ones;
+//! ZKH totals by class; `rows` (one per scanned structure: id, label,
+//! 6-components, object voxels / facets / box, candidates, hull faces /
+//! vertices / edges / integers (eq. 8.2 and compact) / volume / area,
+//! scan box and inside / on / outside counts, convexity, ZKHs by class
+//! with count and voxels); `timings_s` per stage (read, label, adapter,
+//! then object, candidates, hull, scan, zkh summed over structures, and
+//! total). Reports of the two backends differ only in `backend`,
+//! `adapter`, `arithmetic` and `timings_s`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde_json::{Value, json};
+
+use super::hull::{HullArgs, object_json};
+use super::{BackendArg, Global};
+use crate::hscan::zkh::{ZkhClass, analyse};
+use crate::hscan::{self, Classification, VoxelBox};
+use crate::hull::ConvexHull;
+use crate::parity::Backend;
+use crate::volume::Volume;
+use crate::volume::analysis::label_6_connected;
+use crate::voxel::{DigitalObject, Frame};
+
+/// Most distinct non-zero values `--labels` accepts.
+const MAX_SCAN_LABELS: usize = 65_536;
+
+/// Arguments of `chisel scan`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Volume (any format `chisel stats` reads).
+    volume: PathBuf,
+    /// Structures = 6-connected components of the samples ≥ T.
+    #[arg(long, conflicts_with = "labels", required_unless_present = "labels")]
+    threshold: Option<f64>,
+    /// Structures = the non-zero label values (all voxels of each label).
+    #[arg(long)]
+    labels: bool,
+    /// Skip (and count) structures with fewer voxels.
+    #[arg(long, default_value_t = 1)]
+    min_voxels: u64,
+    /// Where the inside-hull scan runs (`hull_rows` kernel or its CPU mirror).
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: BackendArg,
+    #[command(flatten)]
+    hull: HullArgs,
+    /// JSON report.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Print the report on stdout as JSON (else as text).
+    #[arg(long)]
+    json: bool,
+}
+
+/// One structure: its id in the per-voxel id map, the label value it
+/// stands for (`--labels`), its voxels and inclusive voxel bounding box.
+#[derive(Debug, Clone)]
+struct Structure {
+    id: u32,
+    label: Option<f64>,
+    voxels: u64,
+    lo: [usize; 3],
+    hi: [usize; 3],
+}
+
+/// Seconds per stage, summed over structures.
+#[derive(Debug, Default)]
+struct StageTimes {
+    object: f64,
+    candidates: f64,
+    hull: f64,
+    scan: f64,
+    zkh: f64,
+}
+
+/// Per-class ZKH totals of one structure or of the whole scan.
+#[derive(Debug, Default, Clone, Copy)]
+struct ZkhTotals {
+    /// `[cavity, concavity, tunnel, branched tunnel]` counts.
+    count: [u64; 4],
+    /// Their voxels.
+    voxels: [u64; 4],
+    largest: u64,
+}
+
+impl ZkhTotals {
+    fn add(&mut self, class: ZkhClass, size: u64) {
+        let k = match class {
+            ZkhClass::Cavity => 0,
+            ZkhClass::Concavity => 1,
+            ZkhClass::UnbranchedTunnel => 2,
+            ZkhClass::BranchedTunnel => 3,
+        };
+        self.count[k] += 1;
+        self.voxels[k] += size;
+        self.largest = self.largest.max(size);
+    }
+
+    fn merge(&mut self, o: &ZkhTotals) {
+        for k in 0..4 {
+            self.count[k] += o.count[k];
+            self.voxels[k] += o.voxels[k];
+        }
+        self.largest = self.largest.max(o.largest);
+    }
+
+    fn json(&self) -> Value {
+        let class = |k: usize| json!({ "count": self.count[k], "voxels": self.voxels[k] });
+        json!({
+            "count": self.count.iter().sum::<u64>(),
+            "voxels": self.voxels.iter().sum::<u64>(),
+            "largest": self.largest,
+            "cavities": class(0),
+            "concavities": class(1),
+            "tunnels": class(2),
+            "branched_tunnels": class(3),
+        })
+    }
+}
+
+pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    let name = args.volume.display();
+    let t_total = Instant::now();
+    let t = Instant::now();
+    let volume = crate::io::read_volume(&args.volume)?;
+    let read_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (ids, structures) = match args.threshold {
+        Some(threshold) => {
+            components(&volume, threshold).map_err(|e| anyhow::anyhow!("{name}: {e}"))?
+        }
+        None => labels(&volume).map_err(|e| anyhow::anyhow!("{name}: {e}"))?,
+    };
+    anyhow::ensure!(
+        !structures.is_empty(),
+        "{name}: {}",
+        match args.threshold {
+            Some(t) => format!("no sample ≥ {t}: nothing to scan"),
+            None => "no non-zero label: nothing to scan".to_string(),
+        }
+    );
+    let label_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let gpu = match args.backend {
+        BackendArg::Gpu => Some(global.gpu()?),
+        BackendArg::Cpu => None,
+    };
+    let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
+    let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let frame = Frame {
+        spacing: volume.spacing,
+        origin: volume.origin,
+    };
+    let (kind, options) = (args.hull.kind(), args.hull.options());
+    let (kept, skipped): (Vec<&Structure>, Vec<&Structure>) =
+        structures.iter().partition(|s| s.voxels >= args.min_voxels);
+    let mut times = StageTimes::default();
+    let mut totals = ZkhTotals::default();
+    let mut n_degenerate = 0u64;
+    let mut rows = Vec::with_capacity(kept.len());
+    let bar = global.progress(kept.len() as u64, "structures");
+    for s in kept {
+        let row = scan_structure(s, &ids, volume.dims, frame, &args.hull, backend, &mut times)
+            .map_err(|e| anyhow::anyhow!("{name}: structure {}: {e}", s.id))?;
+        totals.merge(&row.zkh);
+        n_degenerate += u64::from(row.degenerate);
+        rows.push(row.value);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let value = json!({
+        "command": "scan",
+        "volume": args.volume,
+        "dims": volume.dims,
+        "spacing": volume.spacing,
+        "selection": match args.threshold {
+            Some(t) => json!({ "threshold": t }),
+            None => json!({ "labels": true }),
+        },
+        "min_voxels": args.min_voxels,
+        "backend": backend.name(),
+        "adapter": gpu.as_ref().map(|g| g.describe()),
+        "arithmetic": gpu.as_ref().map(|g| format!("{:?}", hscan::gpu::Arithmetic::of(g))),
+        "candidates": format!("{kind:?}"),
+        "hull_options": options,
+        "structures": structures.len(),
+        "scanned": rows.len(),
+        "degenerate": n_degenerate,
+        "skipped": {
+            "count": skipped.len(),
+            "voxels": skipped.iter().map(|s| s.voxels).sum::<u64>(),
+        },
+        "zkh": totals.json(),
+        "rows": rows,
+        "timings_s": {
+            "read": read_s,
+            "label": label_s,
+            "adapter": adapter_s,
+            "object": times.object,
+            "candidates": times.candidates,
+            "hull": times.hull,
+            "scan": times.scan,
+            "zkh": times.zkh,
+            "total": t_total.elapsed().as_secs_f64(),
+        },
+    });
+    global.note(format!(
+        "{} structures ({} scanned, {} skipped below {} voxels, {} degenerate); {} ZKHs \
+         ({} cavities, {} concavities, {} tunnels, {} branched) in {:.3} s on {}",
+        structures.len(),
+        rows.len(),
+        skipped.len(),
+        args.min_voxels,
+        n_degenerate,
+        totals.count.iter().sum::<u64>(),
+        totals.count[0],
+        totals.count[1],
+        totals.count[2],
+        totals.count[3],
+        t_total.elapsed().as_secs_f64(),
+        backend.name(),
+    ));
+    super::report::emit(&value, args.json, args.report.as_deref())
+}
+
+/// The 6-connected components of the samples `≥ threshold`: the per-voxel
+/// component number (0 = not selected) and one [`Structure`] per component
+/// in file order.
+fn components(volume: &Volume, threshold: f64) -> crate::Result<(Vec<u32>, Vec<Structure>)> {
+    let lab = label_6_connected(volume.dims, |i| volume.data.get_f64(i) >= threshold)?;
+    let structures = boxes(&lab.labels, volume.dims, lab.n_components())
+        .into_iter()
+        .enumerate()
+        .map(|(c, (lo, hi, voxels))| Structure {
+            id: c as u32 + 1,
+            label: None,
+            voxels,
+            lo,
+            hi,
+        })
+        .collect();
+    Ok((lab.labels, structures))
+}
+
+/// The distinct non-zero, non-NaN sample values in ascending order: the
+/// per-voxel index into them (1-based; 0 = background) and one
+/// [`Structure`] per value.
+///
+/// Errors: [`crate::Error::InvalidInput`] past [`MAX_SCAN_LABELS`] values.
+fn labels(volume: &Volume) -> crate::Result<(Vec<u32>, Vec<Structure>)> {
+    let n = volume.data.len();
+    let is_label = |v: f64| v != 0.0 && !v.is_nan();
+    let mut values: Vec<f64> = Vec::new();
+    let mut last = f64::NAN;
+    for i in 0..n {
+        let v = volume.data.get_f64(i);
+        if is_label(v) && v != last {
+            last = v;
+            if let Err(at) = values.binary_search_by(|x| x.total_cmp(&v)) {
+                if values.len() == MAX_SCAN_LABELS {
+                    return Err(crate::Error::InvalidInput(format!(
+                        "more than {MAX_SCAN_LABELS} distinct non-zero values: not a label \
+                         volume (use --threshold)"
+                    )));
+                }
+                values.insert(at, v);
+            }
+        }
+    }
+    let mut ids = vec![0u32; n];
+    let (mut last, mut last_id) = (f64::NAN, 0u32);
+    for (i, id) in ids.iter_mut().enumerate() {
+        let v = volume.data.get_f64(i);
+        if !is_label(v) {
+            continue;
+        }
+        if v != last {
+            last = v;
+            last_id = values
+                .binary_search_by(|x| x.total_cmp(&v))
+                .map_or(0, |k| k as u32 + 1);
+        }
+        *id = last_id;
+    }
+    let structures = boxes(&ids, volume.dims, values.len())
+        .into_iter()
+        .zip(values)
+        .enumerate()
+        .map(|(k, ((lo, hi, voxels), value))| Structure {
+            id: k as u32 + 1,
+            label: Some(value),
+            voxels,
+            lo,
+            hi,
+        })
+        .collect();
+    Ok((ids, structures))
+}
+
+/// Per id `1..=n`: inclusive voxel bounding box and voxel count.
+fn boxes(ids: &[u32], dims: [usize; 3], n: usize) -> Vec<([usize; 3], [usize; 3], u64)> {
+    let mut out = vec![([usize::MAX; 3], [0usize; 3], 0u64); n];
+    let [nx, ny, _] = dims;
+    for (i, &id) in ids.iter().enumerate() {
+        if id == 0 {
+            continue;
+        }
+        let p = [i % nx, (i / nx) % ny, i / (nx * ny)];
+        let (lo, hi, count) = &mut out[id as usize - 1];
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+        *count += 1;
+    }
+    out
+}
+
+/// One report row and what the totals need.
+struct Row {
+    value: Value,
+    zkh: ZkhTotals,
+    degenerate: bool,
+}
+
+/// Flags `ids == id` over the box `lo ..= hi` (x fastest).
+fn flags(ids: &[u32], dims: [usize; 3], id: u32, lo: [usize; 3], hi: [usize; 3]) -> Vec<bool> {
+    let [nx, ny, _] = dims;
+    let mut out = Vec::with_capacity((0..3).map(|a| hi[a] - lo[a] + 1).product());
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            let row = nx * (y + ny * z);
+            out.extend(ids[row + lo[0]..=row + hi[0]].iter().map(|&v| v == id));
+        }
+    }
+    out
+}
+
+/// Whether all `points` lie on one line (no polygon, no polyhedron).
+fn collinear(points: &[[i64; 3]]) -> bool {
+    let sub = |a: [i64; 3], b: [i64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let Some(&a) = points.first() else {
+        return true;
+    };
+    let Some(&b) = points.iter().find(|&&p| p != a) else {
+        return true;
+    };
+    let u = sub(b, a);
+    points.iter().all(|&p| {
+        let v = sub(p, a);
+        u[1] * v[2] == u[2] * v[1] && u[2] * v[0] == u[0] * v[2] && u[0] * v[1] == u[1] * v[0]
+    })
+}
+
+/// Hull, inside-hull scan and ZKH summary of one structure.
+fn scan_structure(
+    s: &Structure,
+    ids: &[u32],
+    dims: [usize; 3],
+    frame: Frame,
+    hull_args: &HullArgs,
+    backend: Backend<'_>,
+    times: &mut StageTimes,
+) -> anyhow::Result<Row> {
+    let t = Instant::now();
+    let lo = s.lo.map(|c| c as i64);
+    let box_dims: [usize; 3] = std::array::from_fn(|a| s.hi[a] - s.lo[a] + 1);
+    let object_flags = flags(ids, dims, s.id, s.lo, s.hi);
+    let object = DigitalObject::from_mask(box_dims, &object_flags, frame)?.shifted(lo);
+    let n_components = if s.label.is_some() {
+        label_6_connected(box_dims, |i| object_flags[i])?.n_components()
+    } else {
+        1
+    };
+    let mut row = json!({
+        "id": s.id,
+        "label": s.label,
+        "components": n_components,
+        "object": object_json(&object),
+    });
+    times.object += t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let candidates = object.candidates(hull_args.kind());
+    row["candidates"] = json!(candidates.len());
+    times.candidates += t.elapsed().as_secs_f64();
+    if collinear(&candidates) {
+        row["degenerate"] = json!("collinear");
+        return Ok(Row {
+            value: row,
+            zkh: ZkhTotals::default(),
+            degenerate: true,
+        });
+    }
+
+    let t = Instant::now();
+    let hull = ConvexHull::build(&candidates, hull_args.options())?;
+    let summary = hull.summary(&frame);
+    row["hull"] = json!({
+        "faces": summary.faces,
+        "vertices": summary.vertices,
+        "edges": summary.edges,
+        "integers_eq_8_2": summary.integers_eq_8_2,
+        "integers_compact": summary.integers_compact,
+        "volume_voxels": summary.volume_voxels,
+        "area_voxels": summary.area_voxels,
+        "volume_world": summary.volume_world,
+        "area_world": summary.area_world,
+        "planar": summary.planar,
+    });
+    let faces: Vec<hscan::HalfSpace> = hull
+        .half_spaces()
+        .iter()
+        .map(|h| hscan::HalfSpace {
+            normal: h.normal,
+            offset: h.offset,
+        })
+        .collect();
+    times.hull += t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let (hlo, hhi) = hull.voxel_bbox();
+    let bbox = VoxelBox {
+        origin: hlo,
+        dims: std::array::from_fn(|a| (hhi[a] - hlo[a] + 1).max(0) as usize),
+    };
+    let classification: Classification =
+        hscan::row_spans(&faces, &bbox, backend)?.to_classification()?;
+    let [outside, on, inside] = classification.counts();
+    row["scan"] = json!({
+        "box": bbox,
+        "inside": inside,
+        "on": on,
+        "outside": outside,
+    });
+    let closed = inside + on;
+    row["convexity"] = json!({
+        "hull_voxels": closed,
+        "digital": object.n_voxels() as f64 / closed as f64,
+        "volume": (summary.volume_voxels > 0.0).then(|| object.n_voxels() as f64 / summary.volume_voxels),
+    });
+    times.scan += t.elapsed().as_secs_f64();
+
+    let mut zkh = ZkhTotals::default();
+    if !hull.is_planar() {
+        let t = Instant::now();
+        // Extreme voxels are hull vertices (or own its corner vertices), so
+        // the hull's voxel box is the structure's box.
+        anyhow::ensure!(
+            hlo == lo && hhi == s.hi.map(|c| c as i64),
+            "hull box {hlo:?}..={hhi:?} differs from the structure box {:?}..={:?}",
+            s.lo,
+            s.hi
+        );
+        let mut adjacency = vec![Vec::new(); faces.len()];
+        for e in hull.cell_list().edges {
+            adjacency[e.left as usize].push(e.right as usize);
+            adjacency[e.right as usize].push(e.left as usize);
+        }
+        let analysis = analyse(&object_flags, &classification, &faces, &adjacency)?;
+        for c in &analysis.components {
+            zkh.add(c.class, c.size);
+        }
+        times.zkh += t.elapsed().as_secs_f64();
+    }
+    row["zkh"] = if hull.is_planar() {
+        Value::Null
+    } else {
+        zkh.json()
+    };
+    Ok(Row {
+        value: row,
+        zkh,
+        degenerate: false,
+    })
+}

@@ -58,6 +58,10 @@ pub struct KnifeSegment {
     pub ends: [u32; 2],
 }
 
+/// Segments of one surface triangle: (knife triangle, its two cut points),
+/// ascending knife triangle.
+pub(crate) type TriangleSegments = Vec<(u32, [PointOrigin; 2])>;
+
 /// `orient3d`'s static error bound `(7 + 56ε)ε` (Shewchuk 1997).
 const O3D_ERRBOUND: f64 = (7.0 + 56.0 * f64::EPSILON / 2.0) * f64::EPSILON / 2.0;
 
@@ -226,7 +230,7 @@ impl Pair<'_> {
     }
 
     /// Segments of one surface triangle, ascending knife triangle.
-    fn triangle_segments(&self, st: u32) -> Result<Vec<(u32, [PointOrigin; 2])>> {
+    fn triangle_segments(&self, st: u32) -> Result<TriangleSegments> {
         let m = self.margin as f32;
         let b = tri_box(self.surface, st);
         let grown = Aabb {
@@ -246,7 +250,7 @@ impl Pair<'_> {
     }
 
     /// Segments of each of `tris` (in parallel for large sets).
-    pub fn segments_of(&self, tris: &[u32]) -> Result<Vec<Vec<(u32, [PointOrigin; 2])>>> {
+    pub fn segments_of(&self, tris: &[u32]) -> Result<Vec<TriangleSegments>> {
         if tris.len() < 1 << 12 {
             tris.iter().map(|&t| self.triangle_segments(t)).collect()
         } else {

@@ -378,7 +378,7 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
 /// (surface triangle, knife triangle) order (tree and scan agree).
 fn finish_locate_mesh(
     pair: &corefine::Pair<'_>,
-    crossed: Vec<(u32, Vec<(u32, [PointOrigin; 2])>)>,
+    crossed: Vec<(u32, corefine::TriangleSegments)>,
     mut stats: CutStats,
 ) -> Located {
     let mut ids: HashMap<PointOrigin, u32> = HashMap::new();

@@ -497,6 +497,38 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
     Ok(finish_locate(mesh, crossed, k, stats))
 }
 
+/// A multiplicative hash for edge keys (vertex-id pairs, not attacker
+/// controlled): the cut-vertex table is on the query's hot path.
+#[derive(Debug, Clone, Copy, Default)]
+struct EdgeHash;
+
+impl std::hash::BuildHasher for EdgeHash {
+    type Hasher = EdgeHasher;
+    fn build_hasher(&self) -> EdgeHasher {
+        EdgeHasher(0)
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct EdgeHasher(u64);
+
+impl std::hash::Hasher for EdgeHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(29) ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
 /// Cut vertices of the crossed triangles, numbered by first use in
 /// ascending triangle order (so tree and scan number them identically).
 fn finish_locate(
@@ -506,7 +538,8 @@ fn finish_locate(
     mut stats: CutStats,
 ) -> Located {
     let p = &mesh.positions;
-    let mut ids: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut ids: HashMap<(u32, u32), u32, EdgeHash> =
+        HashMap::with_capacity_and_hasher(2 * crossed.len(), EdgeHash);
     let mut out = Located::default();
     for &t in &crossed {
         let tri = mesh.triangles[t as usize];

@@ -251,52 +251,237 @@ fn rectangle_that_cuts_through_equals_the_plane_and_partial_one_keeps_one_piece(
     same_result(&r, &cut_full_scan(&s.mesh, &small, &CAP).unwrap());
 }
 
+/// A square sheet knife in the plane z = `z` (two triangles, normal +z),
+/// corners off the grid diagonals so no knife edge meets a surface edge.
+fn sheet(z: f32) -> TriMesh {
+    TriMesh::new(
+        vec![
+            glam::Vec3::new(-10.3, -9.1, z),
+            glam::Vec3::new(40.7, -10.2, z),
+            glam::Vec3::new(39.6, 40.9, z),
+            glam::Vec3::new(-9.4, 39.8, z),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    )
+    .unwrap()
+}
+
+/// Every edge used twice in opposite directions, and the volumes of the
+/// pieces on each side.
+fn side_volumes(r: &CutResult, c: DVec3) -> (f64, f64) {
+    let mut v = (0.0, 0.0);
+    for (p, s) in r.pieces.iter().zip(&r.sides) {
+        match s {
+            Side::Negative => v.0 += volume(p, c),
+            Side::Positive => v.1 += volume(p, c),
+            Side::Both => panic!("a piece on both sides"),
+        }
+    }
+    v
+}
+
 #[test]
 fn triangulated_knife_cuts_like_the_plane_it_samples() {
     let s = mc(&ball_volume(30, 10.0));
-    // A large square knife in the plane z = 14.3, as two triangles.
     let z = 14.3f32;
-    let knife = TriMesh::new(
+    let knife = Knife::Mesh(sheet(z));
+    let flat = plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]);
+    let c = DVec3::splat(14.5);
+    for opts in [CutOptions::default(), CAP] {
+        let r = cut(&s.mesh, &s.forest, &knife, &opts).unwrap();
+        let p = cut(&s.mesh, &s.forest, &flat, &opts).unwrap();
+        assert_eq!(r.pieces.len(), 2);
+        assert_eq!(r.sides, p.sides);
+        assert_eq!(r.stats.curves_open, 0);
+        same_result(&r, &cut_full_scan(&s.mesh, &knife, &opts).unwrap());
+        // The knife's diagonal adds cut points inside surface triangles, so
+        // the triangles differ from the plane's; the halves do not.
+        let (a, b) = (side_volumes(&r, c), side_volumes(&p, c));
+        if opts.cap {
+            assert_eq!(r.stats.loops_capped, 1);
+            assert_conserved(&s.mesh, &r, 1e-6, "ball/sheet");
+            assert!((a.0 - b.0).abs() < 1e-4 * b.0, "{a:?} vs {b:?}");
+            assert!((a.1 - b.1).abs() < 1e-4 * b.1, "{a:?} vs {b:?}");
+        }
+    }
+}
+
+#[test]
+fn closed_triangulated_knife_cuts_a_cube_into_inside_and_outside() {
+    let cube = common::cube();
+    // An icosphere of radius 0.4 through the face x = 1: the cut curve
+    // crosses the face's diagonal, knife edges pierce the face triangles.
+    let (ctr, rad) = (DVec3::new(0.93, 0.52, 0.47), 0.4);
+    let mut ball = common::icosphere(3);
+    for p in &mut ball.positions {
+        *p = (p.as_dvec3() * rad + ctr).as_vec3();
+    }
+    let knife = Knife::Mesh(ball.clone());
+    let r = cut_mesh(&cube, &knife, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2, "inside and outside");
+    assert_eq!(r.sides, vec![Side::Positive, Side::Negative]);
+    assert_eq!(r.stats.curves_open, 0);
+    assert_eq!(r.stats.loops_capped, 1);
+    assert_conserved(&cube, &r, 1e-6, "cube/icosphere");
+    // The inside piece is the ball's part with x < 1 (spherical cap of
+    // height r − 0.07 cut off); the icosphere is a little smaller.
+    let h = rad - 0.07;
+    let part = 4.0 / 3.0 * std::f64::consts::PI * rad.powi(3)
+        - std::f64::consts::PI * h * h * (3.0 * rad - h) / 3.0;
+    let (neg, pos) = side_volumes(&r, DVec3::splat(0.5));
+    assert!((neg - part).abs() < 0.03 * part, "{neg} vs {part}");
+    assert!((neg + pos - 1.0).abs() < 1e-6);
+    // Every cap vertex is a knife vertex or a cut point on the knife: the
+    // inside piece's vertices all lie in the closed ball.
+    let inside = &r.pieces[r.sides.iter().position(|s| *s == Side::Negative).unwrap()];
+    for q in &inside.positions {
+        assert!((q.as_dvec3() - ctr).length() <= rad + 1e-5, "{q}");
+    }
+    // The sheet of a closed knife, reversed, swaps the sides.
+    let mut flipped = ball;
+    for t in &mut flipped.triangles {
+        t.swap(1, 2);
+    }
+    let f = cut_mesh(&cube, &Knife::Mesh(flipped), &CAP).unwrap();
+    assert_eq!(f.sides, vec![Side::Negative, Side::Positive]);
+    assert_conserved(&cube, &f, 1e-6, "cube/flipped icosphere");
+}
+
+#[test]
+fn closed_triangulated_knife_bites_a_marching_cubes_ball_like_the_sphere() {
+    let s = mc(&ball_volume(40, 14.0));
+    let (ctr, rad) = (DVec3::new(19.37, 19.61, 31.13), 8.0);
+    let mut ball = common::icosphere(4);
+    for p in &mut ball.positions {
+        *p = (p.as_dvec3() * rad + ctr).as_vec3();
+    }
+    let knife = Knife::Mesh(ball);
+    let r = cut(&s.mesh, &s.forest, &knife, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_conserved(&s.mesh, &r, 1e-6, "ball/icosphere");
+    same_result(&r, &cut_full_scan(&s.mesh, &knife, &CAP).unwrap());
+    assert!(r.stats.triangles_tested * 2 < r.stats.triangles_total);
+    let sph = cut(
+        &s.mesh,
+        &s.forest,
+        &Knife::Sphere {
+            centre: ctr,
+            radius: rad,
+        },
+        &CAP,
+    )
+    .unwrap();
+    let c = DVec3::splat(19.5);
+    let (a, b) = (side_volumes(&r, c), side_volumes(&sph, c));
+    assert!((a.0 - b.0).abs() < 0.02 * b.0, "{a:?} vs {b:?}");
+}
+
+#[test]
+fn triangulated_knife_contacts_and_bad_knives_are_errors() {
+    let cube = common::cube();
+    let tri = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| {
+        TriMesh::new(vec![a.into(), b.into(), c.into()], vec![[0, 1, 2]]).unwrap()
+    };
+    // A knife vertex exactly on the face x = 1.
+    let touching = tri([1.0, 0.5, 0.4], [1.5, 0.2, 0.5], [1.5, 0.8, 0.55]);
+    let e = cut_mesh(&cube, &Knife::Mesh(touching), &CAP).unwrap_err();
+    assert!(e.to_string().contains("move or tilt the knife"), "{e}");
+    // An open knife whose border lies inside the cube.
+    let short = TriMesh::new(
         vec![
-            glam::Vec3::new(-10.0, -10.0, z),
-            glam::Vec3::new(40.0, -10.0, z),
-            glam::Vec3::new(40.0, 40.0, z),
-            glam::Vec3::new(-10.0, 40.0, z),
+            glam::Vec3::new(0.31, -0.5, 0.47),
+            glam::Vec3::new(1.5, -0.5, 0.52),
+            glam::Vec3::new(1.5, 1.5, 0.53),
+            glam::Vec3::new(0.33, 1.5, 0.49),
         ],
         vec![[0, 1, 2], [0, 2, 3]],
     )
     .unwrap();
-    let r = cut(
-        &s.mesh,
-        &s.forest,
-        &Knife::Mesh(knife.clone()),
-        &CutOptions::default(),
+    let e = cut_mesh(&cube, &Knife::Mesh(short), &CAP).unwrap_err();
+    assert!(e.to_string().contains("border"), "{e}");
+    // Inconsistent orientation.
+    let twisted = TriMesh::new(
+        vec![
+            glam::Vec3::new(-1.0, -1.0, 0.5),
+            glam::Vec3::new(2.0, -1.0, 0.5),
+            glam::Vec3::new(2.0, 2.0, 0.5),
+            glam::Vec3::new(-1.0, 2.0, 0.5),
+        ],
+        vec![[0, 1, 2], [0, 3, 2]],
     )
     .unwrap();
-    let p = cut(
-        &s.mesh,
-        &s.forest,
-        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
-        &CutOptions::default(),
+    assert!(cut_mesh(&cube, &Knife::Mesh(twisted), &CAP).is_err());
+    // The same sheet, consistently oriented, halves the cube (control).
+    let good = TriMesh::new(
+        vec![
+            glam::Vec3::new(-1.0, -1.1, 0.5),
+            glam::Vec3::new(2.1, -1.0, 0.5),
+            glam::Vec3::new(2.0, 2.1, 0.5),
+            glam::Vec3::new(-1.1, 2.0, 0.5),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
     )
     .unwrap();
+    let r = cut_mesh(&cube, &Knife::Mesh(good), &CAP).unwrap();
     assert_eq!(r.pieces.len(), 2);
-    assert_eq!(r.stats.triangles_split, p.stats.triangles_split);
-    assert_eq!(r.sides, p.sides);
-    for (a, b) in r.pieces.iter().zip(&p.pieces) {
-        assert_eq!(a.triangles, b.triangles);
-        for (x, y) in a.positions.iter().zip(&b.positions) {
-            assert!((*x - *y).abs().max_element() < 1e-4);
+    assert_conserved(&cube, &r, 1e-6, "cube/sheet");
+    let (neg, pos) = side_volumes(&r, DVec3::splat(0.5));
+    assert!(
+        (neg - 0.5).abs() < 1e-6 && (pos - 0.5).abs() < 1e-6,
+        "{neg} {pos}"
+    );
+}
+
+/// A box [5.5, 34.5]³ on a 40³ grid (flat faces on half-integer planes).
+fn box_volume() -> Volume {
+    let n = 40;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let d = [x, y, z]
+                    .iter()
+                    .map(|&i| (i as f64 - 5.5).min(34.5 - i as f64))
+                    .fold(f64::INFINITY, f64::min);
+                data.push(d as f32);
+            }
         }
     }
-    same_result(
-        &r,
-        &cut_full_scan(&s.mesh, &Knife::Mesh(knife.clone()), &CutOptions::default()).unwrap(),
-    );
+    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
+}
+
+#[test]
+fn sphere_caps_follow_the_sphere() {
+    let s = mc(&box_volume());
+    // Centred on the face z = 34.5: the bite is a half ball.
+    let (ctr, rad) = (DVec3::new(20.2, 19.7, 34.5), 8.0);
+    let k = Knife::Sphere {
+        centre: ctr,
+        radius: rad,
+    };
+    let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_conserved(&s.mesh, &r, 1e-6, "box/sphere");
+    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    let inside = &r.pieces[r.sides.iter().position(|s| *s == Side::Negative).unwrap()];
+    // Off the face, every vertex of the bite is on the sphere (f32).
+    let mut off_face = 0;
+    for q in &inside.positions {
+        if (q.z - 34.5).abs() > 1e-4 {
+            off_face += 1;
+            let d = (q.as_dvec3() - ctr).length();
+            assert!((d - rad).abs() < 4e-6 * rad, "cap vertex {q} at {d}");
+        }
+    }
     assert!(
-        cut(&s.mesh, &s.forest, &Knife::Mesh(knife), &CAP).is_err(),
-        "no caps for mesh knives"
+        off_face > 100,
+        "the cap has {off_face} vertices off the face"
     );
+    // Its volume is the half ball's, up to the chord error and the loop's
+    // polygon (a flat cap would give almost nothing).
+    let half = 2.0 / 3.0 * std::f64::consts::PI * rad.powi(3);
+    let v = volume(inside, ctr);
+    assert!((v - half).abs() < 0.01 * half, "{v} vs {half}");
 }
 
 #[test]

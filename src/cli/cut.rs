@@ -31,7 +31,8 @@ pub struct Args {
     /// A triangulated knife surface (any mesh format).
     #[arg(long)]
     knife: Vec<PathBuf>,
-    /// Close each piece with the knife surface (planes, rectangles, spheres).
+    /// Close each piece with the knife surface (planes, rectangles, the
+    /// sphere patch, the part of a triangulated knife inside the solid).
     #[arg(long)]
     cap: bool,
     /// Output folder for `piece_NNN.ply` (created if missing).

@@ -9,7 +9,13 @@
 //! negative pieces (as is) and the positive pieces (reversed), so the cap
 //! adds no volume: the pieces' volumes add up to the original's.
 //!
-//! Caps are flat between loop vertices (for a sphere, chords of it).
+//! Plane caps are flat. Sphere caps follow the sphere: the loop
+//! triangulation (made in the stereographic plane, which is conformal) is
+//! refined by bisecting interior edges at the sphere point over their
+//! planar midpoint until each is shorter than [`sphere_max_edge`] (chord
+//! error below [`SPHERE_CHORD_ERROR`]·r) or than 1.2 times the longest
+//! loop edge, whichever is longer; loop edges are never split, so both sides
+//! still share them.
 
 use std::collections::HashMap;
 
@@ -87,6 +93,19 @@ pub fn frame(n: DVec3) -> (DVec3, DVec3) {
 }
 
 impl Projection {
+    /// The point of the sphere whose image is `q` (inverse stereographic
+    /// projection); `None` for the plane projection.
+    pub fn unapply(&self, q: DVec2) -> Option<DVec3> {
+        match *self {
+            Projection::Plane { .. } => None,
+            Projection::Sphere { c, r, d, u, v } => {
+                let s = q.length_squared();
+                let w = (u * (2.0 * q.x) + v * (2.0 * q.y) + d * (1.0 - s)) / (1.0 + s);
+                Some(c + w * r)
+            }
+        }
+    }
+
     /// The 2-D image of `p`; `None` at the projection pole.
     pub fn apply(&self, p: DVec3) -> Option<DVec2> {
         match *self {
@@ -288,5 +307,106 @@ fn ear_clip_any(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
     } else {
         let flipped: Vec<DVec2> = pts.iter().map(|p| DVec2::new(p.x, -p.y)).collect();
         ear_clip(&flipped, poly, out);
+    }
+}
+
+/// Largest sagitta of an interior cap edge on a sphere, relative to the radius.
+pub const SPHERE_CHORD_ERROR: f64 = 1e-3;
+
+/// Longest interior cap edge on a sphere of radius `r`: the sagitta of a
+/// chord of length L is `r − √(r² − L²/4) ≈ L²/(8r)`, so `L = r·√(8ε)`.
+pub fn sphere_max_edge(r: f64) -> f64 {
+    r * (8.0 * SPHERE_CHORD_ERROR).sqrt()
+}
+
+/// Interior cap edges may be this many times the longest loop edge: a
+/// triangle on a loop edge keeps an interior edge about as long as it.
+const LOOP_EDGE_FACTOR: f64 = 1.2;
+
+/// Refinement passes at most (each halves the longest edges; the rest are
+/// triangles on loop edges that bisection cannot shorten).
+const MAX_PASSES: usize = 48;
+
+/// Refines cap triangles `tris` (indices into `pts`, their images in the
+/// stereographic plane of `proj`, and `pos`, the points on the sphere):
+/// every edge used by two triangles and longer than `max_edge` in space
+/// and than [`LOOP_EDGE_FACTOR`] times the longest edge used once, is
+/// bisected, longest first, at the point of the sphere over its planar
+/// midpoint (appended to both); edges used once (the cut loops) are kept.
+/// The projection is conformal and keeps orientation, so the refined
+/// triangles keep theirs. Stops after `max_triangles` or [`MAX_PASSES`].
+pub fn refine_on_sphere(
+    tris: &mut Vec<[usize; 3]>,
+    pts: &mut Vec<DVec2>,
+    pos: &mut Vec<DVec3>,
+    proj: &Projection,
+    max_edge: f64,
+    max_triangles: usize,
+) {
+    let key = |a: usize, b: usize| (a.min(b), a.max(b));
+    let mut max_edge = max_edge;
+    let mut passes = 0;
+    loop {
+        // Per edge its first two triangles and its use count.
+        let mut uses: HashMap<(usize, usize), ([usize; 2], u32)> =
+            HashMap::with_capacity(3 * tris.len());
+        for (t, tri) in tris.iter().enumerate() {
+            for e in 0..3 {
+                let slot = uses
+                    .entry(key(tri[e], tri[(e + 1) % 3]))
+                    .or_insert(([usize::MAX; 2], 0));
+                if slot.1 < 2 {
+                    slot.0[slot.1 as usize] = t;
+                }
+                slot.1 += 1;
+            }
+        }
+        let longest_loop_edge = uses
+            .iter()
+            .filter(|(_, (_, n))| *n == 1)
+            .map(|(k, _)| (pos[k.0] - pos[k.1]).length())
+            .fold(0.0, f64::max);
+        max_edge = max_edge.max(LOOP_EDGE_FACTOR * longest_loop_edge);
+        let mut long: Vec<(f64, (usize, usize), [usize; 2])> = uses
+            .iter()
+            .filter(|(_, (_, n))| *n == 2)
+            .map(|(&k, &(ts, _))| ((pos[k.0] - pos[k.1]).length(), k, ts))
+            .filter(|(l, _, _)| *l > max_edge)
+            .collect();
+        passes += 1;
+        if long.is_empty() || tris.len() >= max_triangles || passes > MAX_PASSES {
+            return;
+        }
+        long.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut touched = vec![false; tris.len()];
+        let mut split_any = false;
+        for (_, (a, b), ts) in long {
+            if ts.iter().any(|&t| touched[t]) || tris.len() + 2 > max_triangles {
+                continue;
+            }
+            let mid = (pts[a] + pts[b]) * 0.5;
+            let Some(q) = proj.unapply(mid) else {
+                continue;
+            };
+            let m = pos.len();
+            pts.push(mid);
+            pos.push(q);
+            for t in ts {
+                touched[t] = true;
+                let tri = tris[t];
+                // Rotate so the split edge is (tri[0], tri[1]).
+                let e = (0..3)
+                    .find(|&e| key(tri[e], tri[(e + 1) % 3]) == (a, b))
+                    .unwrap_or(0);
+                let (x, y, z) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
+                tris[t] = [x, m, z];
+                tris.push([m, y, z]);
+                touched.push(true);
+            }
+            split_any = true;
+        }
+        if !split_any {
+            return;
+        }
     }
 }

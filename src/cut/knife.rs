@@ -29,9 +29,10 @@ pub enum Knife {
     },
     /// Sphere; the negative side is the inside.
     Sphere { centre: DVec3, radius: f64 },
-    /// A triangulated knife (open sheet or closed), organised in its own
-    /// B+ tree forest when the cut runs. The negative side of a crossing is
-    /// behind the hit knife triangle (against its right-hand normal).
+    /// A triangulated knife (open sheet reaching beyond the surface, or
+    /// closed), consistently oriented, organised in its own B+ tree forest
+    /// when the cut runs. The negative side is behind the knife triangles
+    /// (against their right-hand normals): inside an outward closed knife.
     Mesh(TriMesh),
 }
 
@@ -157,6 +158,21 @@ impl Knife {
                         "knife mesh has no triangles".into(),
                     ));
                 }
+                // Sides come from the knife's normals: each directed edge
+                // may be used once (a consistently oriented manifold).
+                let mut directed = std::collections::HashSet::new();
+                for (t, tri) in mesh.triangles.iter().enumerate() {
+                    for e in 0..3 {
+                        let (a, b) = (tri[e], tri[(e + 1) % 3]);
+                        if a == b || !directed.insert((a, b)) {
+                            return Err(crate::Error::InvalidInput(format!(
+                                "knife mesh triangle {t}: edge {a}->{b} is degenerate or used \
+                                 twice in one direction; the knife must be a consistently \
+                                 oriented manifold"
+                            )));
+                        }
+                    }
+                }
                 let (forest, _, _) = Forest::from_mesh(mesh);
                 Kind::Mesh { mesh, forest }
             }
@@ -210,8 +226,54 @@ impl PreparedKnife<'_> {
         }
     }
 
+    /// Conservative range of coordinate `axis` over the knife surface points
+    /// whose other two coordinates lie in `b`'s extent (the slab a sorted
+    /// level of the tree is searched in, seed §4.3); infinite when the
+    /// knife is parallel to the axis.
+    pub fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
+        let lo = b.min.as_dvec3();
+        let hi = b.max.as_dvec3();
+        let m = self.margin;
+        let others = [(axis + 1) % 3, (axis + 2) % 3];
+        match &self.kind {
+            Kind::Plane { p, n } => plane_interval(lo, hi, *p, *n, axis, others, m),
+            Kind::Rect { p, n, u, v, h } => {
+                let (a, b) = plane_interval(lo, hi, *p, *n, axis, others, m);
+                let ext = u[axis].abs() * h[0] + v[axis].abs() * h[1] + m;
+                (a.max(p[axis] - ext), b.min(p[axis] + ext))
+            }
+            Kind::Sphere { c, r } => {
+                let d2: f64 = others
+                    .iter()
+                    .map(|&j| (c[j] - c[j].clamp(lo[j], hi[j])).powi(2))
+                    .sum();
+                if d2 > r * r + m * (2.0 * r + m) {
+                    return (f64::INFINITY, f64::NEG_INFINITY);
+                }
+                let w = (r * r - d2).max(0.0).sqrt() + m;
+                (c[axis] - w, c[axis] + w)
+            }
+            Kind::Mesh { forest, .. } => {
+                forest
+                    .groups
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), g| {
+                        (
+                            a.min(f64::from(g.bbox.min[axis]) - m),
+                            b.max(f64::from(g.bbox.max[axis]) + m),
+                        )
+                    })
+            }
+        }
+    }
+
+    /// The box margin (world units).
+    pub fn margin(&self) -> f64 {
+        self.margin
+    }
+
     /// The crossing of edge `a → b` (endpoints in canonical order), if the
-    /// knife cuts it.
+    /// analytic knife cuts it.
     pub fn crossing(&self, a: Vec3, b: Vec3) -> Option<Crossing> {
         let (a, b) = (a.as_dvec3(), b.as_dvec3());
         match &self.kind {
@@ -221,7 +283,8 @@ impl PreparedKnife<'_> {
                 d.dot(*u).abs() <= h[0] && d.dot(*v).abs() <= h[1]
             }),
             Kind::Sphere { c, r } => sphere_crossing(a, b, *c, *r),
-            Kind::Mesh { mesh, forest } => mesh_crossing(a, b, mesh, forest, self.margin),
+            // Triangulated knives are intersected triangle by triangle (corefine).
+            Kind::Mesh { .. } => None,
         }
     }
 }
@@ -232,6 +295,33 @@ fn grow(b: &Aabb, m: f64) -> Aabb {
         min: b.min - Vec3::splat(m),
         max: b.max + Vec3::splat(m),
     }
+}
+
+/// Range of coordinate `axis` on the plane `n·(x − p) = 0` over the box's
+/// extent on the `others` axes, widened by the margin.
+fn plane_interval(
+    lo: DVec3,
+    hi: DVec3,
+    p: DVec3,
+    n: DVec3,
+    axis: usize,
+    others: [usize; 2],
+    m: f64,
+) -> (f64, f64) {
+    let na = n[axis];
+    if na.abs() < 1e-9 {
+        return (f64::NEG_INFINITY, f64::INFINITY);
+    }
+    // n_a·x_a = n·p − Σ_j n_j x_j over the box's other coordinates.
+    let (mut s_lo, mut s_hi) = (n.dot(p), n.dot(p));
+    for j in others {
+        let (a, b) = (n[j] * lo[j], n[j] * hi[j]);
+        s_lo -= a.max(b);
+        s_hi -= a.min(b);
+    }
+    let (a, b) = (s_lo / na, s_hi / na);
+    let w = m / na.abs() + 1e-12 * (a.abs() + b.abs());
+    (a.min(b) - w, a.max(b) + w)
 }
 
 fn plane_clear(lo: DVec3, hi: DVec3, p: DVec3, n: DVec3, m: f64) -> bool {
@@ -314,7 +404,7 @@ fn forest_touches(forest: &Forest, b: &Aabb) -> bool {
 }
 
 /// Knife triangles whose boxes overlap `b`, via the knife's forest.
-fn knife_candidates(forest: &Forest, b: &Aabb, out: &mut Vec<u32>) {
+pub(crate) fn knife_candidates(forest: &Forest, b: &Aabb, out: &mut Vec<u32>) {
     for g in &forest.groups {
         if !g.bbox.overlaps(b) {
             continue;
@@ -335,57 +425,4 @@ fn knife_candidates(forest: &Forest, b: &Aabb, out: &mut Vec<u32>) {
             }
         }
     }
-}
-
-/// Segment a–b against the knife triangles: an odd number of hits is a
-/// crossing, placed at the hit nearest the segment's middle.
-fn mesh_crossing(a: DVec3, b: DVec3, mesh: &TriMesh, forest: &Forest, m: f64) -> Option<Crossing> {
-    let seg = grow(
-        &Aabb {
-            min: a.min(b).as_vec3(),
-            max: a.max(b).as_vec3(),
-        },
-        m,
-    );
-    let mut cand = Vec::new();
-    knife_candidates(forest, &seg, &mut cand);
-    let d = b - a;
-    let mut hits: Vec<(f64, bool)> = Vec::new();
-    for t in cand {
-        let [i, j, k] = mesh.triangles[t as usize];
-        let p = &mesh.positions;
-        let (v0, v1, v2) = (
-            p[i as usize].as_dvec3(),
-            p[j as usize].as_dvec3(),
-            p[k as usize].as_dvec3(),
-        );
-        // Möller–Trumbore with half-open barycentric rules so a hit on a
-        // shared knife edge counts once.
-        let e1 = v1 - v0;
-        let e2 = v2 - v0;
-        let pv = d.cross(e2);
-        let det = e1.dot(pv);
-        if det == 0.0 {
-            continue;
-        }
-        let inv = 1.0 / det;
-        let tv = a - v0;
-        let u = tv.dot(pv) * inv;
-        let qv = tv.cross(e1);
-        let v = d.dot(qv) * inv;
-        let s = e2.dot(qv) * inv;
-        if u >= 0.0 && v >= 0.0 && u + v < 1.0 && (0.0..1.0).contains(&s) {
-            let normal = e1.cross(e2);
-            hits.push((s, normal.dot(d) > 0.0));
-        }
-    }
-    if hits.len().is_multiple_of(2) {
-        return None;
-    }
-    hits.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let (s, a_behind) = hits[hits.len() / 2];
-    Some(Crossing {
-        point: a + d * s,
-        first_negative: a_behind,
-    })
 }

@@ -28,6 +28,7 @@
 //! vertices and across cut vertices not separated by the cut.
 
 mod cap;
+mod corefine;
 mod knife;
 
 use std::collections::HashMap;
@@ -36,8 +37,10 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
+use crate::surface::tree::sorted_overlap;
 use crate::surface::{Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 use knife::{Kind, PreparedKnife};
@@ -45,7 +48,8 @@ use knife::{Kind, PreparedKnife};
 /// Options of [`cut`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CutOptions {
-    /// Close every piece with the knife surface (plane, rectangle, sphere),
+    /// Close every piece with the knife surface (plane, rectangle, the
+    /// sphere patch, or the part of a triangulated knife inside the solid),
     /// so closed input gives closed pieces whose volumes add up.
     pub cap: bool,
 }
@@ -114,8 +118,16 @@ pub struct Located {
     pub points: Vec<Vec3>,
     /// Per cut vertex, whether its edge's lower-id end is on the negative side.
     pub lower_negative: Vec<bool>,
-    /// Per cut vertex, its edge `(lower id, higher id)`.
+    /// Per cut vertex, its edge `(lower id, higher id)` (for a triangulated
+    /// knife: of the surface or of the knife, see `origins`).
     pub edges: Vec<(u32, u32)>,
+    /// Triangulated knife only: per cut vertex, which edge crosses which
+    /// triangle (`edge_cuts` is then empty: an edge may be crossed more
+    /// than once).
+    pub origins: Vec<PointOrigin>,
+    /// Triangulated knife only: the cut curve, one segment per intersecting
+    /// (surface triangle, knife triangle) pair, sorted by both.
+    pub segments: Vec<KnifeSegment>,
     /// Query counts.
     pub stats: CutStats,
 }
@@ -125,7 +137,7 @@ pub struct Located {
 pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     let t0 = Instant::now();
     let prepared = knife.prepare(forest_scale(forest))?;
-    let mut located = locate_prepared(mesh, forest, &prepared);
+    let mut located = locate_prepared(mesh, forest, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
     assemble(mesh, located, &prepared, opts)
 }
@@ -142,7 +154,7 @@ pub fn cut_mesh(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutR
 pub fn cut_full_scan(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     let t0 = Instant::now();
     let prepared = knife.prepare(scene_scale(mesh))?;
-    let mut located = locate_scan_prepared(mesh, &prepared);
+    let mut located = locate_scan_prepared(mesh, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
     assemble(mesh, located, &prepared, opts)
 }
@@ -220,16 +232,16 @@ fn scene_scale(mesh: &TriMesh) -> f64 {
 /// Locates the cut through the tree (public for benchmarks and tests).
 pub fn locate(mesh: &TriMesh, forest: &Forest, knife: &Knife) -> Result<Located> {
     let prepared = knife.prepare(forest_scale(forest))?;
-    Ok(locate_prepared(mesh, forest, &prepared))
+    locate_prepared(mesh, forest, &prepared)
 }
 
 /// Locates the cut by scanning every triangle (public for benchmarks and tests).
 pub fn locate_full_scan(mesh: &TriMesh, knife: &Knife) -> Result<Located> {
     let prepared = knife.prepare(scene_scale(mesh))?;
-    Ok(locate_scan_prepared(mesh, &prepared))
+    locate_scan_prepared(mesh, &prepared)
 }
 
-fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Located {
+fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Result<Located> {
     let mut stats = CutStats {
         nodes_total: forest.n_nodes(),
         triangles_total: mesh.triangles.len(),
@@ -246,22 +258,45 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Lo
         }
         !clear
     };
+    // Children a slab can touch: all of them, or on a sorted forest the
+    // span found by two binary searches (seed §4.3); the others are clear.
+    let span =
+        |parent: &crate::surface::Aabb,
+         all: std::ops::Range<usize>,
+         axis: usize,
+         lo_hi: &dyn Fn(std::ops::Range<usize>, f64, f64) -> std::ops::Range<usize>| {
+            if !forest.axis_sorted {
+                return all;
+            }
+            let (lo, hi) = k.axis_interval(parent, axis);
+            let r = lo_hi(all.clone(), lo, hi);
+            all.start + r.start..all.start + r.end
+        };
+    let layers_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
+        sorted_overlap(&forest.layers[r], |n| &n.bbox, 2, lo, hi)
+    };
+    let rows_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
+        sorted_overlap(&forest.rows[r], |n| &n.bbox, 1, lo, hi)
+    };
+    let cells_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
+        sorted_overlap(&forest.cells[r], |n| &n.bbox, 0, lo, hi)
+    };
     for g in &forest.groups {
         if !visit(&g.bbox, &mut stats) {
             continue;
         }
         let g_start = tested.len();
-        for l in &forest.layers[g.layers.range()] {
+        for l in &forest.layers[span(&g.bbox, g.layers.range(), 2, &layers_in)] {
             if !visit(&l.bbox, &mut stats) {
                 continue;
             }
             let l_start = tested.len();
-            for r in &forest.rows[l.rows.range()] {
+            for r in &forest.rows[span(&l.bbox, l.rows.range(), 1, &rows_in)] {
                 if !visit(&r.bbox, &mut stats) {
                     continue;
                 }
                 let r_start = tested.len();
-                for c in &forest.cells[r.cells.range()] {
+                for c in &forest.cells[span(&r.bbox, r.cells.range(), 0, &cells_in)] {
                     if !visit(&c.bbox, &mut stats) {
                         continue;
                     }
@@ -276,7 +311,25 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Lo
         expanded.push((g_start, tested.len()));
     }
     stats.triangles_tested = tested.len();
-    let crossed_flags = crossed_flags(mesh, &tested, k);
+    let knife_segments = match &k.kind {
+        Kind::Mesh {
+            mesh: knife,
+            forest,
+        } => Some(
+            corefine::Pair {
+                surface: mesh,
+                knife,
+                forest,
+                margin: k.margin(),
+            }
+            .segments_of(&tested)?,
+        ),
+        _ => None,
+    };
+    let crossed_flags: Vec<bool> = match &knife_segments {
+        Some(segs) => segs.iter().map(|s| !s.is_empty()).collect(),
+        None => crossed_flags(mesh, &tested, k),
+    };
     // Class every expanded node by whether any of its tested triangles crossed.
     let mut prefix = vec![0usize; tested.len() + 1];
     for (i, &f) in crossed_flags.iter().enumerate() {
@@ -289,6 +342,28 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Lo
             stats.classes.separated += 1;
         }
     }
+    if let (
+        Some(segs),
+        Kind::Mesh {
+            mesh: knife,
+            forest,
+        },
+    ) = (knife_segments, &k.kind)
+    {
+        let mut crossed: Vec<(u32, Vec<_>)> = tested
+            .into_iter()
+            .zip(segs)
+            .filter(|(_, s)| !s.is_empty())
+            .collect();
+        crossed.sort_unstable_by_key(|(t, _)| *t);
+        let pair = corefine::Pair {
+            surface: mesh,
+            knife,
+            forest,
+            margin: k.margin(),
+        };
+        return Ok(finish_locate_mesh(&pair, crossed, stats));
+    }
     let mut crossed: Vec<u32> = tested
         .iter()
         .zip(&crossed_flags)
@@ -296,7 +371,44 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Lo
         .map(|(t, _)| *t)
         .collect();
     crossed.sort_unstable();
-    finish_locate(mesh, crossed, k, stats)
+    Ok(finish_locate(mesh, crossed, k, stats))
+}
+
+/// Cut points of a triangulated knife, numbered by first use in ascending
+/// (surface triangle, knife triangle) order (tree and scan agree).
+fn finish_locate_mesh(
+    pair: &corefine::Pair<'_>,
+    crossed: Vec<(u32, corefine::TriangleSegments)>,
+    mut stats: CutStats,
+) -> Located {
+    let mut ids: HashMap<PointOrigin, u32> = HashMap::new();
+    let mut out = Located::default();
+    for (t, segs) in crossed {
+        for (kt, ends) in segs {
+            let ends = ends.map(|o| {
+                *ids.entry(o).or_insert_with(|| {
+                    out.points.push(pair.point(o).as_vec3());
+                    out.lower_negative.push(pair.lower_behind(o));
+                    out.edges.push(match o {
+                        PointOrigin::SurfaceEdge { edge, .. }
+                        | PointOrigin::KnifeEdge { edge, .. } => edge,
+                    });
+                    out.origins.push(o);
+                    out.points.len() as u32 - 1
+                })
+            });
+            out.segments.push(KnifeSegment {
+                triangle: t,
+                knife_triangle: kt,
+                ends,
+            });
+        }
+        out.triangles.push(t);
+    }
+    stats.triangles_split = out.triangles.len();
+    stats.cut_vertices = out.points.len();
+    out.stats = stats;
+    out
 }
 
 /// Whether each triangle has a crossed edge.
@@ -331,7 +443,7 @@ fn crossed_flags(mesh: &TriMesh, tris: &[u32], k: &PreparedKnife<'_>) -> Vec<boo
     }
 }
 
-fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Located {
+fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located> {
     let stats = CutStats {
         triangles_total: mesh.triangles.len(),
         triangles_tested: mesh.triangles.len(),
@@ -362,17 +474,59 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Located {
                 .map(|(t, _)| t)
                 .collect()
         }
-        Kind::Mesh { .. } => {
+        Kind::Mesh {
+            mesh: knife,
+            forest,
+        } => {
+            let pair = corefine::Pair {
+                surface: mesh,
+                knife,
+                forest,
+                margin: k.margin(),
+            };
             let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
-            let flags = crossed_flags(mesh, &all, k);
-            all.into_iter()
-                .zip(flags)
-                .filter(|(_, f)| *f)
-                .map(|(t, _)| t)
-                .collect()
+            let segs = pair.segments_of(&all)?;
+            let crossed = all
+                .into_iter()
+                .zip(segs)
+                .filter(|(_, s)| !s.is_empty())
+                .collect();
+            return Ok(finish_locate_mesh(&pair, crossed, stats));
         }
     };
-    finish_locate(mesh, crossed, k, stats)
+    Ok(finish_locate(mesh, crossed, k, stats))
+}
+
+/// A multiplicative hash for edge keys (vertex-id pairs, not attacker
+/// controlled): the cut-vertex table is on the query's hot path.
+#[derive(Debug, Clone, Copy, Default)]
+struct EdgeHash;
+
+impl std::hash::BuildHasher for EdgeHash {
+    type Hasher = EdgeHasher;
+    fn build_hasher(&self) -> EdgeHasher {
+        EdgeHasher(0)
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct EdgeHasher(u64);
+
+impl std::hash::Hasher for EdgeHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(u64::from(x));
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(29) ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
 }
 
 /// Cut vertices of the crossed triangles, numbered by first use in
@@ -384,7 +538,8 @@ fn finish_locate(
     mut stats: CutStats,
 ) -> Located {
     let p = &mesh.positions;
-    let mut ids: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut ids: HashMap<(u32, u32), u32, EdgeHash> =
+        HashMap::with_capacity_and_hasher(2 * crossed.len(), EdgeHash);
     let mut out = Located::default();
     for &t in &crossed {
         let tri = mesh.triangles[t as usize];
@@ -431,14 +586,188 @@ fn assemble(
     opts: &CutOptions,
 ) -> Result<CutResult> {
     let t0 = Instant::now();
-    if opts.cap && matches!(k.kind, Kind::Mesh { .. }) {
-        return Err(Error::InvalidInput(
-            "caps are made for plane, rectangle and sphere knives; a triangulated knife cuts without capping".into(),
-        ));
+    let n_v = mesh.positions.len() as u32;
+    let mut stats = located.stats.clone();
+    let Split {
+        subs,
+        mut glued,
+        points,
+        caps: cap_tris,
+    } = match &k.kind {
+        Kind::Mesh {
+            mesh: knife,
+            forest,
+        } => {
+            let pair = corefine::Pair {
+                surface: mesh,
+                knife,
+                forest,
+                margin: k.margin(),
+            };
+            let ms = corefine::split(
+                &pair,
+                &located.triangles,
+                &located.points,
+                &located.origins,
+                &located.segments,
+                opts.cap,
+            )?;
+            stats.loops_capped = ms.regions_capped;
+            stats.curves_open = ms.curves_open;
+            let mut points = located.points.clone();
+            points.extend(ms.extra_points);
+            Split {
+                subs: ms
+                    .subs
+                    .into_iter()
+                    .map(|s| {
+                        s.into_iter()
+                            .map(|(v, neg)| Sub { v, side: Some(neg) })
+                            .collect()
+                    })
+                    .collect(),
+                glued: Vec::new(),
+                points,
+                caps: ms.caps,
+            }
+        }
+        _ => split_analytic(mesh, &located, k, opts, &mut stats)?,
+    };
+    glued.resize(points.len(), false);
+    let n_c = points.len() as u32;
+    // Vertex nodes: originals, then two copies per cut vertex (negative,
+    // positive); a glued cut vertex uses its negative copy on both sides.
+    let node = |v: u32, side: Option<bool>| -> u32 {
+        if v < n_v {
+            return v;
+        }
+        let c = v - n_v;
+        let positive = !glued[c as usize] && side == Some(false);
+        n_v + 2 * c + u32::from(positive)
+    };
+    // Union-find over vertex nodes; every sub-triangle joins its vertices.
+    let n_nodes = (n_v + 2 * n_c) as usize;
+    let mut uf = UnionFind::with_len(n_nodes);
+    let mut crossed_iter = located.triangles.iter().zip(&subs).peekable();
+    // Output order: input triangles in id order (split ones replaced by
+    // their sub-triangles), then the negative caps, then the positive caps.
+    let mut out_tris: Vec<([u32; 3], Option<bool>)> =
+        Vec::with_capacity(mesh.triangles.len() + 3 * subs.len());
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        match crossed_iter.peek() {
+            Some((ct, s)) if **ct as usize == t => {
+                for sub in s.iter() {
+                    out_tris.push((sub.v, sub.side));
+                }
+                crossed_iter.next();
+            }
+            _ => out_tris.push((*tri, None)),
+        }
     }
+    for &c in &cap_tris {
+        out_tris.push((c, Some(true)));
+    }
+    for &c in &cap_tris {
+        out_tris.push(([c[0], c[2], c[1]], Some(false)));
+    }
+    let keyed: Vec<[u32; 3]> = out_tris
+        .iter()
+        .map(|(v, s)| v.map(|x| node(x, *s)))
+        .collect();
+    // Cut vertices separate because each side uses its own copy; glued cut
+    // vertices have one copy and join both sides.
+    for k3 in &keyed {
+        uf.union(k3[0], k3[1]);
+        uf.union(k3[0], k3[2]);
+    }
+    // Pieces by first triangle; per piece its own vertex numbering.
+    // Every vertex node belongs to exactly one piece (all triangles using it
+    // were united), so one global node → local index table serves all pieces.
+    let mut piece_of_root = vec![u32::MAX; n_nodes];
+    let mut pieces: Vec<TriMesh> = Vec::new();
+    let mut piece_side: Vec<(bool, bool)> = Vec::new();
+    let mut local = vec![u32::MAX; n_nodes];
+    let position = |key: u32| -> Vec3 {
+        if key < n_v {
+            mesh.positions[key as usize]
+        } else {
+            points[((key - n_v) / 2) as usize]
+        }
+    };
+    let side_of = |tri: &[u32; 3], s: Option<bool>| -> Option<bool> {
+        s.or_else(|| match &k.kind {
+            Kind::Mesh { .. } => None,
+            _ => tri
+                .iter()
+                .find(|&&v| v < n_v)
+                .and_then(|&v| k.side_value(mesh.positions[v as usize].as_dvec3()))
+                .map(|f| f < 0.0),
+        })
+    };
+    for (i, k3) in keyed.iter().enumerate() {
+        let root = uf.find(k3[0]) as usize;
+        if piece_of_root[root] == u32::MAX {
+            piece_of_root[root] = pieces.len() as u32;
+            pieces.push(TriMesh::default());
+            piece_side.push((false, false));
+        }
+        let pi = piece_of_root[root] as usize;
+        // Glued sub-triangles (an open knife ends there) touch both sides;
+        // unsplit triangles of a mesh knife say nothing about their side.
+        let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
+        match side_of(&out_tris[i].0, out_tris[i].1) {
+            _ if glued_sub => piece_side[pi] = (true, true),
+            Some(true) => piece_side[pi].0 = true,
+            Some(false) => piece_side[pi].1 = true,
+            None => {}
+        }
+        let piece = &mut pieces[pi];
+        let tri = k3.map(|key| {
+            let slot = &mut local[key as usize];
+            if *slot == u32::MAX {
+                *slot = piece.positions.len() as u32;
+                piece.positions.push(position(key));
+            }
+            *slot
+        });
+        piece.triangles.push(tri);
+    }
+    let sides = piece_side
+        .iter()
+        .map(|&(n, p)| match (n, p) {
+            (true, false) => Side::Negative,
+            (false, true) => Side::Positive,
+            _ => Side::Both,
+        })
+        .collect();
+    stats.assemble_seconds = t0.elapsed().as_secs_f64();
+    Ok(CutResult {
+        pieces,
+        sides,
+        stats,
+    })
+}
+
+/// A split before regrouping: sub-triangles per crossed triangle, glued
+/// cut vertices, all new vertices (cut points, then cap vertices) and the
+/// caps (ids `n_v + point`, oriented for the negative side).
+struct Split {
+    subs: Vec<Vec<Sub>>,
+    glued: Vec<bool>,
+    points: Vec<Vec3>,
+    caps: Vec<[u32; 3]>,
+}
+
+/// The split by an analytic knife (one cut vertex per crossed edge).
+fn split_analytic(
+    mesh: &TriMesh,
+    located: &Located,
+    k: &PreparedKnife<'_>,
+    opts: &CutOptions,
+    stats: &mut CutStats,
+) -> Result<Split> {
     let n_v = mesh.positions.len() as u32;
     let n_c = located.points.len() as u32;
-    let mut stats = located.stats.clone();
     // Sub-triangles of each crossed triangle.
     let mut subs: Vec<Vec<Sub>> = Vec::with_capacity(located.triangles.len());
     let mut glued = vec![false; n_c as usize];
@@ -507,133 +836,30 @@ fn assemble(
         }
         subs.push(s);
     }
-    // Vertex nodes: originals, then two copies per cut vertex (negative,
-    // positive); a glued cut vertex uses its negative copy on both sides.
-    let node = |v: u32, side: Option<bool>| -> u32 {
-        if v < n_v {
-            return v;
-        }
-        let c = v - n_v;
-        let positive = !glued[c as usize] && side == Some(false);
-        n_v + 2 * c + u32::from(positive)
-    };
-    // Caps.
+    // Caps; a sphere cap adds its own vertices after the cut vertices.
+    let mut points = located.points.clone();
     let mut cap_tris: Vec<[u32; 3]> = Vec::new();
     if opts.cap {
         let (loops, open) = cap::loops(&segments);
         stats.curves_open = open;
         stats.loops_capped = loops.len();
         if !loops.is_empty() {
-            cap_tris = make_caps(&loops, &located.points, n_v, k)?;
+            cap_tris = make_caps(&loops, &mut points, n_v, k)?;
         }
     }
-    // Union-find over vertex nodes; every sub-triangle joins its vertices.
-    let n_nodes = (n_v + 2 * n_c) as usize;
-    let mut uf = UnionFind::with_len(n_nodes);
-    let mut crossed_iter = located.triangles.iter().zip(&subs).peekable();
-    // Output order: input triangles in id order (split ones replaced by
-    // their sub-triangles), then the negative caps, then the positive caps.
-    let mut out_tris: Vec<([u32; 3], Option<bool>)> =
-        Vec::with_capacity(mesh.triangles.len() + 3 * subs.len());
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        match crossed_iter.peek() {
-            Some((ct, s)) if **ct as usize == t => {
-                for sub in s.iter() {
-                    out_tris.push((sub.v, sub.side));
-                }
-                crossed_iter.next();
-            }
-            _ => out_tris.push((*tri, None)),
-        }
-    }
-    for &c in &cap_tris {
-        out_tris.push((c, Some(true)));
-    }
-    for &c in &cap_tris {
-        out_tris.push(([c[0], c[2], c[1]], Some(false)));
-    }
-    let keyed: Vec<[u32; 3]> = out_tris
-        .iter()
-        .map(|(v, s)| v.map(|x| node(x, *s)))
-        .collect();
-    // Cut vertices separate because each side uses its own copy; glued cut
-    // vertices have one copy and join both sides.
-    for k3 in &keyed {
-        uf.union(k3[0], k3[1]);
-        uf.union(k3[0], k3[2]);
-    }
-    // Pieces by first triangle; per piece its own vertex numbering.
-    // Every vertex node belongs to exactly one piece (all triangles using it
-    // were united), so one global node → local index table serves all pieces.
-    let mut piece_of_root = vec![u32::MAX; n_nodes];
-    let mut pieces: Vec<TriMesh> = Vec::new();
-    let mut piece_side: Vec<(bool, bool)> = Vec::new();
-    let mut local = vec![u32::MAX; n_nodes];
-    let position = |key: u32| -> Vec3 {
-        if key < n_v {
-            mesh.positions[key as usize]
-        } else {
-            located.points[((key - n_v) / 2) as usize]
-        }
-    };
-    let side_of = |tri: &[u32; 3], s: Option<bool>| -> Option<bool> {
-        s.or_else(|| match &k.kind {
-            Kind::Mesh { .. } => None,
-            _ => tri
-                .iter()
-                .find(|&&v| v < n_v)
-                .and_then(|&v| k.side_value(mesh.positions[v as usize].as_dvec3()))
-                .map(|f| f < 0.0),
-        })
-    };
-    for (i, k3) in keyed.iter().enumerate() {
-        let root = uf.find(k3[0]) as usize;
-        if piece_of_root[root] == u32::MAX {
-            piece_of_root[root] = pieces.len() as u32;
-            pieces.push(TriMesh::default());
-            piece_side.push((false, false));
-        }
-        let pi = piece_of_root[root] as usize;
-        // Glued sub-triangles (an open knife ends there) touch both sides;
-        // unsplit triangles of a mesh knife say nothing about their side.
-        let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
-        match side_of(&out_tris[i].0, out_tris[i].1) {
-            _ if glued_sub => piece_side[pi] = (true, true),
-            Some(true) => piece_side[pi].0 = true,
-            Some(false) => piece_side[pi].1 = true,
-            None => {}
-        }
-        let piece = &mut pieces[pi];
-        let tri = k3.map(|key| {
-            let slot = &mut local[key as usize];
-            if *slot == u32::MAX {
-                *slot = piece.positions.len() as u32;
-                piece.positions.push(position(key));
-            }
-            *slot
-        });
-        piece.triangles.push(tri);
-    }
-    let sides = piece_side
-        .iter()
-        .map(|&(n, p)| match (n, p) {
-            (true, false) => Side::Negative,
-            (false, true) => Side::Positive,
-            _ => Side::Both,
-        })
-        .collect();
-    stats.assemble_seconds = t0.elapsed().as_secs_f64();
-    Ok(CutResult {
-        pieces,
-        sides,
-        stats,
+    Ok(Split {
+        subs,
+        glued,
+        points,
+        caps: cap_tris,
     })
 }
 
-/// Cap triangles (vertex ids `n_v + cut id`, oriented for the negative side).
+/// Cap triangles (vertex ids `n_v + point id`, oriented for the negative
+/// side); a sphere cap's own vertices are appended to `points`.
 fn make_caps(
     loops: &[Vec<u32>],
-    points: &[Vec3],
+    points: &mut Vec<Vec3>,
     n_v: u32,
     k: &PreparedKnife<'_>,
 ) -> Result<Vec<[u32; 3]>> {
@@ -644,12 +870,26 @@ fn make_caps(
             cap::Projection::Plane { origin: *p, u, v }
         }
         Kind::Sphere { c, r } => {
+            // The cap lies left of its loops seen from outside: their
+            // summed vector area (about the centre) points into it, also
+            // for a loop on a great circle or a cap beyond a hemisphere.
+            let area: DVec3 = loops
+                .iter()
+                .map(|lp| {
+                    (0..lp.len())
+                        .map(|i| (pos(lp[i]) - *c).cross(pos(lp[(i + 1) % lp.len()]) - *c))
+                        .sum::<DVec3>()
+                })
+                .sum();
             let mean: DVec3 = loops
                 .iter()
                 .flatten()
                 .map(|&v| (pos(v) - *c).normalize_or_zero())
                 .sum();
-            let d = mean.try_normalize().unwrap_or(DVec3::Z);
+            let d = area
+                .try_normalize()
+                .or_else(|| mean.try_normalize())
+                .unwrap_or(DVec3::Z);
             let (u, v) = cap::frame(d);
             cap::Projection::Sphere {
                 c: *c,
@@ -678,8 +918,34 @@ fn make_caps(
         }
         index_loops.push(il);
     }
-    Ok(cap::triangulate(&pts, &index_loops)
-        .into_iter()
-        .map(|t| t.map(|i| ids[i]))
-        .collect())
+    let mut tris = cap::triangulate(&pts, &index_loops);
+    if let Kind::Sphere { r, .. } = &k.kind {
+        let mut pos3: Vec<DVec3> = ids.iter().map(|&v| pos(v)).collect();
+        // Enough for a whole sphere at the chord bound, with room to spare.
+        let max_triangles = 64 * (1.0 / cap::SPHERE_CHORD_ERROR) as usize + 4 * tris.len();
+        cap::refine_on_sphere(
+            &mut tris,
+            &mut pts,
+            &mut pos3,
+            &projection,
+            cap::sphere_max_edge(*r),
+            max_triangles,
+        );
+        let first_new = points.len() as u32;
+        points.extend(pos3[ids.len()..].iter().map(|q| q.as_vec3()));
+        let n_loop = ids.len();
+        return Ok(tris
+            .into_iter()
+            .map(|t| {
+                t.map(|i| {
+                    if i < n_loop {
+                        ids[i]
+                    } else {
+                        n_v + first_new + (i - n_loop) as u32
+                    }
+                })
+            })
+            .collect());
+    }
+    Ok(tris.into_iter().map(|t| t.map(|i| ids[i])).collect())
 }

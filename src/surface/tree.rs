@@ -162,6 +162,13 @@ pub struct Forest {
     pub cells: Vec<CellNode>,
     /// Triangle ids ordered by (group, cell); leaves index this.
     pub triangles: Vec<u32>,
+    /// Whether the boxes are sorted along their keys: in every row the
+    /// cells' `min.x` and `max.x` never decrease, likewise the rows' `y`
+    /// bounds in every layer and the layers' `z` bounds in every group. True
+    /// for marching-cubes forests (a cell's triangles stay inside the cell);
+    /// it lets a query find the children a slab can touch by binary search
+    /// (seed §4.3) instead of testing every child box.
+    pub axis_sorted: bool,
 }
 
 impl Forest {
@@ -273,7 +280,35 @@ impl Forest {
                 },
             });
         }
+        f.axis_sorted = f.boxes_sorted();
         f
+    }
+
+    /// Whether every level's child boxes are sorted along its axis (see
+    /// [`Forest::axis_sorted`]).
+    fn boxes_sorted(&self) -> bool {
+        fn sorted<'a>(mut it: impl Iterator<Item = &'a Aabb>, axis: usize) -> bool {
+            let Some(first) = it.next() else {
+                return true;
+            };
+            let mut prev = (first.min[axis], first.max[axis]);
+            it.all(|b| {
+                let ok = b.min[axis] >= prev.0 && b.max[axis] >= prev.1;
+                prev = (b.min[axis], b.max[axis]);
+                ok
+            })
+        }
+        self.groups
+            .iter()
+            .all(|g| sorted(self.layers[g.layers.range()].iter().map(|l| &l.bbox), 2))
+            && self
+                .layers
+                .iter()
+                .all(|l| sorted(self.rows[l.rows.range()].iter().map(|r| &r.bbox), 1))
+            && self
+                .rows
+                .iter()
+                .all(|r| sorted(self.cells[r.cells.range()].iter().map(|c| &c.bbox), 0))
     }
 
     /// A forest for any mesh: groups = vertex-connected components
@@ -330,6 +365,22 @@ impl Forest {
         &self.triangles
             [self.cells[first].triangles.start as usize..self.cells[last].triangles.end as usize]
     }
+}
+
+/// The nodes among `nodes` (boxes sorted along `axis`, see
+/// [`Forest::axis_sorted`]) whose extent along `axis` can meet the closed
+/// interval `[lo, hi]`: two binary searches (seed §4.3), as an index range
+/// into `nodes`.
+pub fn sorted_overlap<T>(
+    nodes: &[T],
+    bbox: impl Fn(&T) -> &Aabb,
+    axis: usize,
+    lo: f64,
+    hi: f64,
+) -> std::ops::Range<usize> {
+    let start = nodes.partition_point(|n| f64::from(bbox(n).max[axis]) < lo);
+    let end = nodes.partition_point(|n| f64::from(bbox(n).min[axis]) <= hi);
+    start..end.max(start)
 }
 
 /// Stable counting sort of `items` by `key(item) < n_keys`.

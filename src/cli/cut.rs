@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use glam::DVec3;
 use serde_json::json;
 
-use super::Global;
+use super::{Global, ViewAxes};
 use crate::cut::{CutOptions, Knife, cut_sequence};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::render::{RenderOptions, View};
@@ -41,6 +41,8 @@ pub struct Args {
     /// Preview PNG with the pieces coloured by index.
     #[arg(long)]
     preview: Option<PathBuf>,
+    #[command(flatten)]
+    view: ViewAxes,
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -138,6 +140,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             height: 384,
             scalars: Some("piece".into()),
             title: Some(format!("chisel cut: {} pieces", result.pieces.len())),
+            facing: args.view.facing()?,
             ..Default::default()
         };
         crate::render::render_png(&gpu, &merged(&result.pieces), &opts, path)?;

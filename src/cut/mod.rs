@@ -169,7 +169,7 @@ pub fn cut_sequence(mesh: &TriMesh, knives: &[Knife], opts: &CutOptions) -> Resu
         let mut next_sides = Vec::new();
         for p in &pieces {
             let r = cut_mesh(p, k, opts)?;
-            add_stats(&mut stats, &r.stats);
+            stats.accumulate(&r.stats);
             next.extend(r.pieces);
             next_sides.extend(r.sides);
         }
@@ -183,21 +183,25 @@ pub fn cut_sequence(mesh: &TriMesh, knives: &[Knife], opts: &CutOptions) -> Resu
     })
 }
 
-fn add_stats(a: &mut CutStats, b: &CutStats) {
-    a.nodes_visited += b.nodes_visited;
-    a.nodes_total += b.nodes_total;
-    a.classes.clear += b.classes.clear;
-    a.classes.separated += b.classes.separated;
-    a.classes.intersected += b.classes.intersected;
-    a.triangles_tested += b.triangles_tested;
-    a.triangles_total += b.triangles_total;
-    a.triangles_split += b.triangles_split;
-    a.triangles_partial += b.triangles_partial;
-    a.cut_vertices += b.cut_vertices;
-    a.loops_capped += b.loops_capped;
-    a.curves_open += b.curves_open;
-    a.locate_seconds += b.locate_seconds;
-    a.assemble_seconds += b.assemble_seconds;
+impl CutStats {
+    /// Adds `b`'s counts and timings (several cuts reported as one).
+    pub fn accumulate(&mut self, b: &CutStats) {
+        let a = self;
+        a.nodes_visited += b.nodes_visited;
+        a.nodes_total += b.nodes_total;
+        a.classes.clear += b.classes.clear;
+        a.classes.separated += b.classes.separated;
+        a.classes.intersected += b.classes.intersected;
+        a.triangles_tested += b.triangles_tested;
+        a.triangles_total += b.triangles_total;
+        a.triangles_split += b.triangles_split;
+        a.triangles_partial += b.triangles_partial;
+        a.cut_vertices += b.cut_vertices;
+        a.loops_capped += b.loops_capped;
+        a.curves_open += b.curves_open;
+        a.locate_seconds += b.locate_seconds;
+        a.assemble_seconds += b.assemble_seconds;
+    }
 }
 
 /// Scene size from the group boxes (no pass over the vertices).

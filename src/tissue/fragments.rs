@@ -236,7 +236,7 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
         let mut taken = 0usize;
         for (mesh, member) in &pieces {
             let r = cut_mesh(mesh, &knife, &opts)?;
-            add_stats(&mut total, &r.stats);
+            total.accumulate(&r.stats);
             for (p, side) in r.pieces.into_iter().zip(r.sides) {
                 let mut m = member.clone();
                 let inside = c
@@ -304,18 +304,4 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
         pieces: infos,
         stats,
     })
-}
-
-fn add_stats(a: &mut CutStats, b: &CutStats) {
-    a.nodes_visited += b.nodes_visited;
-    a.nodes_total += b.nodes_total;
-    a.triangles_tested += b.triangles_tested;
-    a.triangles_total += b.triangles_total;
-    a.triangles_split += b.triangles_split;
-    a.triangles_partial += b.triangles_partial;
-    a.cut_vertices += b.cut_vertices;
-    a.loops_capped += b.loops_capped;
-    a.curves_open += b.curves_open;
-    a.locate_seconds += b.locate_seconds;
-    a.assemble_seconds += b.assemble_seconds;
 }

@@ -1,22 +1,27 @@
 //! CPU marching cubes with one-pass grouping (seed 004 §1).
 //!
 //! The grid is walked in chunks of z layers (rayon, one chunk per task).
-//! Inside a chunk, layer by layer:
+//! The inside flags are kept as bit rows (64 points per `u64`, read from the
+//! volume's native type by [`Field::inside_row`]), so whole words of points
+//! or cells that are all inside or all outside cost one test. Inside a
+//! chunk, layer by layer:
 //! 1. *points*: every sample point `p` owns its +x, +y, +z grid edges; each
 //!    crossing edge becomes one vertex, numbered in point order (x fastest,
 //!    then y, then z; axes x < y < z within a point) — the same numbering the
 //!    GPU's scan produces, so vertices are welded by edge id and both
 //!    backends give identical indices;
-//! 2. *cells*: each cell looks its case up in [`super::tables`] and emits
-//!    triangles in table order; each new triangle joins the groups of the
-//!    triangles already using its vertices — neighbours in the current and
-//!    previous cells — with union-find (seed §1 cases: join, new, merge).
+//! 2. *cells*: each crossed cell looks its case up in [`super::tables`] and
+//!    emits triangles in table order; each new triangle joins the groups of
+//!    the triangles already using its vertices — neighbours in the current
+//!    and previous cells — with union-find (seed §1 cases: join, new, merge).
 //!
 //! Chunks number their vertices from 0 (global id = chunk base + local id)
 //! and are stitched by uniting the groups of the vertices on the shared
-//! layer. Interpolation (the one expression both backends use, in f32):
+//! layer; the output does not depend on the number of threads.
+//! Interpolation (the one expression both backends use, in f32):
 //! `t = (level − a) / (b − a)`, `u[axis] = f32(p[axis]) + t`, with `a` the
-//! sample at the edge's lower end `p` and `b` at `p + e_axis`.
+//! sample at the edge's lower end `p` and `b` at `p + e_axis`
+//! ([`Field::sample`], only where an edge crosses).
 
 use rayon::prelude::*;
 
@@ -132,63 +137,134 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
     Ok(stitch(chunks))
 }
 
-/// Per-layer buffers of the chunk walk.
-struct Layer {
-    values: Vec<f32>,
-    inside: Vec<u8>,
-    /// Vertex id of each point's +x, +y, +z edge (NONE where not crossing).
-    vid: [Vec<u32>; 3],
+/// The bit-row geometry of the walk: row length and the mask of the
+/// points that own a +x edge (`x < nx − 1`), per word.
+struct Rows {
+    nx: usize,
+    ny: usize,
+    words: usize,
+    has_x: Vec<u64>,
 }
 
-impl Layer {
-    fn new(n: usize) -> Self {
-        Layer {
-            values: vec![0.0; n],
-            inside: vec![0; n],
-            vid: [vec![NONE; n], vec![NONE; n], vec![NONE; n]],
+impl Rows {
+    fn new(field: &Field<'_>) -> Self {
+        let [nx, ny, _] = field.dims;
+        let words = field.row_words();
+        let has_x = (0..words)
+            .map(|w| {
+                let lo = 64 * w;
+                let n = (nx - 1).saturating_sub(lo).min(64);
+                if n == 64 { u64::MAX } else { (1u64 << n) - 1 }
+            })
+            .collect();
+        Rows {
+            nx,
+            ny,
+            words,
+            has_x,
         }
     }
 
-    fn load(&mut self, field: &Field<'_>, z: usize) {
-        field.layer(z, &mut self.values);
-        let level = field.level;
-        for (m, &v) in self.inside.iter_mut().zip(&self.values) {
-            *m = u8::from(v >= level);
+    /// Row `y` of a layer of bits.
+    #[inline]
+    fn row<'a>(&self, layer: &'a [u64], y: usize) -> &'a [u64] {
+        &layer[y * self.words..(y + 1) * self.words]
+    }
+}
+
+/// Word `w` of `row` shifted down by one bit: bit `x` holds point `x + 1`.
+#[inline]
+fn next_bits(row: &[u64], w: usize) -> u64 {
+    row[w] >> 1 | row.get(w + 1).map_or(0, |n| n << 63)
+}
+
+/// Fills `bits` (`ny` rows of `words` words) with the inside flags of layer `z`.
+fn load_bits(field: &Field<'_>, rows: &Rows, z: usize, bits: &mut [u64]) {
+    for (y, row) in bits.chunks_exact_mut(rows.words).enumerate() {
+        field.inside_row(y, z, row);
+    }
+}
+
+/// The numbered crossing edges of one point layer: per row and word the
+/// crossing masks of the +x, +y, +z edges, and per row its first vertex
+/// id. A vertex id is recovered by counting along the row ([`VertexRows`]).
+struct Crossings {
+    /// `ny · words` masks `[x, y, z]`.
+    masks: Vec<[u64; 3]>,
+    /// `ny` first vertex ids (chunk-local).
+    row_base: Vec<u32>,
+}
+
+impl Crossings {
+    fn new(rows: &Rows) -> Self {
+        Crossings {
+            masks: vec![[0; 3]; rows.ny * rows.words],
+            row_base: vec![0; rows.ny],
         }
     }
 }
 
 fn run_chunk(field: &Field<'_>, z0: usize, z1: usize) -> Chunk {
-    let [nx, ny, nz] = field.dims;
-    let n = nx * ny;
+    let [_, _, nz] = field.dims;
+    let rows = Rows::new(field);
     let mut out = Chunk::default();
-    // Ring of three layers z, z + 1, z + 2; layer k lives in slot (k − z0) mod 3.
-    let slot = |k: usize| (k - z0) % 3;
-    let mut ring = [Layer::new(n), Layer::new(n), Layer::new(n)];
-    ring[0].load(field, z0);
-    ring[1].load(field, z0 + 1);
+    // Bits of layers z, z + 1, z + 2 in slot (k − z0) mod 3; crossings of
+    // layers z, z + 1 in slot (k − z0) mod 2.
+    let slot3 = |k: usize| (k - z0) % 3;
+    let slot2 = |k: usize| (k - z0) % 2;
+    let mut bits: [Vec<u64>; 3] = std::array::from_fn(|_| vec![0; rows.ny * rows.words]);
+    let mut crossings = [Crossings::new(&rows), Crossings::new(&rows)];
+    let mut vertex_rows = VertexRows::new(&rows);
+    load_bits(field, &rows, z0, &mut bits[0]);
+    load_bits(field, &rows, z0 + 1, &mut bits[1]);
     let mut next_id: u32 = 0;
-    number_points(field, &mut ring, 0, z0, true, &mut next_id, &mut out);
+    let layer = Layer {
+        z: z0,
+        bits: &bits[0],
+        above: Some(&bits[1]),
+        own: true,
+    };
+    number_points(
+        field,
+        &rows,
+        &layer,
+        &mut crossings[0],
+        &mut next_id,
+        &mut out,
+    );
     out.n_first_layer = next_id as usize;
     let last_chunk = z1 == nz - 1;
     for z in z0..z1 {
         if z + 2 < nz {
-            ring[slot(z + 2)].load(field, z + 2);
+            load_bits(field, &rows, z + 2, &mut bits[slot3(z + 2)]);
         }
         let shared_layer = z + 1 == z1 && !last_chunk;
         if shared_layer {
             out.n_own = next_id as usize;
         }
-        number_points(
+        let layer = Layer {
+            z: z + 1,
+            bits: &bits[slot3(z + 1)],
+            above: (z + 2 < nz).then(|| bits[slot3(z + 2)].as_slice()),
+            own: !shared_layer,
+        };
+        let [c0, c1] = &mut crossings;
+        let (lower, upper) = if slot2(z) == 0 { (c0, c1) } else { (c1, c0) };
+        number_points(field, &rows, &layer, upper, &mut next_id, &mut out);
+        let cells = CellLayer {
+            z,
+            lower: &bits[slot3(z)],
+            upper: &bits[slot3(z + 1)],
+        };
+        vertex_rows.clear();
+        emit_cells(
             field,
-            &mut ring,
-            slot(z + 1),
-            z + 1,
-            !shared_layer,
-            &mut next_id,
+            &rows,
+            &cells,
+            [&*lower, &*upper],
+            &mut vertex_rows,
             &mut out,
         );
-        emit_cells(field, &ring[slot(z)], &ring[slot(z + 1)], z, &mut out);
     }
     if last_chunk {
         out.n_own = next_id as usize;
@@ -196,159 +272,218 @@ fn run_chunk(field: &Field<'_>, z0: usize, z1: usize) -> Chunk {
     out
 }
 
-/// Numbers the crossing edges of layer `z` (in `ring[slot]`); stores
+/// A point layer to number: its bits, the bits of the layer above (none
+/// on the top layer), and whether this chunk stores its vertices.
+struct Layer<'a> {
+    z: usize,
+    bits: &'a [u64],
+    above: Option<&'a [u64]>,
+    own: bool,
+}
+
+/// Numbers the crossing edges of a point layer in point order (x fastest,
+/// then y; axes x < y < z within a point), a word of 64 points at a time:
+/// the crossing edges of a word are `m ^ next_bits(m)`, `m ^ m_y+1` and
+/// `m ^ m_z+1`. Records the masks and row bases in `crossings`; stores
 /// positions and edge ids when the layer is `own`.
 fn number_points(
     field: &Field<'_>,
-    ring: &mut [Layer; 3],
-    slot: usize,
-    z: usize,
-    own: bool,
+    rows: &Rows,
+    layer: &Layer<'_>,
+    crossings: &mut Crossings,
     next_id: &mut u32,
     out: &mut Chunk,
 ) {
-    let [nx, ny, nz] = field.dims;
+    let (nx, ny) = (rows.nx, rows.ny);
     let level = field.level;
-    let up = (slot + 1) % 3;
-    let has_up = z + 1 < nz;
-    let (lo, hi) = split_two(ring, slot, up);
-    let layer = lo;
-    let above = hi;
-    // Stale ids are never read: cells only look up crossing edges, and every
-    // crossing edge of this layer is numbered below.
-    let mut vid = std::mem::take(&mut layer.vid);
+    let z = layer.z;
     let zf = z as f32;
     for y in 0..ny {
-        let row = y * nx;
-        let has_y = y + 1 < ny;
-        let m = &layer.inside[row..row + nx];
-        let my = if has_y {
-            &layer.inside[row + nx..row + 2 * nx]
-        } else {
-            m
-        };
-        let mz = if has_up {
-            &above.inside[row..row + nx]
-        } else {
-            m
-        };
-        let mut x = 0;
-        while x < nx {
-            // Eight points at once when none of their edges cross.
-            if x + 9 <= nx {
-                let w = word(m, x);
-                if w == word(m, x + 1) && w == word(my, x) && w == word(mz, x) {
-                    x += 8;
-                    continue;
-                }
+        crossings.row_base[y] = *next_id;
+        let m = rows.row(layer.bits, y);
+        let my = (y + 1 < ny).then(|| rows.row(layer.bits, y + 1));
+        let mz = layer.above.map(|a| rows.row(a, y));
+        let masks = &mut crossings.masks[y * rows.words..(y + 1) * rows.words];
+        for (w, mask) in masks.iter_mut().enumerate() {
+            let ex = (m[w] ^ next_bits(m, w)) & rows.has_x[w];
+            let ey = my.map_or(0, |r| m[w] ^ r[w]);
+            let ez = mz.map_or(0, |r| m[w] ^ r[w]);
+            *mask = [ex, ey, ez];
+            let n = ex.count_ones() + ey.count_ones() + ez.count_ones();
+            if n == 0 {
+                continue;
             }
-            let q = row + x;
-            let mq = m[x];
-            let a = layer.values[q];
-            let point = (q + z * nx * ny) as u64;
-            let mut add = |axis: usize, b: f32, out: &mut Chunk, vid: &mut [Vec<u32>; 3]| {
-                vid[axis][q] = *next_id;
-                *next_id += 1;
-                out.vertex_node.push(NONE);
-                if own {
+            *next_id += n;
+            out.vertex_node
+                .extend(std::iter::repeat_n(NONE, n as usize));
+            if !layer.own {
+                continue;
+            }
+            let mut any = ex | ey | ez;
+            while any != 0 {
+                let s = any.trailing_zeros();
+                any &= any - 1;
+                let x = 64 * w + s as usize;
+                let point = (x + nx * (y + ny * z)) as u64;
+                let a = field.sample(x, y, z);
+                for (axis, e) in [ex, ey, ez].into_iter().enumerate() {
+                    if e >> s & 1 == 0 {
+                        continue;
+                    }
+                    let b = match axis {
+                        0 => field.sample(x + 1, y, z),
+                        1 => field.sample(x, y + 1, z),
+                        _ => field.sample(x, y, z + 1),
+                    };
                     let t = (level - a) / (b - a);
                     let mut u = [x as f32, y as f32, zf];
                     u[axis] += t;
                     out.positions.push(u);
                     out.edges.push(3 * point + axis as u64);
                 }
-            };
-            if x + 1 < nx && m[x + 1] != mq {
-                add(0, layer.values[q + 1], out, &mut vid);
             }
-            if has_y && my[x] != mq {
-                add(1, layer.values[q + nx], out, &mut vid);
-            }
-            if has_up && mz[x] != mq {
-                add(2, above.values[q], out, &mut vid);
-            }
-            x += 1;
         }
     }
-    layer.vid = vid;
 }
 
-/// Eight inside flags starting at `x` as one word (`x + 8 <= s.len()`).
-#[inline]
-fn word(s: &[u8], x: usize) -> u64 {
-    let mut b = [0u8; 8];
-    b.copy_from_slice(&s[x..x + 8]);
-    u64::from_ne_bytes(b)
+/// Vertex ids of the point rows a cell row reads — rows `y` and `y + 1`
+/// of the lower and upper layer — unpacked from [`Crossings`] into small
+/// per-row arrays (`[layer][y mod 2][axis][x]`), each row once per cell layer.
+struct VertexRows {
+    nx: usize,
+    words: usize,
+    /// Ids at `((2·layer + y mod 2)·3 + axis)·nx + x`.
+    ids: Vec<u32>,
+    /// Row held by each `[layer][y mod 2]` slot (`usize::MAX`: none).
+    held: [[usize; 2]; 2],
 }
 
-/// Mutable references to two distinct ring slots.
-fn split_two(ring: &mut [Layer; 3], a: usize, b: usize) -> (&mut Layer, &mut Layer) {
-    let [r0, r1, r2] = ring;
-    match (a, b) {
-        (0, 1) => (r0, r1),
-        (1, 2) => (r1, r2),
-        (2, 0) => (r2, r0),
-        (1, 0) => (r1, r0),
-        (2, 1) => (r2, r1),
-        _ => (r0, r2),
+impl VertexRows {
+    fn new(rows: &Rows) -> Self {
+        VertexRows {
+            nx: rows.nx,
+            words: rows.words,
+            ids: vec![NONE; 12 * rows.nx],
+            held: [[usize::MAX; 2]; 2],
+        }
+    }
+
+    /// Forgets the rows held (a new cell layer starts).
+    fn clear(&mut self) {
+        self.held = [[usize::MAX; 2]; 2];
+    }
+
+    /// Makes rows `y` and `y + 1` of the lower and upper layer available.
+    fn hold(&mut self, layers: [&Crossings; 2], y: usize) {
+        let nx = self.nx;
+        for (dz, c) in layers.into_iter().enumerate() {
+            for yy in [y, y + 1] {
+                if self.held[dz][yy % 2] == yy {
+                    continue;
+                }
+                let slot =
+                    &mut self.ids[(2 * dz + yy % 2) * 3 * nx..(2 * dz + yy % 2 + 1) * 3 * nx];
+                let (ids_x, rest) = slot.split_at_mut(nx);
+                let (ids_y, ids_z) = rest.split_at_mut(nx);
+                let mut id = c.row_base[yy];
+                let masks = &c.masks[yy * self.words..(yy + 1) * self.words];
+                for (w, &[ex, ey, ez]) in masks.iter().enumerate() {
+                    let mut any = ex | ey | ez;
+                    while any != 0 {
+                        let s = any.trailing_zeros();
+                        any &= any - 1;
+                        let x = 64 * w + s as usize;
+                        if ex >> s & 1 == 1 {
+                            ids_x[x] = id;
+                            id += 1;
+                        }
+                        if ey >> s & 1 == 1 {
+                            ids_y[x] = id;
+                            id += 1;
+                        }
+                        if ez >> s & 1 == 1 {
+                            ids_z[x] = id;
+                            id += 1;
+                        }
+                    }
+                }
+                self.held[dz][yy % 2] = yy;
+            }
+        }
+    }
+
+    /// Id of the vertex on the `axis` edge of point `(x, y)` of layer `dz`
+    /// (row `y` held).
+    #[inline]
+    fn get(&self, dz: usize, y: usize, axis: usize, x: usize) -> u32 {
+        self.ids[((2 * dz + y % 2) * 3 + axis) * self.nx + x]
     }
 }
 
-/// Emits the triangles of cell layer `z` (between `lower` and `upper`).
-fn emit_cells(field: &Field<'_>, lower: &Layer, upper: &Layer, z: usize, out: &mut Chunk) {
+/// A cell layer `z`: the bits of its lower and upper point layers.
+struct CellLayer<'a> {
+    z: usize,
+    lower: &'a [u64],
+    upper: &'a [u64],
+}
+
+/// Emits the triangles of a cell layer in cell order (x fastest, then y),
+/// a word of 64 cells at a time: a cell is crossed when its eight corners
+/// (bits `x` and `x + 1` of four rows) are neither all 0 nor all 1.
+fn emit_cells(
+    field: &Field<'_>,
+    rows: &Rows,
+    cells: &CellLayer<'_>,
+    crossings: [&Crossings; 2],
+    vertex_rows: &mut VertexRows,
+    out: &mut Chunk,
+) {
     let [nx, ny, _] = field.dims;
     let table = tables::table();
     let (cx, cy) = (nx - 1, ny - 1);
-    let layers = [lower, upper];
-    // Offset of each local edge's owner point from the cell origin.
-    let owner: [(usize, usize); 12] = std::array::from_fn(|e| {
-        let o = corner_offset(EDGE_OWNER[e] as usize);
-        (o[0] + o[1] * nx, o[2])
-    });
+    // Offset `[x, y, z]` and axis of each local edge's owner point.
+    let owner: [([usize; 3], usize); 12] =
+        std::array::from_fn(|e| (corner_offset(EDGE_OWNER[e] as usize), edge_axis(e)));
     for y in 0..cy {
-        let r0 = y * nx;
-        let r1 = r0 + nx;
-        let rows = [
-            &lower.inside[r0..r0 + nx],
-            &lower.inside[r1..r1 + nx],
-            &upper.inside[r0..r0 + nx],
-            &upper.inside[r1..r1 + nx],
+        // Corner rows: 0 = (y, z), 1 = (y + 1, z), 2 = (y, z + 1), 3 = (y + 1, z + 1).
+        let r = [
+            rows.row(cells.lower, y),
+            rows.row(cells.lower, y + 1),
+            rows.row(cells.upper, y),
+            rows.row(cells.upper, y + 1),
         ];
-        let mut x = 0;
-        while x < cx {
-            // Eight empty (or full) cells at once.
-            if x + 9 <= nx {
-                let w = word(rows[0], x);
-                if rows.iter().all(|r| word(r, x) == w && word(r, x + 1) == w) {
-                    x += 8;
-                    continue;
+        let mut held = false;
+        for w in 0..rows.words {
+            let lo = r.map(|row| row[w]);
+            let hi = r.map(|row| next_bits(row, w));
+            let any = lo[0] | lo[1] | lo[2] | lo[3] | hi[0] | hi[1] | hi[2] | hi[3];
+            let all = lo[0] & lo[1] & lo[2] & lo[3] & hi[0] & hi[1] & hi[2] & hi[3];
+            let mut crossed = any & !all & rows.has_x[w];
+            if crossed != 0 && !held {
+                vertex_rows.hold(crossings, y);
+                held = true;
+            }
+            while crossed != 0 {
+                let s = crossed.trailing_zeros();
+                crossed &= crossed - 1;
+                let mut case = 0usize;
+                for k in 0..4 {
+                    case |= ((lo[k] >> s & 1) as usize) << (2 * k);
+                    case |= ((hi[k] >> s & 1) as usize) << (2 * k + 1);
+                }
+                let x = 64 * w + s as usize;
+                let cell = (x + cx * (y + cy * cells.z)) as u32;
+                for tri in table.case(case) {
+                    let id = |e: u8| {
+                        let ([ox, oy, oz], axis) = owner[e as usize];
+                        vertex_rows.get(oz, y + oy, axis, x + ox)
+                    };
+                    let v = [id(tri[0]), id(tri[1]), id(tri[2])];
+                    join_group(out, v);
+                    out.triangles.push(v);
+                    out.cells.push(cell);
                 }
             }
-            let case = usize::from(rows[0][x])
-                | usize::from(rows[0][x + 1]) << 1
-                | usize::from(rows[1][x]) << 2
-                | usize::from(rows[1][x + 1]) << 3
-                | usize::from(rows[2][x]) << 4
-                | usize::from(rows[2][x + 1]) << 5
-                | usize::from(rows[3][x]) << 6
-                | usize::from(rows[3][x + 1]) << 7;
-            if case == 0 || case == 255 {
-                x += 1;
-                continue;
-            }
-            let q = r0 + x;
-            let cell = (x + cx * (y + cy * z)) as u32;
-            for tri in table.case(case) {
-                let v = tri.map(|e| {
-                    let e = e as usize;
-                    let (dq, dz) = owner[e];
-                    layers[dz].vid[edge_axis(e)][q + dq]
-                });
-                join_group(out, v);
-                out.triangles.push(v);
-                out.cells.push(cell);
-            }
-            x += 1;
         }
     }
 }
@@ -360,7 +495,7 @@ fn join_group(out: &mut Chunk, v: [u32; 3]) {
     let mut node = NONE;
     for &i in &v {
         let g = out.vertex_node[i as usize];
-        if g != NONE {
+        if g != NONE && g != node {
             node = if node == NONE {
                 out.uf.find(g)
             } else {

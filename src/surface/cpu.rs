@@ -1,10 +1,14 @@
 //! CPU marching cubes with one-pass grouping (seed 004 §1).
 //!
-//! The grid is walked in chunks of z layers (rayon, one chunk per task).
-//! The inside flags are kept as bit rows (64 points per `u64`, read from the
-//! volume's native type by [`Field::inside_row`]), so whole words of points
-//! or cells that are all inside or all outside cost one test. Inside a
-//! chunk, layer by layer:
+//! Two passes over the grid, each parallel over z layers (rayon):
+//! - *count*: the inside flags of every layer as bit rows (64 points per
+//!   `u64`, read once from the volume's native type by
+//!   [`Field::inside_row`]; 1 bit per sample kept), and per layer the number
+//!   of vertices and triangles. Whole words of points or cells that are all
+//!   inside or all outside cost one test. The exclusive sums give every
+//!   layer its first vertex and triangle id, so
+//! - *emit* writes straight into the output arrays, in chunks of z layers
+//!   of about equal work, one task per chunk. Inside a chunk, layer by layer:
 //! 1. *points*: every sample point `p` owns its +x, +y, +z grid edges; each
 //!    crossing edge becomes one vertex, numbered in point order (x fastest,
 //!    then y, then z; axes x < y < z within a point) — the same numbering the
@@ -15,9 +19,9 @@
 //!    the triangles already using its vertices — neighbours in the current
 //!    and previous cells — with union-find (seed §1 cases: join, new, merge).
 //!
-//! Chunks number their vertices from 0 (global id = chunk base + local id)
-//! and are stitched by uniting the groups of the vertices on the shared
-//! layer; the output does not depend on the number of threads.
+//! Chunks number their vertices with global ids and are stitched by uniting
+//! the groups of the vertices on the layer two chunks share; the output does
+//! not depend on the number of threads or chunks.
 //! Interpolation (the one expression both backends use, in f32):
 //! `t = (level − a) / (b − a)`, `u[axis] = f32(p[axis]) + t`, with `a` the
 //! sample at the edge's lower end `p` and `b` at `p + e_axis`
@@ -27,7 +31,7 @@ use rayon::prelude::*;
 
 use super::field::Field;
 use super::tables::{self, EDGE_OWNER, corner_offset, edge_axis};
-use crate::Result;
+use crate::{Error, Result};
 
 /// Index-space output of one marching-cubes run, before world transform.
 #[derive(Debug, Default)]
@@ -99,46 +103,130 @@ impl UnionFind {
 
 const NONE: u32 = u32::MAX;
 
-/// Result of one z chunk (cell layers `z0..z1`).
-#[derive(Debug, Default)]
-struct Chunk {
-    positions: Vec<[f32; 3]>,
-    edges: Vec<u64>,
-    triangles: Vec<[u32; 3]>,
-    cells: Vec<u32>,
-    /// Local union-find node of each triangle.
-    tri_node: Vec<u32>,
-    uf: UnionFind,
-    /// Union-find node of each local vertex (own and shared-layer), or NONE.
-    vertex_node: Vec<u32>,
-    /// Vertices numbered by this chunk on its first layer `z0`.
-    n_first_layer: usize,
-    /// Vertices owned by this chunk (the rest lie on the next chunk's first layer).
-    n_own: usize,
-}
-
-/// Marching cubes of `field` on the CPU; see the module docs.
+/// Marching cubes of `field` on the CPU; see the module docs. Errors when
+/// the surface has 2³² − 1 or more vertices or triangles.
 pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
-    let [_, _, nz] = field.dims;
     if field.dims.iter().any(|&d| d < 2) {
         return Ok(RawSurface::default());
     }
-    let n_layers = nz - 1;
-    let threads = rayon::current_num_threads().max(1);
-    let per = n_layers.div_ceil(4 * threads).max(4);
-    let bounds: Vec<(usize, usize)> = (0..n_layers)
-        .step_by(per)
-        .map(|z0| (z0, (z0 + per).min(n_layers)))
+    let bits = Bits::load(field);
+    let nz = field.dims[2];
+    let table = tables::table();
+    // Vertices of point layer z, triangles of cell layer z (none on the top).
+    let counts: Vec<(u64, u64)> = (0..nz)
+        .into_par_iter()
+        .map(|z| {
+            let tris = if z + 1 < nz {
+                count_triangles(&bits, z, table)
+            } else {
+                0
+            };
+            (count_vertices(&bits, z), tris)
+        })
         .collect();
-    let chunks: Vec<Chunk> = bounds
-        .par_iter()
-        .map(|&(z0, z1)| run_chunk(field, z0, z1))
+    let vbase = exclusive_sum(counts.iter().map(|c| c.0), "vertices")?;
+    let tbase = exclusive_sum(counts.iter().map(|c| c.1), "triangles")?;
+    let (n_v, n_t) = (vbase[nz] as usize, tbase[nz] as usize);
+    let chunks = chunk_bounds(&bits, &counts);
+
+    let mut positions = vec![[0f32; 3]; n_v];
+    let mut edges = vec![0u64; n_v];
+    let mut triangles = vec![[0u32; 3]; n_t];
+    let mut cells = vec![0u32; n_t];
+    // Union-find node of each triangle, then its group.
+    let mut groups = vec![0u32; n_t];
+    let mut outs = Vec::with_capacity(chunks.len());
+    {
+        let (mut p, mut e) = (positions.as_mut_slice(), edges.as_mut_slice());
+        let (mut t, mut c, mut g) = (
+            triangles.as_mut_slice(),
+            cells.as_mut_slice(),
+            groups.as_mut_slice(),
+        );
+        for (k, &(z0, z1)) in chunks.iter().enumerate() {
+            let own_end = if k + 1 == chunks.len() { nz } else { z1 };
+            let nv = (vbase[own_end] - vbase[z0]) as usize;
+            let nt = (tbase[z1] - tbase[z0]) as usize;
+            let (p0, p1) = std::mem::take(&mut p).split_at_mut(nv);
+            let (e0, e1) = std::mem::take(&mut e).split_at_mut(nv);
+            let (t0, t1) = std::mem::take(&mut t).split_at_mut(nt);
+            let (c0, c1) = std::mem::take(&mut c).split_at_mut(nt);
+            let (g0, g1) = std::mem::take(&mut g).split_at_mut(nt);
+            (p, e, t, c, g) = (p1, e1, t1, c1, g1);
+            outs.push(ChunkOut {
+                z0,
+                z1,
+                own_end,
+                first_vertex: vbase[z0] as u32,
+                n_vertices: (vbase[z1 + 1] - vbase[z0]) as usize,
+                positions: p0,
+                edges: e0,
+                triangles: t0,
+                cells: c0,
+                tri_node: g0,
+            });
+        }
+    }
+    let chunk_groups: Vec<ChunkGroups> = outs
+        .into_par_iter()
+        .map(|out| run_chunk(field, &bits, out))
         .collect();
-    Ok(stitch(chunks))
+    let n_groups = stitch(&chunk_groups, &chunks, &vbase, &tbase, &mut groups);
+    Ok(RawSurface {
+        positions,
+        edges,
+        triangles,
+        cells,
+        groups,
+        n_groups,
+    })
 }
 
-/// The bit-row geometry of the walk: row length and the mask of the
-/// points that own a +x edge (`x < nx − 1`), per word.
+/// Exclusive prefix sums (one more entry than `counts`: the total last);
+/// errors when the total reaches `u32::MAX`.
+fn exclusive_sum(counts: impl Iterator<Item = u64>, what: &str) -> Result<Vec<u64>> {
+    let mut out = vec![0u64];
+    let mut sum = 0u64;
+    for c in counts {
+        sum += c;
+        out.push(sum);
+    }
+    if sum >= u64::from(u32::MAX) {
+        return Err(Error::InvalidInput(format!(
+            "marching cubes: {sum} {what} exceed 32-bit numbering"
+        )));
+    }
+    Ok(out)
+}
+
+/// Cell layers `z0..z1` of each chunk: about `4 × threads` chunks of equal
+/// work (triangles + vertices + a share for the words scanned).
+fn chunk_bounds(bits: &Bits, counts: &[(u64, u64)]) -> Vec<(usize, usize)> {
+    let n_layers = counts.len() - 1;
+    let scan = (bits.rows.ny * bits.rows.words / 8) as u64 + 1;
+    let work: Vec<u64> = (0..n_layers)
+        .map(|z| counts[z].1 + counts[z + 1].0 + scan)
+        .collect();
+    let total: u64 = work.iter().sum();
+    let n_chunks = (4 * rayon::current_num_threads().max(1)).min(n_layers) as u64;
+    let mut out = Vec::with_capacity(n_chunks as usize);
+    let (mut z0, mut acc, mut k) = (0, 0u64, 1u64);
+    for (z, w) in work.iter().enumerate() {
+        acc += w;
+        if acc * n_chunks >= k * total && z + 1 < n_layers {
+            out.push((z0, z + 1));
+            z0 = z + 1;
+            while acc * n_chunks >= k * total {
+                k += 1;
+            }
+        }
+    }
+    out.push((z0, n_layers));
+    out
+}
+
+/// The bit-row geometry: row length and the mask of the points that own a
+/// +x edge (`x < nx − 1`), per word.
 struct Rows {
     nx: usize,
     ny: usize,
@@ -152,8 +240,7 @@ impl Rows {
         let words = field.row_words();
         let has_x = (0..words)
             .map(|w| {
-                let lo = 64 * w;
-                let n = (nx - 1).saturating_sub(lo).min(64);
+                let n = (nx - 1).saturating_sub(64 * w).min(64);
                 if n == 64 { u64::MAX } else { (1u64 << n) - 1 }
             })
             .collect();
@@ -164,11 +251,70 @@ impl Rows {
             has_x,
         }
     }
+}
 
-    /// Row `y` of a layer of bits.
+/// Inside flags of the whole (padded) grid: `nz` layers of `ny` rows of
+/// `words` words, 1 bit per sample.
+struct Bits {
+    rows: Rows,
+    nz: usize,
+    data: Vec<u64>,
+}
+
+impl Bits {
+    /// Reads every layer (in parallel) through [`Field::inside_row`].
+    fn load(field: &Field<'_>) -> Self {
+        let rows = Rows::new(field);
+        let nz = field.dims[2];
+        let plane = rows.ny * rows.words;
+        let mut data = vec![0u64; nz * plane];
+        data.par_chunks_mut(plane)
+            .enumerate()
+            .for_each(|(z, layer)| {
+                for (y, row) in layer.chunks_exact_mut(rows.words).enumerate() {
+                    field.inside_row(y, z, row);
+                }
+            });
+        Bits { rows, nz, data }
+    }
+
+    /// Row `y` of layer `z`.
     #[inline]
-    fn row<'a>(&self, layer: &'a [u64], y: usize) -> &'a [u64] {
-        &layer[y * self.words..(y + 1) * self.words]
+    fn row(&self, y: usize, z: usize) -> &[u64] {
+        let w = self.rows.words;
+        let start = (z * self.rows.ny + y) * w;
+        &self.data[start..start + w]
+    }
+
+    /// Crossing masks `[x, y, z]` of word `w` of row `y` of layer `z`: the
+    /// points whose +x, +y, +z edge joins an inside and an outside sample.
+    #[inline]
+    fn crossings(&self, y: usize, z: usize, w: usize) -> [u64; 3] {
+        let m = self.row(y, z);
+        let ex = (m[w] ^ next_bits(m, w)) & self.rows.has_x[w];
+        let ey = if y + 1 < self.rows.ny {
+            m[w] ^ self.row(y + 1, z)[w]
+        } else {
+            0
+        };
+        let ez = if z + 1 < self.nz {
+            m[w] ^ self.row(y, z + 1)[w]
+        } else {
+            0
+        };
+        [ex, ey, ez]
+    }
+
+    /// The four corner rows of cell row `y` of cell layer `z`:
+    /// (y, z), (y + 1, z), (y, z + 1), (y + 1, z + 1).
+    #[inline]
+    fn cell_rows(&self, y: usize, z: usize) -> [&[u64]; 4] {
+        [
+            self.row(y, z),
+            self.row(y + 1, z),
+            self.row(y, z + 1),
+            self.row(y + 1, z + 1),
+        ]
     }
 }
 
@@ -178,20 +324,100 @@ fn next_bits(row: &[u64], w: usize) -> u64 {
     row[w] >> 1 | row.get(w + 1).map_or(0, |n| n << 63)
 }
 
-/// Fills `bits` (`ny` rows of `words` words) with the inside flags of layer `z`.
-fn load_bits(field: &Field<'_>, rows: &Rows, z: usize, bits: &mut [u64]) {
-    for (y, row) in bits.chunks_exact_mut(rows.words).enumerate() {
-        field.inside_row(y, z, row);
+/// Word `w` of 64 cells of a cell row: corner bits at `x` (`lo`) and at
+/// `x + 1` (`hi`) of the four corner rows, and the mask of crossed cells
+/// (corners neither all inside nor all outside).
+#[inline]
+fn cell_word(r: &[&[u64]; 4], w: usize, has_x: u64) -> ([u64; 4], [u64; 4], u64) {
+    let lo = r.map(|row| row[w]);
+    let hi = r.map(|row| next_bits(row, w));
+    let any = lo[0] | lo[1] | lo[2] | lo[3] | hi[0] | hi[1] | hi[2] | hi[3];
+    let all = lo[0] & lo[1] & lo[2] & lo[3] & hi[0] & hi[1] & hi[2] & hi[3];
+    (lo, hi, any & !all & has_x)
+}
+
+/// Case index of the cell at bit `s` (corner `c = x + 2y + 4z` is bit `c`).
+#[inline]
+fn case_at(lo: &[u64; 4], hi: &[u64; 4], s: u32) -> usize {
+    let mut case = 0usize;
+    for k in 0..4 {
+        case |= ((lo[k] >> s & 1) as usize) << (2 * k);
+        case |= ((hi[k] >> s & 1) as usize) << (2 * k + 1);
     }
+    case
+}
+
+/// Vertices numbered on point layer `z`.
+fn count_vertices(bits: &Bits, z: usize) -> u64 {
+    let mut n = 0u64;
+    for y in 0..bits.rows.ny {
+        for w in 0..bits.rows.words {
+            let [ex, ey, ez] = bits.crossings(y, z, w);
+            n += u64::from(ex.count_ones() + ey.count_ones() + ez.count_ones());
+        }
+    }
+    n
+}
+
+/// Triangles emitted on cell layer `z`.
+fn count_triangles(bits: &Bits, z: usize, table: &tables::CaseTable) -> u64 {
+    let mut n = 0u64;
+    for y in 0..bits.rows.ny - 1 {
+        let r = bits.cell_rows(y, z);
+        for w in 0..bits.rows.words {
+            let (lo, hi, mut crossed) = cell_word(&r, w, bits.rows.has_x[w]);
+            while crossed != 0 {
+                let s = crossed.trailing_zeros();
+                crossed &= crossed - 1;
+                n += table.case(case_at(&lo, &hi, s)).len() as u64;
+            }
+        }
+    }
+    n
+}
+
+/// One chunk's share of the output: cell layers `z0..z1`, point layers
+/// `z0..=z1` of which it stores `z0..own_end`.
+struct ChunkOut<'a> {
+    z0: usize,
+    z1: usize,
+    own_end: usize,
+    /// Global id of the first vertex of layer `z0`.
+    first_vertex: u32,
+    /// Vertices on layers `z0..=z1`.
+    n_vertices: usize,
+    positions: &'a mut [[f32; 3]],
+    edges: &'a mut [u64],
+    triangles: &'a mut [[u32; 3]],
+    cells: &'a mut [u32],
+    /// Local union-find node of each triangle.
+    tri_node: &'a mut [u32],
+}
+
+/// One chunk's grouping state.
+struct ChunkGroups {
+    uf: UnionFind,
+    /// Union-find node of each vertex of layers `z0..=z1` (by id − first
+    /// id), or NONE.
+    vertex_node: Vec<u32>,
+    first_vertex: u32,
+}
+
+/// Write cursors of a chunk.
+struct Emit<'a, 'o> {
+    out: &'a mut ChunkOut<'o>,
+    groups: ChunkGroups,
+    n_positions: usize,
+    n_triangles: usize,
 }
 
 /// The numbered crossing edges of one point layer: per row and word the
-/// crossing masks of the +x, +y, +z edges, and per row its first vertex
-/// id. A vertex id is recovered by counting along the row ([`VertexRows`]).
+/// crossing masks, and per row its first vertex id. A vertex id is
+/// recovered by counting along the row ([`VertexRows`]).
 struct Crossings {
     /// `ny · words` masks `[x, y, z]`.
     masks: Vec<[u64; 3]>,
-    /// `ny` first vertex ids (chunk-local).
+    /// `ny` first vertex ids.
     row_base: Vec<u32>,
 }
 
@@ -204,119 +430,71 @@ impl Crossings {
     }
 }
 
-fn run_chunk(field: &Field<'_>, z0: usize, z1: usize) -> Chunk {
-    let [_, _, nz] = field.dims;
-    let rows = Rows::new(field);
-    let mut out = Chunk::default();
-    // Bits of layers z, z + 1, z + 2 in slot (k − z0) mod 3; crossings of
-    // layers z, z + 1 in slot (k − z0) mod 2.
-    let slot3 = |k: usize| (k - z0) % 3;
-    let slot2 = |k: usize| (k - z0) % 2;
-    let mut bits: [Vec<u64>; 3] = std::array::from_fn(|_| vec![0; rows.ny * rows.words]);
-    let mut crossings = [Crossings::new(&rows), Crossings::new(&rows)];
-    let mut vertex_rows = VertexRows::new(&rows);
-    load_bits(field, &rows, z0, &mut bits[0]);
-    load_bits(field, &rows, z0 + 1, &mut bits[1]);
-    let mut next_id: u32 = 0;
-    let layer = Layer {
-        z: z0,
-        bits: &bits[0],
-        above: Some(&bits[1]),
-        own: true,
+fn run_chunk(field: &Field<'_>, bits: &Bits, mut out: ChunkOut<'_>) -> ChunkGroups {
+    let rows = &bits.rows;
+    let (z0, z1, own_end) = (out.z0, out.z1, out.own_end);
+    let mut emit = Emit {
+        groups: ChunkGroups {
+            uf: UnionFind::default(),
+            vertex_node: vec![NONE; out.n_vertices],
+            first_vertex: out.first_vertex,
+        },
+        out: &mut out,
+        n_positions: 0,
+        n_triangles: 0,
     };
+    // Crossings of layers z, z + 1 in slot (k − z0) mod 2.
+    let mut crossings = [Crossings::new(rows), Crossings::new(rows)];
+    let mut vertex_rows = VertexRows::new(rows);
+    let mut next_id = emit.groups.first_vertex;
     number_points(
         field,
-        &rows,
-        &layer,
+        bits,
+        z0,
+        true,
         &mut crossings[0],
         &mut next_id,
-        &mut out,
+        &mut emit,
     );
-    out.n_first_layer = next_id as usize;
-    let last_chunk = z1 == nz - 1;
     for z in z0..z1 {
-        if z + 2 < nz {
-            load_bits(field, &rows, z + 2, &mut bits[slot3(z + 2)]);
-        }
-        let shared_layer = z + 1 == z1 && !last_chunk;
-        if shared_layer {
-            out.n_own = next_id as usize;
-        }
-        let layer = Layer {
-            z: z + 1,
-            bits: &bits[slot3(z + 1)],
-            above: (z + 2 < nz).then(|| bits[slot3(z + 2)].as_slice()),
-            own: !shared_layer,
-        };
         let [c0, c1] = &mut crossings;
-        let (lower, upper) = if slot2(z) == 0 { (c0, c1) } else { (c1, c0) };
-        number_points(field, &rows, &layer, upper, &mut next_id, &mut out);
-        let cells = CellLayer {
-            z,
-            lower: &bits[slot3(z)],
-            upper: &bits[slot3(z + 1)],
+        let (lower, upper) = if (z - z0) % 2 == 0 {
+            (c0, c1)
+        } else {
+            (c1, c0)
         };
+        let own = z + 1 < own_end;
+        number_points(field, bits, z + 1, own, upper, &mut next_id, &mut emit);
         vertex_rows.clear();
-        emit_cells(
-            field,
-            &rows,
-            &cells,
-            [&*lower, &*upper],
-            &mut vertex_rows,
-            &mut out,
-        );
+        emit_cells(bits, z, [&*lower, &*upper], &mut vertex_rows, &mut emit);
     }
-    if last_chunk {
-        out.n_own = next_id as usize;
-    }
-    out
+    emit.groups
 }
 
-/// A point layer to number: its bits, the bits of the layer above (none
-/// on the top layer), and whether this chunk stores its vertices.
-struct Layer<'a> {
-    z: usize,
-    bits: &'a [u64],
-    above: Option<&'a [u64]>,
-    own: bool,
-}
-
-/// Numbers the crossing edges of a point layer in point order (x fastest,
-/// then y; axes x < y < z within a point), a word of 64 points at a time:
-/// the crossing edges of a word are `m ^ next_bits(m)`, `m ^ m_y+1` and
-/// `m ^ m_z+1`. Records the masks and row bases in `crossings`; stores
-/// positions and edge ids when the layer is `own`.
+/// Numbers the crossing edges of point layer `z` in point order (x
+/// fastest, then y; axes x < y < z within a point), a word of 64 points at
+/// a time. Records the masks and row bases in `crossings`; stores positions
+/// and edge ids when the layer is `own`.
 fn number_points(
     field: &Field<'_>,
-    rows: &Rows,
-    layer: &Layer<'_>,
+    bits: &Bits,
+    z: usize,
+    own: bool,
     crossings: &mut Crossings,
     next_id: &mut u32,
-    out: &mut Chunk,
+    emit: &mut Emit<'_, '_>,
 ) {
-    let (nx, ny) = (rows.nx, rows.ny);
+    let Rows { nx, ny, words, .. } = bits.rows;
     let level = field.level;
-    let z = layer.z;
     let zf = z as f32;
     for y in 0..ny {
         crossings.row_base[y] = *next_id;
-        let m = rows.row(layer.bits, y);
-        let my = (y + 1 < ny).then(|| rows.row(layer.bits, y + 1));
-        let mz = layer.above.map(|a| rows.row(a, y));
-        let masks = &mut crossings.masks[y * rows.words..(y + 1) * rows.words];
+        let masks = &mut crossings.masks[y * words..(y + 1) * words];
         for (w, mask) in masks.iter_mut().enumerate() {
-            let ex = (m[w] ^ next_bits(m, w)) & rows.has_x[w];
-            let ey = my.map_or(0, |r| m[w] ^ r[w]);
-            let ez = mz.map_or(0, |r| m[w] ^ r[w]);
+            let [ex, ey, ez] = bits.crossings(y, z, w);
             *mask = [ex, ey, ez];
-            let n = ex.count_ones() + ey.count_ones() + ez.count_ones();
-            if n == 0 {
-                continue;
-            }
-            *next_id += n;
-            out.vertex_node
-                .extend(std::iter::repeat_n(NONE, n as usize));
-            if !layer.own {
+            *next_id += ex.count_ones() + ey.count_ones() + ez.count_ones();
+            if !own {
                 continue;
             }
             let mut any = ex | ey | ez;
@@ -326,20 +504,22 @@ fn number_points(
                 let x = 64 * w + s as usize;
                 let point = (x + nx * (y + ny * z)) as u64;
                 let a = field.sample(x, y, z);
-                for (axis, e) in [ex, ey, ez].into_iter().enumerate() {
-                    if e >> s & 1 == 0 {
-                        continue;
-                    }
-                    let b = match axis {
-                        0 => field.sample(x + 1, y, z),
-                        1 => field.sample(x, y + 1, z),
-                        _ => field.sample(x, y, z + 1),
-                    };
+                let mut vertex = |axis: usize, b: f32| {
                     let t = (level - a) / (b - a);
                     let mut u = [x as f32, y as f32, zf];
                     u[axis] += t;
-                    out.positions.push(u);
-                    out.edges.push(3 * point + axis as u64);
+                    emit.out.positions[emit.n_positions] = u;
+                    emit.out.edges[emit.n_positions] = 3 * point + axis as u64;
+                    emit.n_positions += 1;
+                };
+                if ex >> s & 1 == 1 {
+                    vertex(0, field.sample(x + 1, y, z));
+                }
+                if ey >> s & 1 == 1 {
+                    vertex(1, field.sample(x, y + 1, z));
+                }
+                if ez >> s & 1 == 1 {
+                    vertex(2, field.sample(x, y, z + 1));
                 }
             }
         }
@@ -348,7 +528,7 @@ fn number_points(
 
 /// Vertex ids of the point rows a cell row reads — rows `y` and `y + 1`
 /// of the lower and upper layer — unpacked from [`Crossings`] into small
-/// per-row arrays (`[layer][y mod 2][axis][x]`), each row once per cell layer.
+/// per-row arrays, each row once per cell layer.
 struct VertexRows {
     nx: usize,
     words: usize,
@@ -381,9 +561,9 @@ impl VertexRows {
                 if self.held[dz][yy % 2] == yy {
                     continue;
                 }
-                let slot =
-                    &mut self.ids[(2 * dz + yy % 2) * 3 * nx..(2 * dz + yy % 2 + 1) * 3 * nx];
-                let (ids_x, rest) = slot.split_at_mut(nx);
+                let slot = 2 * dz + yy % 2;
+                let ids = &mut self.ids[slot * 3 * nx..(slot + 1) * 3 * nx];
+                let (ids_x, rest) = ids.split_at_mut(nx);
                 let (ids_y, ids_z) = rest.split_at_mut(nx);
                 let mut id = c.row_base[yy];
                 let masks = &c.masks[yy * self.words..(yy + 1) * self.words];
@@ -412,53 +592,34 @@ impl VertexRows {
         }
     }
 
-    /// Id of the vertex on the `axis` edge of point `(x, y)` of layer `dz`
-    /// (row `y` held).
-    #[inline]
-    fn get(&self, dz: usize, y: usize, axis: usize, x: usize) -> u32 {
-        self.ids[((2 * dz + y % 2) * 3 + axis) * self.nx + x]
+    /// Offset into the held ids of each local edge of the cells of row `y`
+    /// (add the cell's `x`).
+    fn edge_offsets(&self, y: usize) -> [usize; 12] {
+        std::array::from_fn(|e| {
+            let [ox, oy, oz] = corner_offset(EDGE_OWNER[e] as usize);
+            ((2 * oz + (y + oy) % 2) * 3 + edge_axis(e)) * self.nx + ox
+        })
     }
 }
 
-/// A cell layer `z`: the bits of its lower and upper point layers.
-struct CellLayer<'a> {
-    z: usize,
-    lower: &'a [u64],
-    upper: &'a [u64],
-}
-
-/// Emits the triangles of a cell layer in cell order (x fastest, then y),
-/// a word of 64 cells at a time: a cell is crossed when its eight corners
-/// (bits `x` and `x + 1` of four rows) are neither all 0 nor all 1.
+/// Emits the triangles of cell layer `z` in cell order (x fastest, then
+/// y), a word of 64 cells at a time.
 fn emit_cells(
-    field: &Field<'_>,
-    rows: &Rows,
-    cells: &CellLayer<'_>,
+    bits: &Bits,
+    z: usize,
     crossings: [&Crossings; 2],
     vertex_rows: &mut VertexRows,
-    out: &mut Chunk,
+    emit: &mut Emit<'_, '_>,
 ) {
-    let [nx, ny, _] = field.dims;
+    let Rows { nx, ny, words, .. } = bits.rows;
     let table = tables::table();
     let (cx, cy) = (nx - 1, ny - 1);
-    // Offset `[x, y, z]` and axis of each local edge's owner point.
-    let owner: [([usize; 3], usize); 12] =
-        std::array::from_fn(|e| (corner_offset(EDGE_OWNER[e] as usize), edge_axis(e)));
     for y in 0..cy {
-        // Corner rows: 0 = (y, z), 1 = (y + 1, z), 2 = (y, z + 1), 3 = (y + 1, z + 1).
-        let r = [
-            rows.row(cells.lower, y),
-            rows.row(cells.lower, y + 1),
-            rows.row(cells.upper, y),
-            rows.row(cells.upper, y + 1),
-        ];
+        let r = bits.cell_rows(y, z);
         let mut held = false;
-        for w in 0..rows.words {
-            let lo = r.map(|row| row[w]);
-            let hi = r.map(|row| next_bits(row, w));
-            let any = lo[0] | lo[1] | lo[2] | lo[3] | hi[0] | hi[1] | hi[2] | hi[3];
-            let all = lo[0] & lo[1] & lo[2] & lo[3] & hi[0] & hi[1] & hi[2] & hi[3];
-            let mut crossed = any & !all & rows.has_x[w];
+        let offsets = vertex_rows.edge_offsets(y);
+        for w in 0..words {
+            let (lo, hi, mut crossed) = cell_word(&r, w, bits.rows.has_x[w]);
             if crossed != 0 && !held {
                 vertex_rows.hold(crossings, y);
                 held = true;
@@ -466,22 +627,18 @@ fn emit_cells(
             while crossed != 0 {
                 let s = crossed.trailing_zeros();
                 crossed &= crossed - 1;
-                let mut case = 0usize;
-                for k in 0..4 {
-                    case |= ((lo[k] >> s & 1) as usize) << (2 * k);
-                    case |= ((hi[k] >> s & 1) as usize) << (2 * k + 1);
-                }
                 let x = 64 * w + s as usize;
-                let cell = (x + cx * (y + cy * cells.z)) as u32;
-                for tri in table.case(case) {
-                    let id = |e: u8| {
-                        let ([ox, oy, oz], axis) = owner[e as usize];
-                        vertex_rows.get(oz, y + oy, axis, x + ox)
-                    };
+                let cell = (x + cx * (y + cy * z)) as u32;
+                let ids = &vertex_rows.ids[x..];
+                for tri in table.case(case_at(&lo, &hi, s)) {
+                    let id = |e: u8| ids[offsets[e as usize]];
                     let v = [id(tri[0]), id(tri[1]), id(tri[2])];
-                    join_group(out, v);
-                    out.triangles.push(v);
-                    out.cells.push(cell);
+                    let node = join_group(&mut emit.groups, v);
+                    let i = emit.n_triangles;
+                    emit.out.triangles[i] = v;
+                    emit.out.cells[i] = cell;
+                    emit.out.tri_node[i] = node;
+                    emit.n_triangles += 1;
                 }
             }
         }
@@ -490,87 +647,112 @@ fn emit_cells(
 
 /// One-pass grouping: the new triangle `v` joins the groups of the
 /// triangles already using its vertices (seed §1: add to one group, start a
-/// new group, or merge several).
-fn join_group(out: &mut Chunk, v: [u32; 3]) {
+/// new group, or merge several). Returns its union-find node.
+fn join_group(groups: &mut ChunkGroups, v: [u32; 3]) -> u32 {
+    let base = groups.first_vertex;
     let mut node = NONE;
     for &i in &v {
-        let g = out.vertex_node[i as usize];
+        let g = groups.vertex_node[(i - base) as usize];
         if g != NONE && g != node {
             node = if node == NONE {
-                out.uf.find(g)
+                groups.uf.find(g)
             } else {
-                out.uf.union(node, g)
+                groups.uf.union(node, g)
             };
         }
     }
     if node == NONE {
-        node = out.uf.push();
+        node = groups.uf.push();
     }
     for &i in &v {
-        if out.vertex_node[i as usize] == NONE {
-            out.vertex_node[i as usize] = node;
+        let slot = &mut groups.vertex_node[(i - base) as usize];
+        if *slot == NONE {
+            *slot = node;
         }
     }
-    out.tri_node.push(node);
+    node
 }
 
-/// Joins the chunks: global vertex ids, global union-find across the shared
-/// layers, canonical group numbers (by first triangle).
-fn stitch(chunks: Vec<Chunk>) -> RawSurface {
-    let mut uf = UnionFind::default();
-    let mut node_base = Vec::with_capacity(chunks.len());
-    let mut vert_base = Vec::with_capacity(chunks.len());
-    let (mut nodes, mut verts) = (0u32, 0u32);
-    for c in &chunks {
-        node_base.push(nodes);
-        vert_base.push(verts);
-        nodes += c.uf.len() as u32;
-        verts += c.n_own as u32;
+/// Joins the chunks' grouping: one union-find over all chunks' nodes, the
+/// vertices of each shared layer united, then `groups` (per triangle: the
+/// chunk-local node on entry) becomes the canonical group, numbered by
+/// first triangle. Returns the number of groups.
+fn stitch(
+    chunk_groups: &[ChunkGroups],
+    chunks: &[(usize, usize)],
+    vbase: &[u64],
+    tbase: &[u64],
+    groups: &mut [u32],
+) -> usize {
+    let mut node_base = Vec::with_capacity(chunk_groups.len());
+    let mut n_nodes = 0u32;
+    for c in chunk_groups {
+        node_base.push(n_nodes);
+        n_nodes += c.uf.len() as u32;
     }
-    uf.parent = Vec::with_capacity(nodes as usize);
-    for (c, &base) in chunks.iter().zip(&node_base) {
-        let mut local = c.uf.clone();
-        for i in 0..local.len() as u32 {
-            let r = local.find(i);
-            uf.parent.push(base + r);
-        }
+    let mut uf = UnionFind {
+        parent: Vec::with_capacity(n_nodes as usize),
+    };
+    for (c, &base) in chunk_groups.iter().zip(&node_base) {
+        uf.parent.extend(c.uf.parent.iter().map(|&p| base + p));
     }
-    // Seams: the shared layer is numbered by both neighbours in the same order.
-    for k in 1..chunks.len() {
-        let (prev, next) = (&chunks[k - 1], &chunks[k]);
-        let shared = &prev.vertex_node[prev.n_own..];
-        for (i, &a) in shared.iter().enumerate().take(next.n_first_layer) {
-            let b = next.vertex_node.get(i).copied().unwrap_or(NONE);
+    // Seams: chunk k's first layer is chunk k − 1's last.
+    for k in 1..chunk_groups.len() {
+        let (prev, next) = (&chunk_groups[k - 1], &chunk_groups[k]);
+        let z = chunks[k].0;
+        for id in vbase[z] as u32..vbase[z + 1] as u32 {
+            let a = prev.vertex_node[(id - prev.first_vertex) as usize];
+            let b = next.vertex_node[(id - next.first_vertex) as usize];
             if a != NONE && b != NONE {
                 uf.union(node_base[k - 1] + a, node_base[k] + b);
             }
         }
     }
-    let n_tris: usize = chunks.iter().map(|c| c.triangles.len()).sum();
-    let mut out = RawSurface {
-        positions: Vec::with_capacity(verts as usize),
-        edges: Vec::with_capacity(verts as usize),
-        triangles: Vec::with_capacity(n_tris),
-        cells: Vec::with_capacity(n_tris),
-        groups: Vec::with_capacity(n_tris),
-        n_groups: 0,
-    };
-    let mut canonical = vec![NONE; nodes as usize];
-    for (k, c) in chunks.into_iter().enumerate() {
-        let vb = vert_base[k];
-        out.positions.extend_from_slice(&c.positions);
-        out.edges.extend_from_slice(&c.edges);
-        out.triangles
-            .extend(c.triangles.iter().map(|t| t.map(|i| i + vb)));
-        out.cells.extend_from_slice(&c.cells);
-        for &node in &c.tri_node {
-            let root = uf.find(node_base[k] + node) as usize;
-            if canonical[root] == NONE {
-                canonical[root] = out.n_groups as u32;
-                out.n_groups += 1;
+    // Parents never exceed their node (union by index), so one forward
+    // pass resolves every root.
+    let mut root = vec![0u32; n_nodes as usize];
+    for i in 0..n_nodes as usize {
+        let p = uf.parent[i] as usize;
+        root[i] = if p == i { p as u32 } else { root[p] };
+    }
+    // Per chunk: global roots in place and the distinct roots in order of
+    // first triangle; then canonical numbers in chunk order.
+    let mut slices = Vec::with_capacity(chunks.len());
+    let mut rest = groups;
+    for &(z0, z1) in chunks {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut((tbase[z1] - tbase[z0]) as usize);
+        slices.push(head);
+        rest = tail;
+    }
+    let firsts: Vec<Vec<u32>> = slices
+        .par_iter_mut()
+        .zip(&node_base)
+        .map(|(tris, &base)| {
+            let mut seen = std::collections::HashSet::new();
+            let mut order = Vec::new();
+            let mut prev = NONE;
+            for g in tris.iter_mut() {
+                *g = root[(base + *g) as usize];
+                if *g != prev && seen.insert(*g) {
+                    order.push(*g);
+                }
+                prev = *g;
             }
-            out.groups.push(canonical[root]);
+            order
+        })
+        .collect();
+    let mut canonical = vec![NONE; n_nodes as usize];
+    let mut n_groups = 0u32;
+    for r in firsts.iter().flatten() {
+        if canonical[*r as usize] == NONE {
+            canonical[*r as usize] = n_groups;
+            n_groups += 1;
         }
     }
-    out
+    slices.into_par_iter().for_each(|tris| {
+        for g in tris.iter_mut() {
+            *g = canonical[*g as usize];
+        }
+    });
+    n_groups as usize
 }

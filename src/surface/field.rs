@@ -270,9 +270,14 @@ impl<'a> Field<'a> {
     /// `layer(z)[x + nx·y]`. A padding sample next to one inner sample `v`
     /// (one coordinate outside) is `pad_value(v)`; padding edges and
     /// corners are `level − 1`.
+    #[inline]
     pub fn sample(&self, x: usize, y: usize, z: usize) -> f32 {
         let p = self.pad;
         let d = self.volume.dims;
+        let (i, j, k) = (x.wrapping_sub(p), y.wrapping_sub(p), z.wrapping_sub(p));
+        if i < d[0] && j < d[1] && k < d[2] {
+            return self.inner_value(i + d[0] * (j + d[1] * k));
+        }
         let c = [x, y, z];
         let mut inner = [0usize; 3];
         let mut n_pad = 0;
@@ -295,6 +300,7 @@ impl<'a> Field<'a> {
 
     /// Inner sample `i` (linear index) as `f32`, labels as 0/1: the
     /// conversion of [`Field::inner_row`].
+    #[inline]
     fn inner_value(&self, i: usize) -> f32 {
         macro_rules! convert {
             ($v:expr) => {

@@ -1,5 +1,9 @@
 //! Marching cubes: the CT head (500, 1150) and generated head-like phantoms
-//! (256³, 512³), CPU and GPU in the same run, voxels/s.
+//! (256³, 512³), CPU and GPU in the same run, voxels/s. The CPU path reads
+//! every sample once in its native type; each case prints that read
+//! volume (bytes per voxel) and the sample bandwidth it implies, the bound
+//! a memory-bound pass would hit. On a software adapter (lavapipe, ~1 M
+//! voxels/s) the GPU runs only the CT head.
 //!
 //! `CHISEL_BENCH_QUICK=1`: few samples, phantoms of 64³/128³ (CI smoke run).
 
@@ -61,6 +65,9 @@ fn main() {
         Some(g) => eprintln!("adapter: {}", g.describe()),
         None => eprintln!("adapter: none (GPU benches skipped)"),
     }
+    let software = gpu
+        .as_ref()
+        .is_some_and(|g| g.info.device_type == wgpu::DeviceType::Cpu);
     let mut cases: Vec<(String, Volume, f32)> = Vec::new();
     let head =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/headsq/quarter.nhdr");
@@ -84,14 +91,22 @@ fn main() {
         let tris = marching_cubes(vol, iso, &opts, Backend::Cpu)
             .map(|s| s.mesh.triangles.len())
             .unwrap_or(0);
+        let bytes = vol.data.scalar_type().size();
         eprintln!(
-            "mc/{name}: {voxels} voxels, {tris} triangles; cpu {:.1} ms = {:.1} M voxels/s",
+            "mc/{name}: {voxels} voxels, {tris} triangles; cpu {:.1} ms = {:.1} M voxels/s \
+             (reads {bytes} B/voxel = {:.2} GB/s of samples; {} threads)",
             cpu_s * 1e3,
-            voxels as f64 / cpu_s / 1e6
+            voxels as f64 / cpu_s / 1e6,
+            (voxels * bytes as u64) as f64 / cpu_s / 1e9,
+            rayon::current_num_threads()
         );
         group.bench_function(format!("cpu/{name}"), |b| {
             b.iter(|| marching_cubes(vol, iso, &opts, Backend::Cpu))
         });
+        if software && voxels > 1 << 22 {
+            eprintln!("mc/{name}: gpu skipped on a software adapter");
+            continue;
+        }
         if let Some(g) = &gpu {
             let gpu_s = median(|| {
                 marching_cubes(vol, iso, &opts, Backend::Gpu(g)).map(|s| s.mesh.triangles.len())

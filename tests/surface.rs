@@ -726,3 +726,116 @@ fn crop_to_label(vol: &Volume, label: f64) -> Volume {
     let origin = [0, 1, 2].map(|a| vol.origin[a] + vol.spacing[a] * lo[a] as f64);
     Volume::new(dims, vol.spacing, origin, VolumeData::U8(data)).unwrap()
 }
+
+/// The CPU reads inside flags as bit rows in the native type and samples
+/// only at crossings; both must equal the `f32` layers the GPU uploads
+/// (`Field::layer`), for every sample type, with and without padding, at
+/// levels between, on and beyond the integer values, and for labels.
+#[test]
+fn field_rows_and_samples_match_layers() {
+    let dims = [70, 5, 4];
+    let n: usize = dims.iter().product();
+    let mut next = xorshift(77);
+    let raw: Vec<i64> = (0..n).map(|_| (next() % 9) as i64 - 4).collect();
+    let volumes = [
+        VolumeData::U8(raw.iter().map(|&v| (v + 4) as u8).collect()),
+        VolumeData::I8(raw.iter().map(|&v| v as i8).collect()),
+        VolumeData::U16(raw.iter().map(|&v| (v + 4) as u16 * 1000).collect()),
+        VolumeData::I16(raw.iter().map(|&v| v as i16 * 1000).collect()),
+        VolumeData::U32(raw.iter().map(|&v| (v + 4) as u32 * 100_000_007).collect()),
+        VolumeData::I32(raw.iter().map(|&v| v as i32 * 100_000_007).collect()),
+        VolumeData::F32(raw.iter().map(|&v| v as f32 * 0.3).collect()),
+        VolumeData::F64(raw.iter().map(|&v| v as f64 * 0.3 + 1e-9).collect()),
+    ];
+    let isos = [
+        IsoSpec::Level(0.0),
+        IsoSpec::Level(0.5),
+        IsoSpec::Level(-1.0),
+        IsoSpec::Level(2.0),
+        IsoSpec::Level(1000.0),
+        IsoSpec::Level(-3999.5),
+        IsoSpec::Level(1e6),
+        IsoSpec::Level(1e30),
+        IsoSpec::Level(-1e30),
+        IsoSpec::Level(300_000_021.0),
+        IsoSpec::Level(0.6),
+        IsoSpec::Label(0.0),
+        IsoSpec::Label(2.0),
+        IsoSpec::Label(-2.0),
+        IsoSpec::Label(2000.0),
+        IsoSpec::Label(0.5),
+        IsoSpec::Label(1e12),
+    ];
+    let mut checked_inside = 0usize;
+    for data in volumes {
+        let vol = Volume::new(dims, [1.0; 3], [0.0; 3], data).unwrap();
+        for iso in isos {
+            for close in [false, true] {
+                let field = chisel::surface::Field::new(&vol, iso, close).unwrap();
+                let [nx, ny, nz] = field.dims;
+                let mut layer = vec![0f32; nx * ny];
+                let mut row = vec![0u64; field.row_words()];
+                for z in 0..nz {
+                    field.layer(z, &mut layer);
+                    for y in 0..ny {
+                        field.inside_row(y, z, &mut row);
+                        for x in 0..field.row_words() * 64 {
+                            let bit = row[x / 64] >> (x % 64) & 1 == 1;
+                            let want = x < nx && layer[x + nx * y] >= field.level;
+                            assert_eq!(
+                                bit,
+                                want,
+                                "{:?} {iso:?} close {close}: inside ({x}, {y}, {z})",
+                                vol.data.scalar_type()
+                            );
+                            checked_inside += usize::from(want);
+                            if x < nx {
+                                let s = field.sample(x, y, z);
+                                assert_eq!(
+                                    s.to_bits(),
+                                    layer[x + nx * y].to_bits(),
+                                    "{:?} {iso:?} close {close}: sample ({x}, {y}, {z})",
+                                    vol.data.scalar_type()
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        checked_inside > 0,
+        "no inside sample: the test proves nothing"
+    );
+}
+
+/// The CPU walk splits the grid into chunks by thread count; stitching must
+/// make the output independent of it (vertex ids, triangle order, groups).
+#[test]
+fn cpu_output_does_not_depend_on_thread_count() {
+    let vol = random_volume(5, [37, 29, 41]);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| marching_cubes(&vol, IsoSpec::Level(127.5), &CLOSE, Backend::Cpu))
+            .unwrap()
+    };
+    let one = run(1);
+    assert!(one.groups.len() > 1, "want several groups");
+    for threads in [2, 3, 7] {
+        let many = run(threads);
+        assert_eq!(one.mesh.triangles, many.mesh.triangles, "{threads} threads");
+        assert_eq!(one.mesh.positions, many.mesh.positions, "{threads} threads");
+        assert_eq!(one.vertex_edges, many.vertex_edges, "{threads} threads");
+        assert_eq!(one.triangle_cells, many.triangle_cells, "{threads} threads");
+        assert_eq!(
+            one.triangle_groups, many.triangle_groups,
+            "{threads} threads"
+        );
+        assert_eq!(one.groups, many.groups, "{threads} threads");
+        assert_eq!(one.forest, many.forest, "{threads} threads");
+    }
+}

@@ -1,7 +1,11 @@
 //! The sample grid marching cubes walks: the volume's samples as `f32`
 //! (labels as 0/1), optionally padded by one outside sample per side.
 //!
-//! Both backends read samples only through [`Field::layer`], so the CPU
+//! The GPU uploads [`Field::layer`]; the CPU reads the inside flags a row
+//! at a time as bits straight from the volume's native type
+//! ([`Field::inside_row`]) and converts a sample to `f32` only where an edge
+//! crosses ([`Field::sample`]). Both give exactly `layer(z)[x + nx·y]` and
+//! `layer(z)[x + nx·y] >= level` (tested in `tests/surface.rs`), so the CPU
 //! mirror and the GPU kernels see bit-identical inputs.
 
 use super::IsoSpec;
@@ -172,6 +176,158 @@ impl<'a> Field<'a> {
         }
     }
 
+    /// Words of one row of [`Field::inside_row`]: `⌈dims[0] / 64⌉`.
+    pub fn row_words(&self) -> usize {
+        self.dims[0].div_ceil(64)
+    }
+
+    /// Inside flags of row `y` of layer `z` of the padded grid as bits
+    /// (`x` is bit `x mod 64` of word `x / 64`; bits from `dims[0]` on are
+    /// 0): exactly `layer(z)[x + nx·y] >= level`. `out`: [`Field::row_words`]
+    /// words. Inner samples are compared in their native type, one row at a
+    /// time, without conversion to `f32`.
+    pub fn inside_row(&self, y: usize, z: usize, out: &mut [u64]) {
+        let [nx, ny, nz] = self.dims;
+        let p = self.pad;
+        out.fill(0);
+        let pad_y = p == 1 && (y == 0 || y == ny - 1);
+        let pad_z = p == 1 && (z == 0 || z == nz - 1);
+        if pad_y || pad_z {
+            let mut row = vec![0.0f32; nx];
+            for (x, v) in row.iter_mut().enumerate() {
+                *v = self.sample(x, y, z);
+            }
+            pack(&row, out, |v| v >= self.level);
+            return;
+        }
+        let (j, k) = (y - p, z - p);
+        self.pack_inner(j, k, out);
+        if p == 1 {
+            shift_up_one(out);
+            for x in [0, nx - 1] {
+                if self.sample(x, y, z) >= self.level {
+                    out[x / 64] |= 1 << (x % 64);
+                }
+            }
+        }
+    }
+
+    /// Inside bits of inner row `j` of inner layer `k` (unpadded x).
+    fn pack_inner(&self, j: usize, k: usize, out: &mut [u64]) {
+        let nx = self.volume.dims[0];
+        let start = self.volume.index(0, j, k);
+        let range = start..start + nx;
+        let level = self.level;
+        // Integer types exact in f32: `f32(v) >= level` ⇔ `v >= ⌈level⌉`;
+        // `f64(v) == label` ⇔ label integral and `v == label`.
+        macro_rules! exact_int {
+            ($v:expr, $t:ty) => {{
+                let src = &$v[range];
+                match self.iso {
+                    IsoSpec::Level(_) => {
+                        let t = level.ceil();
+                        if t <= <$t>::MIN as f32 {
+                            pack(src, out, |_| true);
+                        } else if t <= <$t>::MAX as f32 {
+                            let t = t as $t;
+                            pack(src, out, |v| v >= t);
+                        }
+                    }
+                    IsoSpec::Label(label) => {
+                        if label.fract() == 0.0
+                            && label >= <$t>::MIN as f64
+                            && label <= <$t>::MAX as f64
+                        {
+                            let l = label as $t;
+                            pack(src, out, |v| v == l);
+                        }
+                    }
+                }
+            }};
+        }
+        macro_rules! general {
+            ($v:expr) => {{
+                let src = &$v[range];
+                match self.iso {
+                    IsoSpec::Level(_) => pack(src, out, |v| v as f32 >= level),
+                    IsoSpec::Label(label) => pack(src, out, |v| v as f64 == label),
+                }
+            }};
+        }
+        match &self.volume.data {
+            VolumeData::U8(v) => exact_int!(v, u8),
+            VolumeData::I8(v) => exact_int!(v, i8),
+            VolumeData::U16(v) => exact_int!(v, u16),
+            VolumeData::I16(v) => exact_int!(v, i16),
+            VolumeData::U32(v) => general!(v),
+            VolumeData::I32(v) => general!(v),
+            VolumeData::F32(v) => general!(v),
+            VolumeData::F64(v) => general!(v),
+        }
+    }
+
+    /// Sample `(x, y, z)` of the padded grid as `f32`: exactly
+    /// `layer(z)[x + nx·y]`. A padding sample next to one inner sample `v`
+    /// (one coordinate outside) is `pad_value(v)`; padding edges and
+    /// corners are `level − 1`.
+    #[inline]
+    pub fn sample(&self, x: usize, y: usize, z: usize) -> f32 {
+        let p = self.pad;
+        let d = self.volume.dims;
+        let (i, j, k) = (x.wrapping_sub(p), y.wrapping_sub(p), z.wrapping_sub(p));
+        if i < d[0] && j < d[1] && k < d[2] {
+            return self.inner_value(i + d[0] * (j + d[1] * k));
+        }
+        let c = [x, y, z];
+        let mut inner = [0usize; 3];
+        let mut n_pad = 0;
+        for a in 0..3 {
+            match c[a].checked_sub(p).filter(|&i| i < d[a]) {
+                Some(i) => inner[a] = i,
+                None => {
+                    n_pad += 1;
+                    inner[a] = if c[a] == 0 { 0 } else { d[a] - 1 };
+                }
+            }
+        }
+        let v = || self.inner_value(self.volume.index(inner[0], inner[1], inner[2]));
+        match n_pad {
+            0 => v(),
+            1 => self.pad_value(v()),
+            _ => self.level - 1.0,
+        }
+    }
+
+    /// Inner sample `i` (linear index) as `f32`, labels as 0/1: the
+    /// conversion of [`Field::inner_row`].
+    #[inline]
+    fn inner_value(&self, i: usize) -> f32 {
+        macro_rules! convert {
+            ($v:expr) => {
+                match self.iso {
+                    IsoSpec::Level(_) => $v[i] as f32,
+                    IsoSpec::Label(label) => {
+                        if $v[i] as f64 == label {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    }
+                }
+            };
+        }
+        match &self.volume.data {
+            VolumeData::U8(v) => convert!(v),
+            VolumeData::I8(v) => convert!(v),
+            VolumeData::U16(v) => convert!(v),
+            VolumeData::I16(v) => convert!(v),
+            VolumeData::U32(v) => convert!(v),
+            VolumeData::I32(v) => convert!(v),
+            VolumeData::F32(v) => convert!(v),
+            VolumeData::F64(v) => convert!(v),
+        }
+    }
+
     /// World position of index-space point `u` (padded grid): `origin +
     /// spacing·(u − pad)` per axis, evaluated in f64 and rounded to f32.
     pub fn to_world(&self, u: [f32; 3]) -> glam::Vec3 {
@@ -179,5 +335,55 @@ impl<'a> Field<'a> {
         let s = self.volume.spacing;
         let w = |a: usize| (o[a] + s[a] * (f64::from(u[a]) - self.pad as f64)) as f32;
         glam::Vec3::new(w(0), w(1), w(2))
+    }
+}
+
+/// Sets bit `i` of `out` where `inside(src[i])`. `out`: ≥ ⌈len/64⌉ words,
+/// zero. 64 samples at a time: the flags as bytes (a branch-free loop that
+/// vectorises), then 8 bytes to 8 bits with one multiplication
+/// ([`bytes_to_bits`]).
+#[inline]
+fn pack<T: Copy>(src: &[T], out: &mut [u64], inside: impl Fn(T) -> bool) {
+    let mut chunks = src.chunks_exact(64);
+    let mut flags = [0u8; 64];
+    for (w, c) in out.iter_mut().zip(&mut chunks) {
+        for (f, &v) in flags.iter_mut().zip(c) {
+            *f = u8::from(inside(v));
+        }
+        *w = bytes_to_bits(&flags);
+    }
+    let rest = chunks.remainder();
+    if !rest.is_empty() {
+        flags.fill(0);
+        for (f, &v) in flags.iter_mut().zip(rest) {
+            *f = u8::from(inside(v));
+        }
+        out[src.len() / 64] = bytes_to_bits(&flags);
+    }
+}
+
+/// 64 flags (bytes 0 or 1) as the bits of one word, flag `i` → bit `i`.
+/// Per 8 bytes: `x · 0x0102040810204080` puts byte `i` at bit `56 + i`
+/// (every other product lands on a distinct bit below 56 or past 63, so
+/// nothing carries into the top byte).
+#[inline]
+fn bytes_to_bits(flags: &[u8; 64]) -> u64 {
+    let mut w = 0u64;
+    for (k, b) in flags.chunks_exact(8).enumerate() {
+        let mut x = [0u8; 8];
+        x.copy_from_slice(b);
+        let x = u64::from_le_bytes(x);
+        w |= (x.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * k);
+    }
+    w
+}
+
+/// Shifts a bit row up by one position (bit `x` moves to `x + 1`).
+fn shift_up_one(row: &mut [u64]) {
+    let mut carry = 0u64;
+    for w in row.iter_mut() {
+        let next = *w >> 63;
+        *w = *w << 1 | carry;
+        carry = next;
     }
 }

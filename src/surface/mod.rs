@@ -30,6 +30,7 @@ pub mod tables;
 pub mod tree;
 
 use std::collections::HashSet;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -127,12 +128,17 @@ pub fn marching_cubes(
 }
 
 /// World transform, group figures and the forest (shared by both backends).
+/// [`Forest::build`] runs alongside the (parallel) figure passes.
 pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
-    let positions: Vec<glam::Vec3> = raw
-        .positions
-        .par_iter()
-        .map(|&u| field.to_world(u))
-        .collect();
+    let (positions, blocks) = rayon::join(
+        || {
+            raw.positions
+                .par_iter()
+                .map(|&u| field.to_world(u))
+                .collect::<Vec<glam::Vec3>>()
+        },
+        || leaf_blocks(&raw.cells, field.dims),
+    );
     let mesh = TriMesh {
         positions,
         triangles: raw.triangles,
@@ -142,8 +148,10 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
         dims: field.dims,
         pad: field.pad,
     };
-    let groups = group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid);
-    let forest = leaf_forest(&mesh, &raw.cells, field.dims, &raw.groups, raw.n_groups);
+    let (forest, groups) = rayon::join(
+        || Forest::build(&mesh, &blocks.keys, blocks.dims, &raw.groups, raw.n_groups),
+        || group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid),
+    );
     Surface {
         mesh,
         vertex_edges: raw.edges,
@@ -155,59 +163,107 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
     }
 }
 
-/// The forest over blocks of [`tree::LEAF_BLOCK`]³ marching-cubes cells:
-/// layer = block layer, row = block row, leaf = block.
-fn leaf_forest(
-    mesh: &TriMesh,
-    cells: &[u32],
+/// Leaf keys of the forest: blocks of [`tree::LEAF_BLOCK`]³ marching-cubes
+/// cells (layer = block layer, row = block row, leaf = block).
+struct LeafBlocks {
+    /// #F block `bx + bdx·(by + bdy·bz)` of each triangle.
+    keys: Vec<u32>,
+    /// Block grid `[bdx, bdy, bdz]`.
     dims: [usize; 3],
-    groups: &[u32],
-    n_groups: usize,
-) -> Forest {
+}
+
+/// The block of each triangle's cell (`cells`: keys `x + cx·(y + cy·z)`).
+fn leaf_blocks(cells: &[u32], dims: [usize; 3]) -> LeafBlocks {
     let b = tree::LEAF_BLOCK;
     let cd = dims.map(|d| d.saturating_sub(1).max(1));
     let bd = cd.map(|c| c.div_ceil(b));
-    let blocks: Vec<u32> = cells
+    let (div_x, div_y) = (DivU32::new(cd[0] as u32), DivU32::new(cd[1] as u32));
+    let keys = cells
         .par_iter()
         .map(|&c| {
-            let c = c as usize;
-            let (x, y, z) = (c % cd[0], (c / cd[0]) % cd[1], c / (cd[0] * cd[1]));
+            let q = div_x.div(c);
+            let z = div_y.div(q) as usize;
+            let x = (c - q * cd[0] as u32) as usize;
+            let y = q as usize - z * cd[1];
             (x / b + bd[0] * (y / b + bd[1] * (z / b))) as u32
         })
         .collect();
-    Forest::build(mesh, &blocks, bd, groups, n_groups)
+    LeafBlocks { keys, dims: bd }
 }
 
-/// Per-group accumulators.
+/// Division of any `u32` by a fixed divisor `d ≥ 1` with one 128-bit
+/// multiplication: `⌊n/d⌋ = ⌊M·n / 2⁶⁴⌋` with `M = ⌈2⁶⁴/d⌉`, exact for all
+/// 32-bit `n` (Lemire, Kaser & Kurz 2019, "Faster remainder by direct
+/// computation", Theorem 1). Decoding cell keys with it instead of
+/// hardware division keeps the forest build off the divider.
 #[derive(Debug, Clone, Copy)]
-struct Acc {
+struct DivU32 {
+    m: u64,
+    d: u32,
+}
+
+impl DivU32 {
+    fn new(d: u32) -> Self {
+        let d = d.max(1);
+        DivU32 {
+            m: if d == 1 {
+                0
+            } else {
+                u64::MAX / u64::from(d) + 1
+            },
+            d,
+        }
+    }
+
+    #[inline]
+    fn div(self, n: u32) -> u32 {
+        if self.d == 1 {
+            n
+        } else {
+            ((u128::from(self.m) * u128::from(n)) >> 64) as u32
+        }
+    }
+}
+
+/// Chunk of triangles or vertices per task of the figure passes; partial
+/// sums are combined in chunk order, so the figures do not depend on the
+/// number of threads.
+const FIGURE_CHUNK: usize = 1 << 16;
+
+/// Group of a vertex used by no triangle.
+const NO_GROUP: u32 = u32::MAX;
+
+/// Per-group sums over triangles.
+#[derive(Debug, Clone, Copy, Default)]
+struct TriangleSums {
     triangles: u32,
-    bbox: Aabb,
     area: f64,
     volume6: f64,
 }
 
-impl Acc {
-    const ZERO: Acc = Acc {
-        triangles: 0,
-        bbox: Aabb::EMPTY,
-        area: 0.0,
-        volume6: 0.0,
-    };
-
-    fn merge(mut self, o: &Acc) -> Acc {
-        self.triangles += o.triangles;
-        self.bbox = self.bbox.union(o.bbox);
-        self.area += o.area;
-        self.volume6 += o.volume6;
-        self
+impl TriangleSums {
+    fn add(&self, o: &TriangleSums) -> TriangleSums {
+        TriangleSums {
+            triangles: self.triangles + o.triangles,
+            area: self.area + o.area,
+            volume6: self.volume6 + o.volume6,
+        }
     }
+}
+
+/// Per-group sums over vertices.
+#[derive(Debug, Clone, Copy)]
+struct VertexSums {
+    vertices: u32,
+    bbox: Aabb,
 }
 
 /// Group figures. Edges: `E = (3F + B)/2`, which holds because every edge
 /// is used once (border) or twice (the table's manifold guarantee, checked
 /// independently by the tests); `B` counts directed edges lying in a
-/// border plane of the grid whose reverse is absent.
+/// border plane of the grid whose reverse is absent. Every vertex lies in
+/// one group (groups are vertex-connected), so vertex counts and boxes are
+/// summed over vertices; area and volume over triangles, in f64.
 fn group_figures(
     mesh: &TriMesh,
     edges: &[u64],
@@ -216,61 +272,102 @@ fn group_figures(
     grid: Grid,
 ) -> Vec<Group> {
     let p = &mesh.positions;
-    let reference = mesh
-        .bounds()
-        .map_or(DVec3::ZERO, |(lo, hi)| ((lo + hi) * 0.5).as_dvec3());
-    let chunk = 1 << 16;
-    let acc = mesh
-        .triangles
-        .par_chunks(chunk)
-        .zip(groups.par_chunks(chunk))
-        .map(|(tris, gs)| {
-            let mut acc = vec![Acc::ZERO; n_groups];
+    let vertex_group: Vec<AtomicU32> = (0..p.len()).map(|_| AtomicU32::new(NO_GROUP)).collect();
+    mesh.triangles
+        .par_chunks(FIGURE_CHUNK)
+        .zip(groups.par_chunks(FIGURE_CHUNK))
+        .for_each(|(tris, gs)| {
             for (t, &g) in tris.iter().zip(gs) {
-                let [a, b, c] = t.map(|i| p[i as usize]);
-                let e = &mut acc[g as usize];
-                let (da, db, dc) = (
-                    a.as_dvec3() - reference,
-                    b.as_dvec3() - reference,
-                    c.as_dvec3() - reference,
-                );
-                let n = (db - da).cross(dc - da);
-                e.triangles += 1;
-                e.bbox = e.bbox.union(Aabb::triangle(a, b, c));
-                e.area += 0.5 * n.length();
-                e.volume6 += da.dot(db.cross(dc));
+                for &v in t {
+                    vertex_group[v as usize].store(g, Ordering::Relaxed);
+                }
             }
-            acc
+        });
+    let no_vertices = VertexSums {
+        vertices: 0,
+        bbox: Aabb::EMPTY,
+    };
+    let vertex_sums = p
+        .par_chunks(FIGURE_CHUNK)
+        .zip(vertex_group.par_chunks(FIGURE_CHUNK))
+        .map(|(ps, gs)| {
+            // Slot n_groups: vertices of no group (none in a mesh from
+            // marching cubes, but they still count for the bounds).
+            let mut sums = vec![no_vertices; n_groups + 1];
+            for (&q, g) in ps.iter().zip(gs) {
+                let g = (g.load(Ordering::Relaxed) as usize).min(n_groups);
+                let s = &mut sums[g];
+                s.vertices += 1;
+                s.bbox = s.bbox.union(Aabb { min: q, max: q });
+            }
+            sums
         })
-        .reduce(
-            || vec![Acc::ZERO; n_groups],
-            |a, b| a.iter().zip(&b).map(|(x, y)| x.merge(y)).collect(),
-        );
-    let mut vertex_group = vec![u32::MAX; p.len()];
-    for (t, &g) in mesh.triangles.iter().zip(groups) {
-        for &v in t {
-            vertex_group[v as usize] = g;
-        }
-    }
-    let mut vertices = vec![0u32; n_groups];
-    for &g in &vertex_group {
-        if let Some(v) = vertices.get_mut(g as usize) {
-            *v += 1;
-        }
-    }
+        .collect::<Vec<_>>()
+        .into_iter()
+        .reduce(|a, b| {
+            a.iter()
+                .zip(&b)
+                .map(|(x, y)| VertexSums {
+                    vertices: x.vertices + y.vertices,
+                    bbox: x.bbox.union(y.bbox),
+                })
+                .collect()
+        })
+        .unwrap_or_else(|| vec![no_vertices; n_groups + 1]);
+    // The mesh's bounds (all vertices, in any group or none).
+    let bounds = vertex_sums.iter().fold(Aabb::EMPTY, |b, s| b.union(s.bbox));
+    let reference = if bounds.is_empty() {
+        DVec3::ZERO
+    } else {
+        ((bounds.min + bounds.max) * 0.5).as_dvec3()
+    };
+    let triangle_sums = mesh
+        .triangles
+        .par_chunks(FIGURE_CHUNK)
+        .zip(groups.par_chunks(FIGURE_CHUNK))
+        .map(|(tris, gs)| {
+            let mut sums = vec![TriangleSums::default(); n_groups];
+            // Runs of one group are summed in locals (same order as summing
+            // into `sums` directly, without a round trip through memory).
+            let mut run = TriangleSums::default();
+            let mut run_group = gs.first().copied().unwrap_or(0) as usize;
+            for (t, &g) in tris.iter().zip(gs) {
+                if g as usize != run_group {
+                    sums[run_group] = sums[run_group].add(&run);
+                    run = sums[g as usize];
+                    sums[g as usize] = TriangleSums::default();
+                    run_group = g as usize;
+                }
+                let da = p[t[0] as usize].as_dvec3() - reference;
+                let db = p[t[1] as usize].as_dvec3() - reference;
+                let dc = p[t[2] as usize].as_dvec3() - reference;
+                let n = (db - da).cross(dc - da);
+                run.triangles += 1;
+                run.area += 0.5 * n.length();
+                run.volume6 += da.dot(db.cross(dc));
+            }
+            if let Some(s) = sums.get_mut(run_group) {
+                *s = s.add(&run);
+            }
+            sums
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .reduce(|a, b| a.iter().zip(&b).map(|(x, y)| x.add(y)).collect())
+        .unwrap_or_else(|| vec![TriangleSums::default(); n_groups]);
     let boundary = boundary_edges(mesh, edges, groups, n_groups, grid);
     (0..n_groups)
         .map(|g| {
-            let a = &acc[g];
-            let f = i64::from(a.triangles);
+            let (t, v) = (&triangle_sums[g], &vertex_sums[g]);
+            let f = i64::from(t.triangles);
             let b = i64::from(boundary[g]);
-            let euler = i64::from(vertices[g]) - (3 * f + b) / 2 + f;
+            let euler = i64::from(v.vertices) - (3 * f + b) / 2 + f;
             Group {
-                triangles: a.triangles,
-                vertices: vertices[g],
-                bbox: a.bbox,
-                area: a.area,
-                volume: a.volume6 / 6.0,
+                triangles: t.triangles,
+                vertices: v.vertices,
+                bbox: v.bbox,
+                area: t.area,
+                volume: t.volume6 / 6.0,
                 boundary_edges: boundary[g],
                 euler,
                 genus: (b == 0).then(|| (2 - euler) / 2),
@@ -324,4 +421,39 @@ fn boundary_edges(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DivU32;
+
+    #[test]
+    fn div_u32_is_exact() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut divisors: Vec<u32> = (1..=1025).collect();
+        divisors.extend([
+            u32::MAX,
+            u32::MAX - 1,
+            1 << 31,
+            (1 << 31) + 1,
+            65_535,
+            65_537,
+        ]);
+        divisors.extend((0..200).map(|_| next() as u32 | 1));
+        for d in divisors {
+            let f = DivU32::new(d);
+            let mut ns: Vec<u32> = vec![0, 1, d - 1, d, d.wrapping_add(1), u32::MAX, u32::MAX - 1];
+            ns.extend((0..2000).map(|_| next() as u32));
+            ns.extend((0..200).map(|_| (next() as u32 % 4096).wrapping_mul(d)));
+            for n in ns {
+                assert_eq!(f.div(n), n / d, "{n} / {d}");
+            }
+        }
+    }
 }

@@ -18,7 +18,7 @@ use super::Global;
 use super::relax::{Job, before_mesh, bone_before_after, run_job, write_preview};
 use crate::parity::Backend;
 use crate::render::{Facing, View};
-use crate::surface::{McOptions, Surface};
+use crate::surface::McOptions;
 use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
 use crate::tissue::phantom::{ct_demo_plan, ct_head_phantom};
 use crate::tissue::{CtLayers, Fragments, NetworkParams, RelaxOptions, Solver};
@@ -43,23 +43,6 @@ pub struct Args {
 /// Skin and bone levels of the phantom (as for the VTK CT head).
 const SKIN_LEVEL: f32 = 500.0;
 const BONE_LEVEL: f32 = 1150.0;
-
-/// Triangles as sorted, rotation-normalised triples of grid edge ids (the
-/// backend-independent identity of a marching-cubes surface).
-fn canonical_triangles(s: &Surface) -> Vec<[u64; 3]> {
-    let mut out: Vec<[u64; 3]> = s
-        .mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let e = t.map(|v| s.vertex_edges[v as usize]);
-            let k = (0..3).min_by_key(|&k| e[k]).unwrap_or(0);
-            [e[k], e[(k + 1) % 3], e[(k + 2) % 3]]
-        })
-        .collect();
-    out.sort_unstable();
-    out
-}
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out).map_err(|e| crate::Error::io(&args.out, e))?;
@@ -92,9 +75,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, SKIN_LEVEL, BONE_LEVEL)?;
     stage("marching_cubes_gpu", t);
     let t = Instant::now();
-    let mc_same = canonical_triangles(&skin_gpu)
-        == canonical_triangles(&mc(SKIN_LEVEL, Backend::Cpu)?)
-        && canonical_triangles(&bone_gpu) == canonical_triangles(&mc(BONE_LEVEL, Backend::Cpu)?);
+    let mc_same = skin_gpu.canonical_triangles()
+        == mc(SKIN_LEVEL, Backend::Cpu)?.canonical_triangles()
+        && bone_gpu.canonical_triangles() == mc(BONE_LEVEL, Backend::Cpu)?.canonical_triangles();
     stage("marching_cubes_cpu_check", t);
     bar.inc(1);
 

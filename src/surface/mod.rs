@@ -112,6 +112,26 @@ pub struct Surface {
     pub grid: Grid,
 }
 
+impl Surface {
+    /// Triangles as sorted, rotation-normalised triples of grid edge ids:
+    /// the backend-independent identity of the surface (CPU and GPU give
+    /// the same list, whatever their vertex and triangle order).
+    pub fn canonical_triangles(&self) -> Vec<[u64; 3]> {
+        let mut out: Vec<[u64; 3]> = self
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let e = t.map(|v| self.vertex_edges[v as usize]);
+                let k = (0..3).min_by_key(|&k| e[k]).unwrap_or(0);
+                [e[k], e[(k + 1) % 3], e[(k + 2) % 3]]
+            })
+            .collect();
+        out.sort_unstable();
+        out
+    }
+}
+
 /// Marching cubes of `volume` on `backend`, with grouping and the forest.
 pub fn marching_cubes(
     volume: &Volume,

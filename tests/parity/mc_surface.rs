@@ -45,22 +45,6 @@ fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
     .unwrap()
 }
 
-/// Triangles as sorted, rotation-normalised triples of grid edge ids.
-fn canonical_triangles(s: &Surface) -> Vec<[u64; 3]> {
-    let mut out: Vec<[u64; 3]> = s
-        .mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            let e = t.map(|v| s.vertex_edges[v as usize]);
-            let k = (0..3).min_by_key(|&k| e[k]).unwrap_or(0);
-            [e[k], e[(k + 1) % 3], e[(k + 2) % 3]]
-        })
-        .collect();
-    out.sort_unstable();
-    out
-}
-
 /// Positions keyed by grid edge id, in edge order.
 fn positions_by_edge(s: &Surface) -> Vec<[f32; 3]> {
     let by: BTreeMap<u64, [f32; 3]> = s
@@ -86,8 +70,8 @@ fn compare(what: &str, cpu: &Surface, gpu: &Surface) -> Result<(), Mismatch> {
     )?;
     compare_exact(
         &format!("{what}: triangle set"),
-        &canonical_triangles(cpu),
-        &canonical_triangles(gpu),
+        &cpu.canonical_triangles(),
+        &gpu.canonical_triangles(),
     )?;
     compare_exact(
         &format!("{what}: triangles in order"),

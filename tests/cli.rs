@@ -4,16 +4,12 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::Value;
 
 fn chisel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_chisel"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("run chisel")
+    common::run_chisel(env!("CARGO_BIN_EXE_chisel"), args)
 }
 
 /// Runs chisel and asserts it succeeded.

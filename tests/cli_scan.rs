@@ -7,7 +7,7 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use chisel::Volume;
 use chisel::phantom::voxel;
@@ -15,11 +15,7 @@ use chisel::volume::VolumeData;
 use serde_json::Value;
 
 fn chisel(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_chisel"))
-        .args(args)
-        .arg("--quiet")
-        .output()
-        .expect("run chisel")
+    common::run_chisel(env!("CARGO_BIN_EXE_chisel"), args)
 }
 
 fn scan_json(args: &[&str]) -> Value {

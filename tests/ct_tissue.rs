@@ -11,7 +11,7 @@ use chisel::parity::Backend;
 use chisel::tissue::ct::CT_SUBCUTIS_DEPTH;
 use chisel::tissue::phantom::{self, HEADSQ_CHIN_ADVANCE_TOML, ct_demo_plan, ct_head_phantom};
 use chisel::tissue::{
-    BoneCut, CtLayers, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status, cut_bone,
+    CtLayers, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status, cut_bone,
     layers_from_ct, relax,
 };
 use chisel::{TriMesh, Volume};
@@ -45,10 +45,6 @@ fn assert_closed_oriented(mesh: &TriMesh, what: &str) {
 
 fn volume_of(mesh: &TriMesh) -> f64 {
     phantom::signed_volume(mesh)
-}
-
-fn cuts(toml: &str) -> Vec<BoneCut> {
-    Plan::from_toml_str(toml, "test").unwrap().cuts
 }
 
 #[test]

@@ -231,66 +231,6 @@ pub fn refine_grid(mesh: &TriMesh, cols: usize, rows: usize, factor: usize) -> R
     TriMesh::new(positions, triangles)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn phantom_is_closed_outward_and_nested() {
-        let h = head_phantom(16).unwrap();
-        assert!(signed_volume(&h.skin) > 0.0);
-        assert!(signed_volume(&h.skull) > 0.0);
-        assert!(!h.jaw_vertices.is_empty());
-        // Every skull vertex lies inside the subcutis shell (0.8 · skin).
-        let skin_radius = |d: Vec3| {
-            h.skin
-                .positions
-                .iter()
-                .filter(|p| p.normalize().dot(d) > 0.995)
-                .map(|p| p.length())
-                .fold(f32::INFINITY, f32::min)
-        };
-        for p in h.skull.positions.iter().step_by(7) {
-            let r = skin_radius(p.normalize());
-            if r.is_finite() {
-                assert!(p.length() < 0.8 * r + 2.0, "{p} vs skin {r}");
-            }
-        }
-    }
-
-    #[test]
-    fn refine_grid_counts_and_interpolates() {
-        let mut pos = Vec::new();
-        for c in 0..3 {
-            for r in 0..4 {
-                pos.push(Vec3::new(c as f32, r as f32, 0.0));
-            }
-        }
-        let mut tri = Vec::new();
-        for c in 0..2u32 {
-            for r in 0..3u32 {
-                let (a, b, cc, d) = (
-                    c * 4 + r,
-                    (c + 1) * 4 + r,
-                    c * 4 + r + 1,
-                    (c + 1) * 4 + r + 1,
-                );
-                tri.push([a, b, cc]);
-                tri.push([b, d, cc]);
-            }
-        }
-        let m = TriMesh::new(pos, tri).unwrap();
-        let r = refine_grid(&m, 3, 4, 2).unwrap();
-        assert_eq!(r.n_vertices(), 5 * 7);
-        assert_eq!(r.n_triangles(), 2 * 4 * 6);
-        assert_eq!(r.positions[7 + 1], Vec3::new(0.5, 0.5, 0.0));
-        // Same winding as the input: +z normals.
-        let [a, b, c] = r.triangles[0].map(|i| r.positions[i as usize]);
-        assert!((b - a).cross(c - a).z > 0.0);
-        assert!(refine_grid(&m, 4, 4, 2).is_err());
-    }
-}
-
 /// CT numbers of [`ct_head_phantom`]: air, soft tissue and bone (the
 /// levels 500 and 1150 of the VTK CT head separate them as in `headsq`).
 pub const CT_AIR: f32 = 0.0;
@@ -414,4 +354,64 @@ pub fn ct_head_phantom(voxel: f32) -> Result<Volume> {
 /// The demo plan on [`ct_head_phantom`], parsed.
 pub fn ct_demo_plan() -> Result<Plan> {
     Plan::from_toml_str(CT_DEMO_PLAN_TOML, "ct_phantom_jaw_advance.toml")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn phantom_is_closed_outward_and_nested() {
+        let h = head_phantom(16).unwrap();
+        assert!(signed_volume(&h.skin) > 0.0);
+        assert!(signed_volume(&h.skull) > 0.0);
+        assert!(!h.jaw_vertices.is_empty());
+        // Every skull vertex lies inside the subcutis shell (0.8 · skin).
+        let skin_radius = |d: Vec3| {
+            h.skin
+                .positions
+                .iter()
+                .filter(|p| p.normalize().dot(d) > 0.995)
+                .map(|p| p.length())
+                .fold(f32::INFINITY, f32::min)
+        };
+        for p in h.skull.positions.iter().step_by(7) {
+            let r = skin_radius(p.normalize());
+            if r.is_finite() {
+                assert!(p.length() < 0.8 * r + 2.0, "{p} vs skin {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn refine_grid_counts_and_interpolates() {
+        let mut pos = Vec::new();
+        for c in 0..3 {
+            for r in 0..4 {
+                pos.push(Vec3::new(c as f32, r as f32, 0.0));
+            }
+        }
+        let mut tri = Vec::new();
+        for c in 0..2u32 {
+            for r in 0..3u32 {
+                let (a, b, cc, d) = (
+                    c * 4 + r,
+                    (c + 1) * 4 + r,
+                    c * 4 + r + 1,
+                    (c + 1) * 4 + r + 1,
+                );
+                tri.push([a, b, cc]);
+                tri.push([b, d, cc]);
+            }
+        }
+        let m = TriMesh::new(pos, tri).unwrap();
+        let r = refine_grid(&m, 3, 4, 2).unwrap();
+        assert_eq!(r.n_vertices(), 5 * 7);
+        assert_eq!(r.n_triangles(), 2 * 4 * 6);
+        assert_eq!(r.positions[7 + 1], Vec3::new(0.5, 0.5, 0.0));
+        // Same winding as the input: +z normals.
+        let [a, b, c] = r.triangles[0].map(|i| r.positions[i as usize]);
+        assert!((b - a).cross(c - a).z > 0.0);
+        assert!(refine_grid(&m, 4, 4, 2).is_err());
+    }
 }

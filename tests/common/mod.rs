@@ -203,3 +203,13 @@ pub fn random_mesh(seed: u64, n_vertices: usize, n: usize) -> TriMesh {
         .collect();
     TriMesh::new(p, t).expect("valid random mesh")
 }
+
+/// Runs the `chisel` binary with `--quiet` (for the CLI test binaries;
+/// `bin` is `env!("CARGO_BIN_EXE_chisel")` of the caller).
+pub fn run_chisel(bin: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(bin)
+        .args(args)
+        .arg("--quiet")
+        .output()
+        .expect("run chisel")
+}

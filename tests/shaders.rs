@@ -44,12 +44,15 @@ fn validate(path: &str, source: &str, features: wgpu::Features) -> naga::Module 
     module
 }
 
+/// A registry's entries: (file name, source, required features).
+type Entries<'a> = Vec<(String, &'a str, wgpu::Features)>;
+
 /// Both folders hold exactly the registered files, and every one validates.
 #[test]
 fn every_wgsl_file_is_registered_and_validates() {
     let mut validated = 0;
     let mut found = 0;
-    let registries: [(&str, Vec<(String, &str, wgpu::Features)>); 2] = [
+    let registries: [(&str, Entries<'_>); 2] = [
         (
             "kernels",
             Kernel::ALL

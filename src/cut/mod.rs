@@ -256,20 +256,43 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
     };
     // Analytic knife: each leaf's triangles are tested as the walk reaches
     // them, straight from the leaf's contiguous span of `forest.triangles`.
+    // The side test is branch-free (every candidate is written, the count
+    // advances only for a mixed one), so the loads of many candidates
+    // overlap; a rectangle then drops mixed triangles it does not reach.
     let mut crossed: Vec<u32> = Vec::new();
-    let mut hits: Vec<usize> = Vec::new();
-    let mut tested = 0usize;
+    let p = &mesh.positions;
+    let exact = k.sign_change_crosses();
     let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
+        let base = crossed.len();
+        crossed.resize(base + tris.len(), 0);
+        let mut n = base;
         for &t in tris {
-            if crossed_sides(mesh, k, side, t).is_some() {
-                crossed.push(t);
-                hits.push(tested);
-            }
-            tested += 1;
+            let f = side_values(p, side, mesh.triangles[t as usize]);
+            let (a, b, c) = (f[0] < 0.0, f[1] < 0.0, f[2] < 0.0);
+            crossed[n] = t;
+            n += usize::from(a != b || b != c);
         }
+        crossed.truncate(n);
+        if !exact {
+            let mut kept = base;
+            for i in base..n {
+                let t = crossed[i];
+                if crossed_sides(mesh, k, side, t).is_some() {
+                    crossed[kept] = t;
+                    kept += 1;
+                }
+            }
+            crossed.truncate(kept);
+        }
+        crossed.len() - base
     });
-    stats.triangles_tested = tested;
-    classify(&expanded, &hits, &mut stats);
+    for &(s, e) in &expanded {
+        if e > s {
+            stats.classes.intersected += 1;
+        } else {
+            stats.classes.separated += 1;
+        }
+    }
     crossed.sort_unstable();
     Ok(finish_locate(mesh, crossed, k, side, stats))
 }
@@ -294,8 +317,8 @@ fn locate_mesh_knife(
     let mut tested: Vec<u32> = Vec::new();
     let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
         tested.extend_from_slice(tris);
+        tris.len()
     });
-    stats.triangles_tested = tested.len();
     let pair = corefine::Pair {
         surface: mesh,
         knife,
@@ -315,14 +338,15 @@ fn locate_mesh_knife(
 }
 
 /// Walks the forest, expanding only nodes the knife may touch, and hands
-/// every expanded leaf's triangles to `leaf` in walk order. Returns, per
-/// expanded node, its span `[start, end)` in the sequence of triangles
-/// handed out (to class it once the crossings are known).
+/// every expanded leaf's triangles to `leaf` in walk order; `leaf` returns
+/// how far to advance a counter (its crossed triangles, or the triangles
+/// handed). Returns, per expanded node, its span `[start, end)` of that
+/// counter (to class it).
 fn walk(
     forest: &Forest,
     k: &PreparedKnife<'_>,
     stats: &mut CutStats,
-    leaf: &mut dyn FnMut(&[u32]),
+    leaf: &mut dyn FnMut(&[u32]) -> usize,
 ) -> Vec<(usize, usize)> {
     let mut expanded: Vec<(usize, usize)> = Vec::new();
     let mut handed = 0usize;
@@ -377,9 +401,10 @@ fn walk(
                         continue;
                     }
                     let tris = &forest.triangles[c.triangles.range()];
-                    leaf(tris);
-                    expanded.push((handed, handed + tris.len()));
-                    handed += tris.len();
+                    stats.triangles_tested += tris.len();
+                    let start = handed;
+                    handed += leaf(tris);
+                    expanded.push((start, handed));
                 }
                 expanded.push((r_start, handed));
             }

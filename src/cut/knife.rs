@@ -185,11 +185,26 @@ impl PreparedKnife<'_> {
     /// Signed side value of a point for the analytic knives (plane and
     /// rectangle: signed distance; sphere: |p − c|² − r²); `None` for mesh knives.
     pub fn side_value(&self, p: DVec3) -> Option<f64> {
+        self.side_fn().map(|f| f.eval(p))
+    }
+
+    /// The side function of an analytic knife, resolved once for a query's
+    /// hot loop; `None` for mesh knives.
+    pub fn side_fn(&self) -> Option<SideFn> {
         match &self.kind {
-            Kind::Plane { p: o, n } | Kind::Rect { p: o, n, .. } => Some(n.dot(p - *o)),
-            Kind::Sphere { c, r } => Some((p - *c).length_squared() - r * r),
+            Kind::Plane { p: o, n } | Kind::Rect { p: o, n, .. } => {
+                Some(SideFn::Plane { p: *o, n: *n })
+            }
+            Kind::Sphere { c, r } => Some(SideFn::Sphere { c: *c, r: *r }),
             Kind::Mesh { .. } => None,
         }
+    }
+
+    /// Whether every edge whose ends have side values of opposite signs is
+    /// crossed (plane and sphere; a rectangle also needs the crossing point
+    /// inside it).
+    pub fn sign_change_crosses(&self) -> bool {
+        matches!(self.kind, Kind::Plane { .. } | Kind::Sphere { .. })
     }
 
     /// Whether the knife surface certainly misses every edge inside `b`.
@@ -272,19 +287,44 @@ impl PreparedKnife<'_> {
         self.margin
     }
 
-    /// The crossing of edge `a → b` (endpoints in canonical order), if the
-    /// analytic knife cuts it.
-    pub fn crossing(&self, a: Vec3, b: Vec3) -> Option<Crossing> {
+    /// The crossing of edge `a → b` (endpoints in canonical order: lower
+    /// vertex id first), if the analytic knife cuts it, given the ends'
+    /// side values `fa`, `fb` from [`SideFn::eval`] (each vertex evaluated
+    /// once per triangle, not once per edge; tree and scan decide here).
+    pub fn crossing_from(&self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
+        if (fa < 0.0) == (fb < 0.0) {
+            return None;
+        }
         let (a, b) = (a.as_dvec3(), b.as_dvec3());
         match &self.kind {
-            Kind::Plane { p, n } => plane_crossing(a, b, *p, *n),
-            Kind::Rect { p, n, u, v, h } => plane_crossing(a, b, *p, *n).filter(|c| {
+            Kind::Plane { .. } => Some(plane_crossing(a, b, fa, fb)),
+            Kind::Rect { p, u, v, h, .. } => Some(plane_crossing(a, b, fa, fb)).filter(|c| {
                 let d = c.point - *p;
                 d.dot(*u).abs() <= h[0] && d.dot(*v).abs() <= h[1]
             }),
-            Kind::Sphere { c, r } => sphere_crossing(a, b, *c, *r),
+            Kind::Sphere { c, .. } => Some(sphere_crossing(a, b, *c, fa)),
             // Triangulated knives are intersected triangle by triangle (corefine).
             Kind::Mesh { .. } => None,
+        }
+    }
+}
+
+/// Side function of an analytic knife (see [`PreparedKnife::side_value`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum SideFn {
+    /// Signed distance `n·(q − p)`, `n` unit.
+    Plane { p: DVec3, n: DVec3 },
+    /// `|q − c|² − r²`.
+    Sphere { c: DVec3, r: f64 },
+}
+
+impl SideFn {
+    /// The side value of `q` (negative: the knife's negative side).
+    #[inline]
+    pub fn eval(self, q: DVec3) -> f64 {
+        match self {
+            SideFn::Plane { p, n } => n.dot(q - p),
+            SideFn::Sphere { c, r } => (q - c).length_squared() - r * r,
         }
     }
 }
@@ -338,25 +378,18 @@ fn project(lo: DVec3, hi: DVec3, p: DVec3, dir: DVec3) -> (f64, f64) {
     (mid - rad, mid + rad)
 }
 
-fn plane_crossing(a: DVec3, b: DVec3, p: DVec3, n: DVec3) -> Option<Crossing> {
-    let fa = n.dot(a - p);
-    let fb = n.dot(b - p);
-    if (fa < 0.0) == (fb < 0.0) {
-        return None;
-    }
+/// Crossing of `a → b` by a plane, given side values of opposite signs.
+fn plane_crossing(a: DVec3, b: DVec3, fa: f64, fb: f64) -> Crossing {
     let t = (fa / (fa - fb)).clamp(0.0, 1.0);
-    Some(Crossing {
+    Crossing {
         point: a + (b - a) * t,
         first_negative: fa < 0.0,
-    })
+    }
 }
 
-fn sphere_crossing(a: DVec3, b: DVec3, c: DVec3, r: f64) -> Option<Crossing> {
-    let fa = (a - c).length_squared() - r * r;
-    let fb = (b - c).length_squared() - r * r;
-    if (fa < 0.0) == (fb < 0.0) {
-        return None;
-    }
+/// Crossing of `a → b` by a sphere, given `fa = |a − c|² − r²` and that
+/// the ends lie on opposite sides.
+fn sphere_crossing(a: DVec3, b: DVec3, c: DVec3, fa: f64) -> Crossing {
     // |a + t·d − c|² = r²: A t² + 2B t + C = 0 with exactly one root in [0, 1].
     let d = b - a;
     let qa = d.length_squared();
@@ -381,10 +414,10 @@ fn sphere_crossing(a: DVec3, b: DVec3, c: DVec3, r: f64) -> Option<Crossing> {
     } else {
         0.5
     };
-    Some(Crossing {
+    Crossing {
         point: a + d * t,
         first_negative: fa < 0.0,
-    })
+    }
 }
 
 /// Whether any knife triangle box of `forest` overlaps `b`.

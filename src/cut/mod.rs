@@ -43,7 +43,7 @@ pub use knife::{Crossing, Knife, Side};
 use crate::surface::tree::sorted_overlap;
 use crate::surface::{Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
-use knife::{Kind, PreparedKnife};
+use knife::{Kind, PreparedKnife, SideFn};
 
 /// Options of [`cut`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -251,9 +251,105 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
         triangles_total: mesh.triangles.len(),
         ..CutStats::default()
     };
+    let Some(side) = k.side_fn() else {
+        return locate_mesh_knife(mesh, forest, k, stats);
+    };
+    // Analytic knife: each leaf's triangles are tested as the walk reaches
+    // them, straight from the leaf's contiguous span of `forest.triangles`.
+    // The side test is branch-free (every candidate is written, the count
+    // advances only for a mixed one), so the loads of many candidates
+    // overlap; a rectangle then drops mixed triangles it does not reach.
+    let mut crossed: Vec<u32> = Vec::new();
+    let p = &mesh.positions;
+    let exact = k.sign_change_crosses();
+    let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
+        let base = crossed.len();
+        crossed.resize(base + tris.len(), 0);
+        let mut n = base;
+        for &t in tris {
+            let f = side_values(p, side, mesh.triangles[t as usize]);
+            let (a, b, c) = (f[0] < 0.0, f[1] < 0.0, f[2] < 0.0);
+            crossed[n] = t;
+            n += usize::from(a != b || b != c);
+        }
+        crossed.truncate(n);
+        if !exact {
+            let mut kept = base;
+            for i in base..n {
+                let t = crossed[i];
+                if crossed_sides(mesh, k, side, t).is_some() {
+                    crossed[kept] = t;
+                    kept += 1;
+                }
+            }
+            crossed.truncate(kept);
+        }
+        crossed.len() - base
+    });
+    for &(s, e) in &expanded {
+        if e > s {
+            stats.classes.intersected += 1;
+        } else {
+            stats.classes.separated += 1;
+        }
+    }
+    crossed.sort_unstable();
+    Ok(finish_locate(mesh, crossed, k, side, stats))
+}
+
+/// The tree query for a triangulated knife: candidate triangles from the
+/// walk, then corefinement of them all at once.
+fn locate_mesh_knife(
+    mesh: &TriMesh,
+    forest: &Forest,
+    k: &PreparedKnife<'_>,
+    mut stats: CutStats,
+) -> Result<Located> {
+    let Kind::Mesh {
+        mesh: knife,
+        forest: knife_forest,
+    } = &k.kind
+    else {
+        return Err(Error::InvalidInput(
+            "internal: analytic knife on the mesh-knife path".into(),
+        ));
+    };
     let mut tested: Vec<u32> = Vec::new();
-    // Per expanded node: where its leaves' tested triangles start, to class it later.
+    let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
+        tested.extend_from_slice(tris);
+        tris.len()
+    });
+    let pair = corefine::Pair {
+        surface: mesh,
+        knife,
+        forest: knife_forest,
+        margin: k.margin(),
+    };
+    let segs = pair.segments_of(&tested)?;
+    let hits: Vec<usize> = (0..segs.len()).filter(|&i| !segs[i].is_empty()).collect();
+    classify(&expanded, &hits, &mut stats);
+    let mut crossed: Vec<(u32, Vec<_>)> = tested
+        .into_iter()
+        .zip(segs)
+        .filter(|(_, s)| !s.is_empty())
+        .collect();
+    crossed.sort_unstable_by_key(|(t, _)| *t);
+    Ok(finish_locate_mesh(&pair, crossed, stats))
+}
+
+/// Walks the forest, expanding only nodes the knife may touch, and hands
+/// every expanded leaf's triangles to `leaf` in walk order; `leaf` returns
+/// how far to advance a counter (its crossed triangles, or the triangles
+/// handed). Returns, per expanded node, its span `[start, end)` of that
+/// counter (to class it).
+fn walk(
+    forest: &Forest,
+    k: &PreparedKnife<'_>,
+    stats: &mut CutStats,
+    leaf: &mut dyn FnMut(&[u32]) -> usize,
+) -> Vec<(usize, usize)> {
     let mut expanded: Vec<(usize, usize)> = Vec::new();
+    let mut handed = 0usize;
     let visit = |b: &crate::surface::Aabb, stats: &mut CutStats| {
         stats.nodes_visited += 1;
         let clear = k.box_is_clear(b);
@@ -286,96 +382,50 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
         sorted_overlap(&forest.cells[r], |n| &n.bbox, 0, lo, hi)
     };
     for g in &forest.groups {
-        if !visit(&g.bbox, &mut stats) {
+        if !visit(&g.bbox, stats) {
             continue;
         }
-        let g_start = tested.len();
+        let g_start = handed;
         for l in &forest.layers[span(&g.bbox, g.layers.range(), 2, &layers_in)] {
-            if !visit(&l.bbox, &mut stats) {
+            if !visit(&l.bbox, stats) {
                 continue;
             }
-            let l_start = tested.len();
+            let l_start = handed;
             for r in &forest.rows[span(&l.bbox, l.rows.range(), 1, &rows_in)] {
-                if !visit(&r.bbox, &mut stats) {
+                if !visit(&r.bbox, stats) {
                     continue;
                 }
-                let r_start = tested.len();
+                let r_start = handed;
                 for c in &forest.cells[span(&r.bbox, r.cells.range(), 0, &cells_in)] {
-                    if !visit(&c.bbox, &mut stats) {
+                    if !visit(&c.bbox, stats) {
                         continue;
                     }
-                    let c_start = tested.len();
-                    tested.extend_from_slice(&forest.triangles[c.triangles.range()]);
-                    expanded.push((c_start, tested.len()));
+                    let tris = &forest.triangles[c.triangles.range()];
+                    stats.triangles_tested += tris.len();
+                    let start = handed;
+                    handed += leaf(tris);
+                    expanded.push((start, handed));
                 }
-                expanded.push((r_start, tested.len()));
+                expanded.push((r_start, handed));
             }
-            expanded.push((l_start, tested.len()));
+            expanded.push((l_start, handed));
         }
-        expanded.push((g_start, tested.len()));
+        expanded.push((g_start, handed));
     }
-    stats.triangles_tested = tested.len();
-    let knife_segments = match &k.kind {
-        Kind::Mesh {
-            mesh: knife,
-            forest,
-        } => Some(
-            corefine::Pair {
-                surface: mesh,
-                knife,
-                forest,
-                margin: k.margin(),
-            }
-            .segments_of(&tested)?,
-        ),
-        _ => None,
-    };
-    let crossed_flags: Vec<bool> = match &knife_segments {
-        Some(segs) => segs.iter().map(|s| !s.is_empty()).collect(),
-        None => crossed_flags(mesh, &tested, k),
-    };
-    // Class every expanded node by whether any of its tested triangles crossed.
-    let mut prefix = vec![0usize; tested.len() + 1];
-    for (i, &f) in crossed_flags.iter().enumerate() {
-        prefix[i + 1] = prefix[i] + usize::from(f);
-    }
-    for (s, e) in expanded {
-        if prefix[e] > prefix[s] {
+    expanded
+}
+
+/// Classes every expanded node `[start, end)` as intersected when one of
+/// the ascending positions `hits` falls inside it, else separated.
+fn classify(expanded: &[(usize, usize)], hits: &[usize], stats: &mut CutStats) {
+    for &(s, e) in expanded {
+        let i = hits.partition_point(|&h| h < s);
+        if hits.get(i).is_some_and(|&h| h < e) {
             stats.classes.intersected += 1;
         } else {
             stats.classes.separated += 1;
         }
     }
-    if let (
-        Some(segs),
-        Kind::Mesh {
-            mesh: knife,
-            forest,
-        },
-    ) = (knife_segments, &k.kind)
-    {
-        let mut crossed: Vec<(u32, Vec<_>)> = tested
-            .into_iter()
-            .zip(segs)
-            .filter(|(_, s)| !s.is_empty())
-            .collect();
-        crossed.sort_unstable_by_key(|(t, _)| *t);
-        let pair = corefine::Pair {
-            surface: mesh,
-            knife,
-            forest,
-            margin: k.margin(),
-        };
-        return Ok(finish_locate_mesh(&pair, crossed, stats));
-    }
-    let mut crossed: Vec<u32> = tested
-        .iter()
-        .zip(&crossed_flags)
-        .filter(|(_, f)| **f)
-        .map(|(t, _)| *t)
-        .collect();
-    crossed.sort_unstable();
-    Ok(finish_locate(mesh, crossed, k, stats))
 }
 
 /// Cut points of a triangulated knife, numbered by first use in ascending
@@ -415,36 +465,41 @@ fn finish_locate_mesh(
     out
 }
 
-/// Whether each triangle has a crossed edge.
-fn crossed_flags(mesh: &TriMesh, tris: &[u32], k: &PreparedKnife<'_>) -> Vec<bool> {
+/// Side values of a triangle's vertices.
+#[inline(always)]
+fn side_values(p: &[Vec3], side: SideFn, [a, b, c]: [u32; 3]) -> [f64; 3] {
+    [
+        side.eval(p[a as usize].as_dvec3()),
+        side.eval(p[b as usize].as_dvec3()),
+        side.eval(p[c as usize].as_dvec3()),
+    ]
+}
+
+/// The side values of triangle `t`'s vertices when an analytic knife
+/// crosses one of its edges: only where the side changes, and for a
+/// rectangle only where the crossing point lies inside it. Each vertex is
+/// evaluated once; tree and scan both decide here.
+#[inline(always)]
+fn crossed_sides(mesh: &TriMesh, k: &PreparedKnife<'_>, side: SideFn, t: u32) -> Option<[f64; 3]> {
+    let tri = mesh.triangles[t as usize];
     let p = &mesh.positions;
-    let edge = |a: u32, b: u32| {
-        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-        k.crossing(p[lo as usize], p[hi as usize]).is_some()
-    };
-    let analytic = !matches!(k.kind, Kind::Mesh { .. });
-    let test = |&t: &u32| {
-        let [a, b, c] = mesh.triangles[t as usize];
-        // Analytic knives cross an edge only where the side changes: three
-        // side values decide most triangles without any edge work.
-        if analytic {
-            let neg = |v: u32| {
-                k.side_value(p[v as usize].as_dvec3())
-                    .is_some_and(|f| f < 0.0)
-            };
-            let (na, nb, nc) = (neg(a), neg(b), neg(c));
-            if na == nb && nb == nc {
-                return false;
-            }
-        }
-        edge(a, b) || edge(b, c) || edge(c, a)
-    };
-    // Small candidate sets (the tree's usual case) are not worth a fork.
-    if tris.len() < 1 << 14 {
-        tris.iter().map(test).collect()
-    } else {
-        tris.par_iter().map(test).collect()
+    let f = side_values(p, side, tri);
+    let neg = f.map(|x| x < 0.0);
+    if neg[0] == neg[1] && neg[1] == neg[2] {
+        return None;
     }
+    if k.sign_change_crosses() {
+        return Some(f);
+    }
+    (0..3)
+        .any(|e| {
+            let (i, j) = (e, (e + 1) % 3);
+            let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
+            neg[i] != neg[j]
+                && k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j])
+                    .is_some()
+        })
+        .then_some(f)
 }
 
 fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located> {
@@ -453,52 +508,59 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
         triangles_tested: mesh.triangles.len(),
         ..CutStats::default()
     };
-    let p = &mesh.positions;
-    let crossed: Vec<u32> = match &k.kind {
-        // Analytic knives: one side value per vertex, then only triangles
-        // with mixed signs can hold a crossed edge.
-        Kind::Plane { .. } | Kind::Rect { .. } | Kind::Sphere { .. } => {
-            let neg: Vec<bool> = p
-                .par_iter()
-                .map(|q| k.side_value(q.as_dvec3()).is_some_and(|f| f < 0.0))
-                .collect();
-            let mixed: Vec<u32> = (0..mesh.triangles.len() as u32)
-                .into_par_iter()
-                .filter(|&t| {
-                    let [a, b, c] = mesh.triangles[t as usize];
-                    let (na, nb, nc) = (neg[a as usize], neg[b as usize], neg[c as usize]);
-                    na != nb || nb != nc
-                })
-                .collect();
-            let flags = crossed_flags(mesh, &mixed, k);
-            mixed
-                .into_iter()
-                .zip(flags)
-                .filter(|(_, f)| *f)
-                .map(|(t, _)| t)
-                .collect()
-        }
-        Kind::Mesh {
-            mesh: knife,
-            forest,
-        } => {
-            let pair = corefine::Pair {
-                surface: mesh,
-                knife,
-                forest,
-                margin: k.margin(),
-            };
-            let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
-            let segs = pair.segments_of(&all)?;
-            let crossed = all
-                .into_iter()
-                .zip(segs)
-                .filter(|(_, s)| !s.is_empty())
-                .collect();
-            return Ok(finish_locate_mesh(&pair, crossed, stats));
-        }
+    let Some(side) = k.side_fn() else {
+        return scan_mesh_knife(mesh, k, stats);
     };
-    Ok(finish_locate(mesh, crossed, k, stats))
+    // Analytic knives: one side value per vertex, then only triangles with
+    // mixed signs can hold a crossed edge.
+    let neg: Vec<bool> = mesh
+        .positions
+        .par_iter()
+        .map(|q| side.eval(q.as_dvec3()) < 0.0)
+        .collect();
+    let mixed: Vec<u32> = (0..mesh.triangles.len() as u32)
+        .into_par_iter()
+        .filter(|&t| {
+            let [a, b, c] = mesh.triangles[t as usize];
+            let (na, nb, nc) = (neg[a as usize], neg[b as usize], neg[c as usize]);
+            na != nb || nb != nc
+        })
+        .collect();
+    let test = |t: &u32| crossed_sides(mesh, k, side, *t).is_some();
+    // Small sets are not worth a fork.
+    let crossed: Vec<u32> = if mixed.len() < 1 << 14 {
+        mixed.into_iter().filter(test).collect()
+    } else {
+        mixed.into_par_iter().filter(test).collect()
+    };
+    Ok(finish_locate(mesh, crossed, k, side, stats))
+}
+
+/// The scan for a triangulated knife: corefinement of every triangle.
+fn scan_mesh_knife(mesh: &TriMesh, k: &PreparedKnife<'_>, stats: CutStats) -> Result<Located> {
+    let Kind::Mesh {
+        mesh: knife,
+        forest,
+    } = &k.kind
+    else {
+        return Err(Error::InvalidInput(
+            "internal: analytic knife on the mesh-knife path".into(),
+        ));
+    };
+    let pair = corefine::Pair {
+        surface: mesh,
+        knife,
+        forest,
+        margin: k.margin(),
+    };
+    let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+    let segs = pair.segments_of(&all)?;
+    let crossed = all
+        .into_iter()
+        .zip(segs)
+        .filter(|(_, s)| !s.is_empty())
+        .collect();
+    Ok(finish_locate_mesh(&pair, crossed, stats))
 }
 
 /// A multiplicative hash for edge keys (vertex-id pairs, not attacker
@@ -533,40 +595,51 @@ impl std::hash::Hasher for EdgeHasher {
     }
 }
 
-/// Cut vertices of the crossed triangles, numbered by first use in
-/// ascending triangle order (so tree and scan number them identically).
+/// Cut vertices of the crossed triangles (ascending ids), numbered by
+/// first use in ascending triangle order (so tree and scan number them
+/// identically). Only edges whose ends change side are looked up.
 fn finish_locate(
     mesh: &TriMesh,
     crossed: Vec<u32>,
     k: &PreparedKnife<'_>,
+    side: SideFn,
     mut stats: CutStats,
 ) -> Located {
     let p = &mesh.positions;
-    let mut ids: HashMap<(u32, u32), u32, EdgeHash> =
+    let mut ids: HashMap<u64, u32, EdgeHash> =
         HashMap::with_capacity_and_hasher(2 * crossed.len(), EdgeHash);
-    let mut out = Located::default();
-    for &t in &crossed {
+    let mut out = Located {
+        triangles: Vec::with_capacity(crossed.len()),
+        edge_cuts: Vec::with_capacity(crossed.len()),
+        ..Located::default()
+    };
+    for t in crossed {
         let tri = mesh.triangles[t as usize];
+        let f = side_values(p, side, tri);
         let mut cuts = [u32::MAX; 3];
         for e in 0..3 {
-            let (a, b) = (tri[e], tri[(e + 1) % 3]);
-            let key = (a.min(b), a.max(b));
+            let (i, j) = (e, (e + 1) % 3);
+            if (f[i] < 0.0) == (f[j] < 0.0) {
+                continue;
+            }
+            let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
+            let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
             if let Some(&id) = ids.get(&key) {
                 cuts[e] = id;
                 continue;
             }
-            if let Some(c) = k.crossing(p[key.0 as usize], p[key.1 as usize]) {
+            if let Some(c) = k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j]) {
                 let id = out.points.len() as u32;
                 ids.insert(key, id);
                 out.points.push(c.point.as_vec3());
                 out.lower_negative.push(c.first_negative);
-                out.edges.push(key);
+                out.edges.push((tri[i], tri[j]));
                 cuts[e] = id;
             }
         }
+        out.triangles.push(t);
         out.edge_cuts.push(cuts);
     }
-    out.triangles = crossed;
     stats.triangles_split = out.triangles.len();
     stats.cut_vertices = out.points.len();
     out.stats = stats;

@@ -127,7 +127,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     crate::io::write_volume(&out("head_ct.nrrd"), &volume)?;
     let facing = Facing::Axes;
     let views = vec![View::Front, View::Right];
-    let title = "chisel demo: jaw osteotomy, 6 mm advance, tissue relaxed on the GPU (mm)";
+    let title = "chisel demo: jaw osteotomy, 6 mm advance (mm)";
     write_preview(
         &gpu,
         (&before_mesh(&job.skin), &relaxed),

@@ -342,7 +342,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 (&before_mesh(&job.skin), &relaxed),
                 vec![View::Front, View::Right],
                 facing,
-                format!("chisel relax: {title} - skin (displacement)"),
+                format!("relax: {title} - skin (mm)"),
                 path,
             )?;
         }
@@ -355,7 +355,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 (before, after),
                 vec![View::Front, View::Right],
                 facing,
-                format!("chisel relax: {title} - bone (displacement)"),
+                format!("relax: {title} - bone (mm)"),
                 path,
             )?;
         }

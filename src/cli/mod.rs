@@ -62,13 +62,12 @@ impl ViewAxes {
     /// The facing rule these options ask for.
     pub fn facing(&self) -> anyhow::Result<crate::render::Facing> {
         let v = |name: &str, a: &Option<Vec<f32>>| -> anyhow::Result<Option<glam::Vec3>> {
-            match a.as_deref() {
-                None => Ok(None),
-                Some(&[x, y, z]) if glam::Vec3::new(x, y, z).length() > 0.0 => {
-                    Ok(Some(glam::Vec3::new(x, y, z)))
-                }
-                Some(o) => anyhow::bail!("--{name} takes a non-zero x,y,z; got {o:?}"),
-            }
+            let v = vec3_arg(name, a.as_deref())?;
+            anyhow::ensure!(
+                v.is_none_or(|v| v.length() > 0.0),
+                "--{name} takes a non-zero x,y,z"
+            );
+            Ok(v)
         };
         Ok(
             match (
@@ -85,6 +84,15 @@ impl ViewAxes {
                 _ => crate::render::Facing::Auto,
             },
         )
+    }
+}
+
+/// A `x,y,z` option as a vector; `name` (without `--`) for the error.
+pub(super) fn vec3_arg(name: &str, v: Option<&[f32]>) -> anyhow::Result<Option<glam::Vec3>> {
+    match v {
+        None => Ok(None),
+        Some(&[x, y, z]) => Ok(Some(glam::Vec3::new(x, y, z))),
+        Some(o) => anyhow::bail!("--{name} takes x,y,z; got {} numbers", o.len()),
     }
 }
 

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use super::{BackendArg, Global, ViewAxes};
+use super::{BackendArg, Global, ViewAxes, vec3_arg};
 use glam::Vec3;
 
 use crate::mesh::{ScalarField, TriMesh};
@@ -242,14 +242,6 @@ pub fn write_preview(
     };
     crate::render::render_panels(gpu, &panels, &opts)?.save_png(path)?;
     Ok(())
-}
-
-fn vec3_arg(name: &str, v: Option<&[f32]>) -> anyhow::Result<Option<Vec3>> {
-    match v {
-        None => Ok(None),
-        Some(&[x, y, z]) => Ok(Some(Vec3::new(x, y, z))),
-        Some(o) => anyhow::bail!("--{name} takes x,y,z; got {} numbers", o.len()),
-    }
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {

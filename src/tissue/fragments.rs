@@ -222,7 +222,9 @@ pub fn validate_cuts(cuts: &[BoneCut]) -> Result<()> {
 pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
     bone.validate()?;
     validate_cuts(cuts)?;
-    let mut pieces: Vec<(TriMesh, Vec<usize>)> = vec![(bone.clone(), Vec::new())];
+    // (piece, indices of the cuts whose fragment holds it, area centroid)
+    let mut pieces: Vec<(TriMesh, Vec<usize>, DVec3)> =
+        vec![(bone.clone(), Vec::new(), centroid(bone))];
     let mut stats = Vec::with_capacity(cuts.len());
     for (ci, c) in cuts.iter().enumerate() {
         let knife = c.knife.knife();
@@ -234,20 +236,21 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
         let mut next = Vec::with_capacity(pieces.len());
         let mut total = CutStats::default();
         let mut taken = 0usize;
-        for (mesh, member) in &pieces {
+        for (mesh, member, _) in &pieces {
             let r = cut_mesh(mesh, &knife, &opts)?;
             total.accumulate(&r.stats);
             for (p, side) in r.pieces.into_iter().zip(r.sides) {
                 let mut m = member.clone();
+                let at = centroid(&p);
                 let inside = c
                     .within
                     .as_ref()
-                    .is_none_or(|w| w.contains(centroid(&p).as_vec3()) == Some(true));
+                    .is_none_or(|w| w.contains(at.as_vec3()) == Some(true));
                 if side == want && inside {
                     m.push(ci);
                     taken += 1;
                 }
-                next.push((p, m));
+                next.push((p, m, at));
             }
         }
         if taken == 0 {
@@ -271,7 +274,7 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
     let mut label = Vec::new();
     let mut ids: BTreeMap<String, Vec<u32>> = BTreeMap::new();
     let mut infos = Vec::with_capacity(pieces.len());
-    for (p, member) in &pieces {
+    for (p, member, at) in &pieces {
         let first = mesh.positions.len() as u32;
         let n = p.positions.len() as u32;
         mesh.positions.extend_from_slice(&p.positions);
@@ -290,7 +293,7 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
             first_vertex: first,
             vertices: n,
             triangles: p.triangles.len() as u32,
-            centroid: centroid(p).as_vec3().to_array(),
+            centroid: at.as_vec3().to_array(),
             fragments: member.iter().map(|&c| cuts[c].name.clone()).collect(),
         });
     }

@@ -617,7 +617,7 @@ fn finish_locate(
         let tri = mesh.triangles[t as usize];
         let f = side_values(p, side, tri);
         let mut cuts = [u32::MAX; 3];
-        for e in 0..3 {
+        for (e, cut) in cuts.iter_mut().enumerate() {
             let (i, j) = (e, (e + 1) % 3);
             if (f[i] < 0.0) == (f[j] < 0.0) {
                 continue;
@@ -625,7 +625,7 @@ fn finish_locate(
             let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
             let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
             if let Some(&id) = ids.get(&key) {
-                cuts[e] = id;
+                *cut = id;
                 continue;
             }
             if let Some(c) = k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j]) {
@@ -634,7 +634,7 @@ fn finish_locate(
                 out.points.push(c.point.as_vec3());
                 out.lower_negative.push(c.first_negative);
                 out.edges.push((tri[i], tri[j]));
-                cuts[e] = id;
+                *cut = id;
             }
         }
         out.triangles.push(t);

@@ -218,6 +218,75 @@ impl ConvexHull {
         ConvexHull::build(&object.candidates(kind), options)
     }
 
+    /// Rebuilds a hull from stored vertices and face cycles (counter-clockwise
+    /// from outside), e.g. a decoded cell list. Planes are recomputed
+    /// exactly (`Σ vᵢ × vᵢ₊₁`, made primitive); a flat polygon is two
+    /// opposite faces over the same cycle.
+    ///
+    /// Errors: [`crate::Error::InvalidInput`] when a coordinate is out of
+    /// range, a face has fewer than three vertices, an index is out of range,
+    /// a face is not planar, or some vertex lies outside a face's plane (the
+    /// faces do not bound a convex polytope).
+    pub fn from_faces(vertices: Vec<[i64; 3]>, cycles: Vec<Vec<u32>>) -> crate::Result<ConvexHull> {
+        let bad = |what: String| crate::Error::InvalidInput(format!("convex polytope: {what}"));
+        if let Some(p) = vertices
+            .iter()
+            .find(|p| p.iter().any(|c| c.abs() > MAX_COORD))
+        {
+            return Err(bad(format!("vertex {p:?} exceeds ±{MAX_COORD}")));
+        }
+        let mut faces = Vec::with_capacity(cycles.len());
+        for (f, cycle) in cycles.into_iter().enumerate() {
+            if cycle.len() < 3 {
+                return Err(bad(format!("face {f} has {} vertices", cycle.len())));
+            }
+            if let Some(v) = cycle.iter().find(|&&v| v as usize >= vertices.len()) {
+                return Err(bad(format!("face {f} names vertex {v} of {}", vertices.len())));
+            }
+            let p = |k: usize| vertices[cycle[k % cycle.len()] as usize];
+            let mut n = [0i64; 3];
+            for k in 0..cycle.len() {
+                let c = cross(sub(p(k), p(0)), sub(p(k + 1), p(0)));
+                n = [n[0] + c[0], n[1] + c[1], n[2] + c[2]];
+            }
+            if n == [0, 0, 0] {
+                return Err(bad(format!("face {f} is degenerate")));
+            }
+            let normal = primitive(n);
+            let plane = HalfSpace {
+                normal,
+                offset: dot(normal, p(0)),
+            };
+            if (0..cycle.len()).any(|k| plane.side(p(k)) != 0) {
+                return Err(bad(format!("face {f} is not planar")));
+            }
+            if let Some(v) = vertices.iter().find(|&&v| plane.side(v) > 0) {
+                return Err(bad(format!("vertex {v:?} lies outside face {f}")));
+            }
+            faces.push(HullFace {
+                vertices: cycle,
+                plane,
+            });
+        }
+        let planar = match faces.as_slice() {
+            [a, b] if a.plane.normal == b.plane.normal.map(|c| -c) => Some(a.plane),
+            _ => None,
+        };
+        let mut hull = ConvexHull {
+            vertices,
+            faces,
+            vol6: 0,
+            planar,
+            stats: HullStats::default(),
+            options: HullOptions::default(),
+        };
+        if hull.faces.len() < 4 && planar.is_none() {
+            return Err(bad(format!("{} faces bound no polytope", hull.faces.len())));
+        }
+        hull.vol6 = hull.volume6_from_faces();
+        Ok(hull)
+    }
+
     /// Hull vertices (combinatorial coordinates), sorted lexicographically.
     pub fn vertices(&self) -> &[[i64; 3]] {
         &self.vertices

@@ -1,13 +1,24 @@
 //! Polyhedrization of non-convex digital objects (seed 003 §4.2–4.5).
 //!
-//! So far: the background components inside the convex hull (ZKH, §4.2.1),
-//! their classification by the hull faces they touch (Def. CO/CA/TU,
-//! §4.2.3), and the face selection for pressing-in (Def. PR (i)–(iii)) —
-//! the inputs of the modification steps (building CH(S' ∪ M), recursion
-//! with swapped roles, merging cell lists), which are not built yet.
+//! - [`zkh`]: the background components inside the convex hull (ZKH,
+//!   §4.2.1) and their classes by the hull faces they touch (Def. CO/CA/TU,
+//!   §4.2.3).
+//! - [`polyhedrize`]: the lossless representation — the recursion with
+//!   swapped roles of §4.4 as a tree of convex shells, cavities as reversed
+//!   shells, genus > 0 components as maximal digital balls ([`balls`],
+//!   §4.5.4), exact voxelization, storage (eq. 8.2) and `.cells` files.
+//! - [`press`]: the face selection for pressing-in (Def. PR (i)–(iii)), the
+//!   input of the surface merge of §4.4.1, which is not built yet.
 
+pub mod balls;
+mod cellfile;
+pub mod polyhedrize;
 pub mod press;
 pub mod zkh;
 
+pub use polyhedrize::{
+    Polyhedron, PolyhedronSummary, PolyhedrizeOptions, Role, Shell, ShellGeometry, ShellKind,
+    ZkhReport, polyhedrize,
+};
 pub use press::faces_to_press;
 pub use zkh::{Zkh, ZkhClass, background_components};

@@ -6,9 +6,7 @@ mod common;
 use chisel::hscan::VoxelBox;
 use chisel::parity::Backend;
 use chisel::phantom::voxel::{cube, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
-use chisel::polyhedron::{
-    Polyhedron, PolyhedrizeOptions, Role, ShellKind, ZkhClass, polyhedrize,
-};
+use chisel::polyhedron::{PolyhedrizeOptions, Polyhedron, Role, ShellKind, ZkhClass, polyhedrize};
 use chisel::volume::Volume;
 use chisel::voxel::{Component, DigitalObject, Frame, Selection};
 
@@ -18,6 +16,14 @@ fn object(v: &Volume) -> DigitalObject {
 
 fn run(o: &DigitalObject) -> (Polyhedron, Vec<chisel::polyhedron::ZkhReport>) {
     polyhedrize(o, PolyhedrizeOptions::default(), Backend::Cpu, &|_| {}).unwrap()
+}
+
+fn run_balls(o: &DigitalObject) -> (Polyhedron, Vec<chisel::polyhedron::ZkhReport>) {
+    let options = PolyhedrizeOptions {
+        balls: true,
+        ..Default::default()
+    };
+    polyhedrize(o, options, Backend::Cpu, &|_| {}).unwrap()
 }
 
 /// Asserts the representation reproduces `o` exactly, also after a round
@@ -40,7 +46,10 @@ fn cylinder_tunnels_give_the_split_face_counts_of_table_8_7() {
         let s = p.summary();
         println!("cylinder {d_o}/{d_i}: {s:?}");
         assert_eq!(z.len(), 1);
-        assert_eq!((z[0].class, z[0].genus, z[0].shells), (ZkhClass::Tunnel, 0, 1));
+        assert_eq!(
+            (z[0].class, z[0].genus, z[0].shells),
+            (ZkhClass::Tunnel, Some(0), 1)
+        );
         assert_eq!(s.shells, 2, "{d_o}/{d_i}");
         assert_eq!(s.faces, faces, "{d_o}/{d_i}");
         assert_eq!(s.g_nc, 1);
@@ -51,7 +60,10 @@ fn cylinder_tunnels_give_the_split_face_counts_of_table_8_7() {
 
 #[test]
 fn convex_objects_are_one_shell() {
-    for (name, v) in [("ball 24", digital_ball(24).unwrap()), ("cube 7", cube(7).unwrap())] {
+    for (name, v) in [
+        ("ball 24", digital_ball(24).unwrap()),
+        ("cube 7", cube(7).unwrap()),
+    ] {
         let o = object(&v);
         let (p, z) = run(&o);
         assert!(z.is_empty(), "{name}");
@@ -69,11 +81,25 @@ fn torus_and_dented_ellipsoid_are_lossless() {
     let o = object(&torus(40, 12).unwrap());
     let (p, z) = run(&o);
     println!("torus: {:?} {z:?}", p.summary());
-    // The hole is a genus-0 tunnel; the part of the tube inside its hull is
-    // a ring (genus 1), decomposed into maximal balls.
-    assert_eq!((z.len(), z[0].class, z[0].genus), (1, ZkhClass::Tunnel, 0));
-    assert!(p.shells.iter().any(|s| s.depth == 2 && matches!(s.kind, ShellKind::Ball(_))));
+    assert_eq!(
+        (z.len(), z[0].class, z[0].genus),
+        (1, ZkhClass::Tunnel, Some(0))
+    );
+    assert!(
+        p.shells
+            .iter()
+            .all(|s| !matches!(s.kind, ShellKind::Ball(_)))
+    );
     assert_lossless(&p, &o, "torus");
+    // With §4.5.4: the part of the tube inside the hole's hull is a ring
+    // (genus 1), decomposed into maximal balls.
+    let (b, _) = run_balls(&o);
+    assert!(
+        b.shells
+            .iter()
+            .any(|s| s.depth == 2 && matches!(s.kind, ShellKind::Ball(_)))
+    );
+    assert_lossless(&b, &o, "torus, balls");
     let o = object(&ellipsoid_dent(13, 13, 8, 5).unwrap());
     let (p, z) = run(&o);
     println!("ellipsoid: {:?} {z:?}", p.summary());
@@ -109,7 +135,11 @@ fn cavities_are_reversed_shells_and_nesting_recurses() {
         roles,
         [(0, Role::Object), (1, Role::Background), (2, Role::Object)]
     );
-    assert_eq!(p.shells[2].geometry.dimension(), 0, "the island is a point label");
+    assert_eq!(
+        p.shells[2].geometry.dimension(),
+        0,
+        "the island is a point label"
+    );
     assert_eq!(p.summary().g_nc, 2);
     // Volume bookkeeping: 10³ − 2³ (hull volumes between centres).
     assert_eq!(p.summary().signed_volume_voxels, 1000.0 - 8.0);
@@ -128,6 +158,8 @@ fn cavities_are_reversed_shells_and_nesting_recurses() {
         let o = carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)]);
         let (p, _) = run(&o);
         assert_lossless(&p, &o, &format!("random carving {round}"));
+        let (p, _) = run_balls(&o);
+        assert_lossless(&p, &o, &format!("random carving {round}, balls"));
     }
 }
 
@@ -144,7 +176,14 @@ fn voxelize_detects_a_wrong_representation() {
         origin: [0, 0, 0],
         dims: [26, 26, 17],
     };
-    assert_eq!(p.voxelize(&b, Backend::Cpu).unwrap().iter().filter(|&&h| h).count(), 6_060 + 1_200);
+    assert_eq!(
+        p.voxelize(&b, Backend::Cpu)
+            .unwrap()
+            .iter()
+            .filter(|&&h| h)
+            .count(),
+        6_060 + 1_200
+    );
 }
 
 #[test]
@@ -154,17 +193,28 @@ fn bad_cell_files_are_refused() {
     let bytes = p.to_bytes();
     let f = Frame::default();
     for cut in [0, 7, 19, 20, 28, bytes.len() - 8, bytes.len() - 1] {
-        assert!(Polyhedron::from_bytes(&bytes[..cut], "t.cells", f).is_err(), "truncated at {cut}");
+        assert!(
+            Polyhedron::from_bytes(&bytes[..cut], "t.cells", f).is_err(),
+            "truncated at {cut}"
+        );
     }
     let mut big = bytes.clone();
     big.extend_from_slice(&[0; 8]);
-    assert!(Polyhedron::from_bytes(&big, "t.cells", f).is_err(), "oversized");
+    assert!(
+        Polyhedron::from_bytes(&big, "t.cells", f).is_err(),
+        "oversized"
+    );
     let mut huge = bytes.clone();
     huge[12..20].copy_from_slice(&u64::MAX.to_le_bytes());
-    assert!(Polyhedron::from_bytes(&huge, "t.cells", f).is_err(), "hostile count");
+    assert!(
+        Polyhedron::from_bytes(&huge, "t.cells", f).is_err(),
+        "hostile count"
+    );
     let mut magic = bytes.clone();
     magic[0] = b'X';
-    let e = Polyhedron::from_bytes(&magic, "t.cells", f).unwrap_err().to_string();
+    let e = Polyhedron::from_bytes(&magic, "t.cells", f)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("t.cells") && e.contains("CHISELPH"), "{e}");
     // A vertex moved outside a face: not convex.
     let mut data = p.encode();
@@ -180,5 +230,41 @@ fn bad_cell_files_are_refused() {
             d[i] = d[i].wrapping_add(delta);
             let _ = Polyhedron::decode(&d, f);
         }
+    }
+}
+
+#[test]
+fn real_ct_bone_is_lossless() {
+    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    let o =
+        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
+    for (name, (p, z)) in [("recursion", run(&o)), ("balls", run_balls(&o))] {
+        let s = p.summary();
+        eprintln!("headsq bone, {name}: {s:?}");
+        assert!(z.iter().any(|z| z.class == ZkhClass::Cavity));
+        // Compact: fewer integers than marching cubes (eq. 8.1, 2 per facet).
+        let mc = chisel::voxel::marching_cubes_integers(2 * o.n_boundary_facets());
+        assert!(
+            (s.integers_eq_8_2 as u64) < mc,
+            "{name}: {} vs {mc}",
+            s.integers_eq_8_2
+        );
+        assert_lossless(&p, &o, &format!("headsq bone, {name}"));
+    }
+}
+
+#[test]
+fn frog_labels_are_lossless() {
+    let Some(v) = common::real_volume("froggy/frogtissue.mhd") else {
+        return;
+    };
+    // Brain (2), a thin tissue (14) and a tiny one (24), every component.
+    for label in [2.0, 14.0, 24.0] {
+        let o = DigitalObject::from_volume(&v, Selection::Label(label), Component::All).unwrap();
+        let (p, _) = run(&o);
+        eprintln!("frog label {label}: {:?}", p.summary());
+        assert_lossless(&p, &o, &format!("frog label {label}"));
     }
 }

@@ -13,6 +13,7 @@ mod hull;
 mod info;
 mod mc;
 mod phantom;
+mod polyhedrize;
 mod relax;
 mod render;
 mod report;
@@ -121,6 +122,8 @@ enum Command {
     Relax(relax::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
+    /// Lossless polyhedron of a voxel object: nested convex shells, .cells, --verify.
+    Polyhedrize(polyhedrize::Args),
     /// Large-volume hull scan: hull, inside-hull counts and ZKH classes of every component or label.
     Scan(scan::Args),
     /// Write a test object volume: the seed's balls, cylinders, tori, dented ellipsoids; the CT head.
@@ -179,6 +182,7 @@ pub fn main() -> ExitCode {
         Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
+        Command::Polyhedrize(a) => polyhedrize::run(&cli.global, a),
         Command::Scan(a) => scan::run(&cli.global, a),
         Command::Phantom(a) => phantom::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),

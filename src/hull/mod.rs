@@ -241,7 +241,10 @@ impl ConvexHull {
                 return Err(bad(format!("face {f} has {} vertices", cycle.len())));
             }
             if let Some(v) = cycle.iter().find(|&&v| v as usize >= vertices.len()) {
-                return Err(bad(format!("face {f} names vertex {v} of {}", vertices.len())));
+                return Err(bad(format!(
+                    "face {f} names vertex {v} of {}",
+                    vertices.len()
+                )));
             }
             let p = |k: usize| vertices[cycle[k % cycle.len()] as usize];
             let mut n = [0i64; 3];

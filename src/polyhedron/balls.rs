@@ -70,7 +70,11 @@ pub fn maximal_balls(dims: [usize; 3], mask: &[bool]) -> Vec<DigitalBall> {
         if !remaining[start] {
             continue;
         }
-        let mut c = [start % dims[0], start / dims[0] % dims[1], start / (dims[0] * dims[1])];
+        let mut c = [
+            start % dims[0],
+            start / dims[0] % dims[1],
+            start / (dims[0] * dims[1]),
+        ];
         let mut ball = grow(&table, dims, &remaining, c);
         'moves: loop {
             for axis in 0..3 {
@@ -146,7 +150,8 @@ fn envelope(f: &[i64], out: &mut [i64]) {
         let (q, p) = (q as i64, p as i64);
         (f[q as usize] + q * q - f[p as usize] - p * p, 2 * (q - p))
     };
-    let less_eq = |a: (i64, i64), b: (i64, i64)| a.0 as i128 * b.1 as i128 <= b.0 as i128 * a.1 as i128;
+    let less_eq =
+        |a: (i64, i64), b: (i64, i64)| a.0 as i128 * b.1 as i128 <= b.0 as i128 * a.1 as i128;
     let mut k = 0usize;
     v[0] = 0;
     z[0] = (i64::MIN / 4, 1);

@@ -17,8 +17,8 @@
 
 use std::path::Path;
 
-use super::polyhedrize::{Polyhedron, Role, Shell, ShellGeometry, ShellKind};
 use super::ZkhClass;
+use super::polyhedrize::{Polyhedron, Role, Shell, ShellGeometry, ShellKind};
 use crate::hull::ConvexHull;
 use crate::voxel::Frame;
 
@@ -127,7 +127,8 @@ impl Polyhedron {
             .ok_or_else(|| crate::Error::InvalidInput(format!("cell list: bad shell count {n}")))?;
         let mut shells: Vec<Shell> = Vec::with_capacity(n);
         for i in 0..n {
-            let bad = |what: String| crate::Error::InvalidInput(format!("cell list shell {i}: {what}"));
+            let bad =
+                |what: String| crate::Error::InvalidInput(format!("cell list shell {i}: {what}"));
             let parent = r.next("parent")?;
             let parent = match parent {
                 0 => None,
@@ -140,7 +141,8 @@ impl Polyhedron {
                 (r, _) => return Err(bad(format!("role {r} (the root is +1, others ±1)"))),
             };
             let (code, arg) = (r.next("kind")?, r.next("kind argument")?);
-            let kind = kind_of(code, arg).ok_or_else(|| bad(format!("unknown kind {code}/{arg}")))?;
+            let kind =
+                kind_of(code, arg).ok_or_else(|| bad(format!("unknown kind {code}/{arg}")))?;
             let voxels = u64::try_from(r.next("voxel count")?)
                 .map_err(|_| bad("negative voxel count".into()))?;
             let dim = r.next("dimension")?;
@@ -154,7 +156,10 @@ impl Polyhedron {
             let geometry = match dim {
                 0 => ShellGeometry::Point(centre(r.point("point")?)?),
                 1 => {
-                    let (a, b) = (centre(r.point("segment start")?)?, centre(r.point("segment end")?)?);
+                    let (a, b) = (
+                        centre(r.point("segment start")?)?,
+                        centre(r.point("segment end")?)?,
+                    );
                     if a == b {
                         return Err(bad("segment of length 0".into()));
                     }
@@ -179,17 +184,23 @@ impl Polyhedron {
                         let mut cycle = Vec::with_capacity(k);
                         for _ in 0..k {
                             let v = r.next("face vertex")?;
-                            cycle.push(u32::try_from(v).map_err(|_| bad(format!("vertex index {v}")))?);
+                            cycle.push(
+                                u32::try_from(v).map_err(|_| bad(format!("vertex index {v}")))?,
+                            );
                         }
                         if role == Role::Background {
                             cycle.reverse();
                         }
                         cycles.push(cycle);
                     }
-                    let hull = ConvexHull::from_faces(vertices, cycles).map_err(|e| bad(e.to_string()))?;
+                    let hull =
+                        ConvexHull::from_faces(vertices, cycles).map_err(|e| bad(e.to_string()))?;
                     let g = ShellGeometry::Polytope(hull);
                     if i64::from(g.dimension()) != dim {
-                        return Err(bad(format!("stated dimension {dim}, found {}", g.dimension())));
+                        return Err(bad(format!(
+                            "stated dimension {dim}, found {}",
+                            g.dimension()
+                        )));
                     }
                     g
                 }
@@ -240,7 +251,9 @@ impl Polyhedron {
     pub fn from_bytes(bytes: &[u8], name: &str, frame: Frame) -> crate::Result<Polyhedron> {
         let bad = |what: String| crate::Error::InvalidInput(format!("{name}: {what}"));
         if bytes.len() < HEADER || &bytes[..8] != MAGIC {
-            return Err(bad("not a chisel cell list (expected the magic CHISELPH)".into()));
+            return Err(bad(
+                "not a chisel cell list (expected the magic CHISELPH)".into()
+            ));
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         if version != VERSION {

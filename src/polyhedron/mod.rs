@@ -17,7 +17,7 @@ pub mod press;
 pub mod zkh;
 
 pub use polyhedrize::{
-    Polyhedron, PolyhedronSummary, PolyhedrizeOptions, Role, Shell, ShellGeometry, ShellKind,
+    PolyhedrizeOptions, Polyhedron, PolyhedronSummary, Role, Shell, ShellGeometry, ShellKind,
     ZkhReport, polyhedrize,
 };
 pub use press::faces_to_press;

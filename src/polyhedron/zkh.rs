@@ -10,14 +10,14 @@
 //! concavity"). The touched faces are split into edge-connected sets:
 //! 0 sets → cavity, 1 → concavity, 2 → tunnel, more → branched tunnel.
 //!
-//! This is the exact CPU reference (brute force over the hull's voxel
-//! bounding box); large scans belong on the GPU path.
+//! The inside test is the exact per-row method of [`crate::hscan`] on the
+//! CPU (bit for bit the brute-force classification).
 
 use std::collections::HashMap;
 
 use crate::hull::ConvexHull;
 use crate::volume::analysis::label_6_connected;
-use crate::voxel::{DigitalObject, voxel_centre, voxel_corner};
+use crate::voxel::{DigitalObject, voxel_corner};
 
 /// Kind of a ZKH by the number of edge-connected sets of hull faces it
 /// touches.
@@ -67,13 +67,21 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let (lo, hi) = hull.voxel_bbox();
     let dims: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize);
     let at = |x: usize, y: usize, z: usize| [lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64];
+    let spaces: Vec<crate::hscan::HalfSpace> = hs
+        .iter()
+        .map(|h| crate::hscan::HalfSpace {
+            normal: h.normal,
+            offset: h.offset,
+        })
+        .collect();
+    let bbox = crate::hscan::VoxelBox { origin: lo, dims };
+    let sides = crate::hscan::classify(&spaces, &bbox, crate::parity::Backend::Cpu)?;
     let mut inside = Vec::with_capacity(dims.iter().product());
     for z in 0..dims[2] {
         for y in 0..dims[1] {
             for x in 0..dims[0] {
-                let v = at(x, y, z);
-                let c = voxel_centre(v);
-                inside.push(!object.contains(v) && hs.iter().all(|h| h.side(c) <= 0));
+                let k = inside.len();
+                inside.push(sides.in_closed_hull(k) && !object.contains(at(x, y, z)));
             }
         }
     }

@@ -268,3 +268,44 @@ fn frog_labels_are_lossless() {
         assert_lossless(&p, &o, &format!("frog label {label}"));
     }
 }
+
+#[test]
+fn slices_give_nested_polygons() {
+    // The 2-D analogue (ch. 9): one slice of the cylinder is a ring of
+    // pixels — an outer polygon and a reversed hole polygon; a digital disk
+    // is one polygon (its hull, minimal edges by Theorem TRM in 2-D).
+    let v = cylinder_tunnel(50, 35, 15).unwrap().slice_z(5).unwrap();
+    let o = object(&v);
+    let (p, z) = run(&o);
+    assert!(z.is_empty(), "no ZKH classes in 2-D");
+    let s = p.summary();
+    assert_eq!(s.shells_by_dimension, [0, 0, 2, 0]);
+    assert_eq!(p.shells[1].role, Role::Background);
+    // The 3-D cylinder's side faces are these edges (60 faces − 4 caps).
+    assert_eq!(s.polygon_edges, 56);
+    assert_lossless(&p, &o, "ring slice");
+    let disk = cylinder_tunnel(50, 1, 3).unwrap().slice_z(1).unwrap();
+    let o = object(&disk);
+    let (p, _) = run(&o);
+    assert_eq!(
+        p.shells.len(),
+        2,
+        "the one-pixel hole of d = 1 is a point label"
+    );
+    assert_lossless(&p, &o, "disk with a point hole");
+    assert!(cylinder_tunnel(50, 35, 15).unwrap().slice_z(17).is_err());
+    let Some(ct) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    for z in [20, 40, 60, 80] {
+        let o = DigitalObject::from_volume(
+            &ct.slice_z(z).unwrap(),
+            Selection::Threshold(1150.0),
+            Component::All,
+        )
+        .unwrap();
+        let (p, _) = run(&o);
+        assert_eq!(p.summary().shells_by_dimension[3], 0);
+        assert_lossless(&p, &o, &format!("headsq slice {z}"));
+    }
+}

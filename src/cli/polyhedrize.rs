@@ -3,7 +3,8 @@
 //! §4.4–4.5) as nested convex shells, written as a `.cells` file (compact
 //! eq. 8.2 encoding) and/or readable JSON, with a triangle mesh of the
 //! shells, a preview coloured by depth, `--verify` (the written cell list is
-//! read back and voxelized against S) and a JSON report.
+//! read back and voxelized against S) and a JSON report. `--slice Z` gives
+//! the 2-D analogue (ch. 9): nested convex polygons for one slice.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -30,6 +31,10 @@ pub struct Args {
     /// instead of recursing into them like all others.
     #[arg(long)]
     balls: bool,
+    /// Only slice Z of the volume: the 2-D analogue (seed 003 ch. 9),
+    /// polygons for the pixel set of one CT slice or label image.
+    #[arg(long)]
+    slice: Option<usize>,
     /// Backend of the inside-shell scans.
     #[arg(long, value_enum, default_value = "cpu")]
     backend: BackendArg,
@@ -65,7 +70,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
     };
     let t = Instant::now();
-    let volume = crate::io::read_volume(&args.volume)?;
+    let mut volume = crate::io::read_volume(&args.volume)?;
+    if let Some(z) = args.slice {
+        volume = volume
+            .slice_z(z)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
+    }
     let object = DigitalObject::from_volume(&volume, selection, component)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     stage("object", t);
@@ -157,6 +167,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "command": "polyhedrize",
         "volume": args.volume,
         "dims": volume.dims,
+        "slice": args.slice,
         "object": object_json(&object),
         "topology": topology,
         "backend": format!("{:?}", args.backend).to_lowercase(),

@@ -283,10 +283,14 @@ pub fn polyhedrize(
     }];
     let mut queue: VecDeque<u32> = VecDeque::new();
     let mut zkh_reports = Vec::new();
-    // Depth 1: the ZKHs with their classes.
+    // Depth 1: the ZKHs with their classes; a flat object (one slice: the
+    // 2-D analogue of ch. 9) has no ZKH classes and recurses like any shell.
     let zkhs = match &shells[0].geometry {
         ShellGeometry::Polytope(h) if !h.is_planar() => background_components(object, h)?,
-        _ => Vec::new(),
+        _ => {
+            queue.push_back(0);
+            Vec::new()
+        }
     };
     for z in zkhs {
         let before = shells.len();
@@ -432,6 +436,10 @@ pub struct PolyhedronSummary {
     pub shell_area_voxels: f64,
     /// Degree of non-convexity (Def. NK): the depth of the deepest shell.
     pub g_nc: u32,
+    /// Edges of the flat shells (polygons; the 2-D analogue of ch. 9).
+    pub polygon_edges: usize,
+    /// Σ perimeters of the flat shells, in voxel edges (ch. 9.3).
+    pub polygon_perimeter_voxels: f64,
 }
 
 impl Polyhedron {
@@ -440,8 +448,23 @@ impl Polyhedron {
         let mut by_dim = [0usize; 4];
         let (mut faces, mut vertices, mut edges, mut ints) = (0, 0, 0, 0);
         let (mut vol6, mut area) = (0i128, 0.0);
+        let (mut polygon_edges, mut perimeter) = (0usize, 0.0f64);
         for s in &self.shells {
             by_dim[usize::from(s.geometry.dimension())] += 1;
+            if let Some(h) = s.geometry.polytope().filter(|h| h.is_planar()) {
+                let f = &h.faces()[0].vertices;
+                polygon_edges += f.len();
+                perimeter += (0..f.len())
+                    .map(|k| {
+                        let (a, b) = (
+                            h.vertices()[f[k] as usize],
+                            h.vertices()[f[(k + 1) % f.len()] as usize],
+                        );
+                        let d = sub(b, a).map(|c| c as f64);
+                        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() / 2.0
+                    })
+                    .sum::<f64>();
+            }
             match &s.geometry {
                 ShellGeometry::Point(_) => ints += 3,
                 ShellGeometry::Segment(..) => ints += 6,
@@ -466,6 +489,8 @@ impl Polyhedron {
             signed_volume_voxels: vol6 as f64 / 48.0,
             shell_area_voxels: area,
             g_nc: self.shells.iter().map(|s| s.depth).max().unwrap_or(0),
+            polygon_edges,
+            polygon_perimeter_voxels: perimeter,
         }
     }
 

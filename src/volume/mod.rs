@@ -196,4 +196,37 @@ impl Volume {
     pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
         x + self.dims[0] * (y + self.dims[1] * z)
     }
+
+    /// Slice `z` as a volume of one sample in z (same type, spacing; origin
+    /// moved to the slice), for the 2-D analogue of the voxel algorithms.
+    ///
+    /// Errors: [`crate::Error::InvalidInput`] when `z` is out of range.
+    pub fn slice_z(&self, z: usize) -> crate::Result<Volume> {
+        if z >= self.dims[2] {
+            return Err(crate::Error::InvalidInput(format!(
+                "slice {z} does not exist: the volume has {} slices",
+                self.dims[2]
+            )));
+        }
+        let n = self.dims[0] * self.dims[1];
+        let r = n * z..n * (z + 1);
+        let data = match &self.data {
+            VolumeData::U8(v) => VolumeData::U8(v[r].to_vec()),
+            VolumeData::I8(v) => VolumeData::I8(v[r].to_vec()),
+            VolumeData::U16(v) => VolumeData::U16(v[r].to_vec()),
+            VolumeData::I16(v) => VolumeData::I16(v[r].to_vec()),
+            VolumeData::U32(v) => VolumeData::U32(v[r].to_vec()),
+            VolumeData::I32(v) => VolumeData::I32(v[r].to_vec()),
+            VolumeData::F32(v) => VolumeData::F32(v[r].to_vec()),
+            VolumeData::F64(v) => VolumeData::F64(v[r].to_vec()),
+        };
+        let mut origin = self.origin;
+        origin[2] += self.spacing[2] * z as f64;
+        Ok(Volume {
+            dims: [self.dims[0], self.dims[1], 1],
+            spacing: self.spacing,
+            origin,
+            data,
+        })
+    }
 }

@@ -54,6 +54,7 @@ fn cylinder_tunnels_give_the_split_face_counts_of_table_8_7() {
         assert_eq!(s.faces, faces, "{d_o}/{d_i}");
         assert_eq!(s.g_nc, 1);
         assert_eq!(p.shells[1].role, Role::Background);
+        assert!(s.volume_exact);
         assert_lossless(&p, &o, &format!("cylinder {d_o}/{d_i}"));
     }
 }
@@ -143,6 +144,7 @@ fn cavities_are_reversed_shells_and_nesting_recurses() {
     assert_eq!(p.summary().g_nc, 2);
     // Volume bookkeeping: 10³ − 2³ (hull volumes between centres).
     assert_eq!(p.summary().signed_volume_voxels, 1000.0 - 8.0);
+    assert!(p.summary().volume_exact);
     assert_lossless(&p, &o, "cube with cavity and island");
     // Staircase pits and L-shaped grooves: every random carving is lossless.
     let mut seed = 0x2545_f491_4f6c_dd1du64;

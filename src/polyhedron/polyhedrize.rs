@@ -429,8 +429,13 @@ pub struct PolyhedronSummary {
     /// Length of the compact encoding ([`Polyhedron::encode`]).
     pub integers_compact: usize,
     /// Σ role sign × shell volume, in voxels: the region's volume when
-    /// sibling shells have disjoint interiors.
+    /// sibling shells have disjoint interiors (each child lies in its parent
+    /// by construction).
     pub signed_volume_voxels: f64,
+    /// Whether every pair of sibling polyhedra was proven interior-disjoint
+    /// (a face plane of one with all vertices of the other on or beyond
+    /// it), so that [`PolyhedronSummary::signed_volume_voxels`] is exact.
+    pub volume_exact: bool,
     /// Σ shell areas in voxel faces (a child sharing face area with its
     /// parent counts it twice).
     pub shell_area_voxels: f64,
@@ -491,7 +496,36 @@ impl Polyhedron {
             g_nc: self.shells.iter().map(|s| s.depth).max().unwrap_or(0),
             polygon_edges,
             polygon_perimeter_voxels: perimeter,
+            volume_exact: self.siblings_disjoint(),
         }
+    }
+
+    /// Whether all sibling polyhedra (dimension 3, same parent) have
+    /// disjoint interiors, proven by separating face planes (exact).
+    fn siblings_disjoint(&self) -> bool {
+        let mut by_parent: std::collections::BTreeMap<u32, Vec<&ConvexHull>> = Default::default();
+        for s in &self.shells {
+            if let (Some(p), Some(h)) = (s.parent, s.geometry.polytope())
+                && !h.is_planar()
+            {
+                by_parent.entry(p).or_default().push(h);
+            }
+        }
+        let separated = |a: &ConvexHull, b: &ConvexHull| {
+            a.faces()
+                .iter()
+                .any(|f| b.vertices().iter().all(|&v| f.plane.side(v) >= 0))
+        };
+        by_parent.values().all(|hulls| {
+            let boxes: Vec<_> = hulls.iter().map(|h| h.bbox()).collect();
+            (0..hulls.len()).all(|i| {
+                (i + 1..hulls.len()).all(|j| {
+                    let apart = (0..3)
+                        .any(|a| boxes[i].1[a] <= boxes[j].0[a] || boxes[j].1[a] <= boxes[i].0[a]);
+                    apart || separated(hulls[i], hulls[j]) || separated(hulls[j], hulls[i])
+                })
+            })
+        })
     }
 
     /// Which voxels of `bbox` the polyhedron holds (one flag per voxel, x

@@ -5,13 +5,19 @@
 //! corners) plus the hull with coplanar faces merged; `hull_points/ball_24`
 //! times the hull of all boundary-voxel centres of the r = 24 ball (the
 //! input the Qhull comparison in the README uses, ~2.4 ms via scipy).
+//! `polyhedrize/<object>` times the whole lossless polyhedrization (nested
+//! shells, §4.4) with `polyhedrize/<object>/verify` the exact voxelization
+//! of the result over the object's box, and prints shells, faces and
+//! integers (eq. 8.2) against marching cubes (eq. 8.1).
 //! `CHISEL_BENCH_QUICK=1`: small cases and sample counts, for CI smoke runs.
 
 use std::hint::black_box;
 use std::time::Duration;
 
 use chisel::hull::{ConvexHull, HullOptions};
+use chisel::parity::Backend;
 use chisel::phantom::voxel::{cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
+use chisel::polyhedron::{PolyhedrizeOptions, polyhedrize};
 use chisel::volume::Volume;
 use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection, voxel_centre};
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
@@ -54,6 +60,28 @@ fn bench_object(g: &mut BenchmarkGroup<'_, WallTime>, name: &str, o: &DigitalObj
             ConvexHull::of_object(black_box(o), CandidateKind::Local26, HullOptions::default())
                 .expect("hull")
         })
+    });
+}
+
+fn bench_polyhedrize(g: &mut BenchmarkGroup<'_, WallTime>, name: &str, o: &DigitalObject) {
+    let run = || {
+        polyhedrize(o, PolyhedrizeOptions::default(), Backend::Cpu, &|_| {}).expect("polyhedrize")
+    };
+    let (p, _) = run();
+    let s = p.summary();
+    eprintln!(
+        "polyhedrize {name}: {} voxels, {} shells, {} faces, {} integers (eq. 8.2) vs {} (eq. 8.1), G_nc {}",
+        o.n_voxels(),
+        s.shells,
+        s.faces,
+        s.integers_eq_8_2,
+        chisel::voxel::marching_cubes_integers(2 * o.n_boundary_facets()),
+        s.g_nc
+    );
+    g.throughput(Throughput::Elements(o.n_voxels()));
+    g.bench_function(BenchmarkId::from_parameter(name), |b| b.iter(run));
+    g.bench_function(BenchmarkId::new(name, "verify"), |b| {
+        b.iter(|| p.mismatches(black_box(o), Backend::Cpu, 1).expect("verify"))
     });
 }
 
@@ -124,6 +152,32 @@ fn main() {
                 ConvexHull::build(black_box(&boundary), HullOptions::default()).expect("hull")
             })
         });
+        g.finish();
+    }
+    {
+        let mut g = group(&mut c, "polyhedrize");
+        bench_polyhedrize(
+            &mut g,
+            "cylinder_50_35",
+            &object(&cylinder_tunnel(50, 35, 15).expect("cyl"), thr),
+        );
+        bench_polyhedrize(
+            &mut g,
+            "torus_40_12",
+            &object(&torus(40, 12).expect("torus"), thr),
+        );
+        let head = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/data/headsq/quarter.nhdr");
+        if !quick() {
+            match chisel::io::read_volume(&head) {
+                Ok(v) => bench_polyhedrize(
+                    &mut g,
+                    "headsq_bone_1150",
+                    &object(&v, Selection::Threshold(1150.0)),
+                ),
+                Err(e) => eprintln!("CT head skipped: {e}"),
+            }
+        }
         g.finish();
     }
     c.final_summary();

@@ -324,10 +324,16 @@ pub fn polyhedrize(
             continue;
         }
         let labels = label_6_connected(bbox.dims, |k| mask[k])?;
-        for c in 1..=labels.n_components() as u32 {
-            let part: Vec<bool> = labels.labels.iter().map(|&l| l == c).collect();
-            let set =
-                DigitalObject::from_mask(bbox.dims, &part, object.frame())?.shifted(bbox.origin);
+        // Each component's voxels, then a mask over its own box (one pass
+        // over the shell's box, not one per component).
+        let mut members: Vec<Vec<usize>> = vec![Vec::new(); labels.n_components()];
+        for (k, &l) in labels.labels.iter().enumerate() {
+            if l > 0 {
+                members[l as usize - 1].push(k);
+            }
+        }
+        for voxels in members {
+            let set = component_object(&bbox, &voxels, object.frame())?;
             add_component(
                 &mut shells,
                 &mut queue,
@@ -400,6 +406,34 @@ fn add_component(
         push(geometry, kind, set.n_voxels());
     }
     Ok(genus)
+}
+
+/// The voxels (local indices of `bbox`) as an object of their own box.
+fn component_object(
+    bbox: &VoxelBox,
+    voxels: &[usize],
+    frame: Frame,
+) -> crate::Result<DigitalObject> {
+    let at: Vec<[i64; 3]> = voxels.iter().map(|&k| voxel_at(bbox, k)).collect();
+    let mut lo = [i64::MAX; 3];
+    let mut hi = [i64::MIN; 3];
+    for v in &at {
+        for a in 0..3 {
+            lo[a] = lo[a].min(v[a]);
+            hi[a] = hi[a].max(v[a]);
+        }
+    }
+    let sub = VoxelBox {
+        origin: lo,
+        dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize),
+    };
+    let mut mask = vec![false; sub.n_voxels()?];
+    for v in at {
+        if let Some(i) = try_local_index(&sub, v) {
+            mask[i] = true;
+        }
+    }
+    Ok(DigitalObject::from_mask(sub.dims, &mask, frame)?.shifted(lo))
 }
 
 fn role_of(object: &DigitalObject, v: [i64; 3]) -> Role {

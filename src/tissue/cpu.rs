@@ -4,7 +4,12 @@
 //! Each mirror performs, per node, the same f32 operations in the same order
 //! as its kernel (CSR order of the springs, the same parenthesisation), and
 //! runs the nodes in parallel with rayon (each node writes only its own
-//! outputs, so the result does not depend on scheduling).
+//! outputs, so the result does not depend on scheduling). The step mirrors
+//! gather four nodes at once as the lanes of a `Vec4`, the way a GPU runs
+//! invocations side by side: the per-spring sqrt and division become
+//! vector instructions, each lane still computes its own node's sum in its
+//! own CSR order, and the results stay bit for bit those of the scalar loop
+//! (`tests/parity/spring_step.rs` finds no difference on lavapipe).
 
 use glam::{Mat4, Vec4};
 use rayon::prelude::*;
@@ -17,7 +22,7 @@ const CHUNK: usize = 512;
 
 /// Nodes per rayon task of the step mirrors for `n` nodes: about eight
 /// tasks per thread (load balance on a shared machine), at least 64 and at
-/// most 2048 nodes (task overhead vs. cache-sized work).
+/// most 2048 nodes (task overhead vs. cache-sized work), whole lane groups.
 fn grain(n: usize) -> usize {
     (n / (8 * rayon::current_num_threads()))
         .clamp(64, 2048)

@@ -531,6 +531,141 @@ fn mirror_tracks_oracle() {
     assert!(stretched);
 }
 
+/// g_i of eq. 4.4 for node `i`, one spring at a time in CSR order: the
+/// kernels' loop written out plainly (the mirror runs four nodes as SIMD
+/// lanes and must give these bits exactly).
+fn scalar_gather(
+    net: &SpringNetwork,
+    pos: &[[f32; 4]],
+    mats: &[[f32; 4]; 16],
+    i: usize,
+) -> [f32; 3] {
+    let (x0, u) = (net.rest[i], pos[i]);
+    let mut g = [0.0f32; 3];
+    let (s, e) = (net.csr.offsets[i] as usize, net.csr.offsets[i + 1] as usize);
+    for &en in &net.csr.entries[s..e] {
+        let j = (en[0] & 0x0fff_ffff) as usize;
+        let m = mats[(en[0] >> 28) as usize];
+        let l = f32::from_bits(en[1]);
+        let r: [f32; 3] = std::array::from_fn(|c| (x0[c] - net.rest[j][c]) + (u[c] - pos[j][c]));
+        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        if len > 0.0 {
+            let ext = len - l;
+            let s = (m[0] * ext + m[1] * (ext - m[2] * l).max(0.0)) / len;
+            for c in 0..3 {
+                g[c] += s * r[c];
+            }
+        }
+    }
+    g
+}
+
+/// The step mirrors equal the plain per-node loop bit for bit, for free
+/// node counts that fill no whole lane group, rows of 0 to many springs
+/// (lanes ending at different k), a zero-length spring, both materials
+/// and external forces.
+#[test]
+fn mirror_lanes_equal_the_scalar_loop() {
+    use chisel::tissue::cpu::{self, StepParams, VELOCITY_FLUSH};
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let materials = [
+        Material::linear(1.3),
+        Material {
+            c1: 0.7,
+            c2: 4.0,
+            knee: 0.05,
+        },
+    ];
+    let mut mats = [[0.0f32; 4]; 16];
+    for (row, m) in mats.iter_mut().zip(&materials) {
+        *row = m.table_row();
+    }
+    for n_free in [1usize, 2, 3, 5, 6, 7, 9, 13] {
+        let n = n_free + 4;
+        let mut p: Vec<Vec3> = (0..n).map(|_| Vec3::new(next(), next(), next())).collect();
+        // Nodes 0 and 1 coincide: a spring of rest length 0.
+        p[1] = p[0];
+        let mut springs = vec![(0u32, 1u32, 0u8)];
+        for a in 0..n as u32 {
+            // Rows of 0 to 4 own springs (plus those of other nodes).
+            for k in 0..(a as usize % 5) {
+                let b = (a as usize + 1 + 2 * k) % n;
+                springs.push((a, b as u32, (k % 2) as u8));
+            }
+        }
+        springs.retain(|&(a, b, _)| a != b);
+        let net = SpringNetwork::from_parts(&p, n_free, &springs, &materials, 1.0, 0.5).unwrap();
+        let mut pos: Vec<[f32; 4]> = (0..n)
+            .map(|i| {
+                let w = if i < n_free { 0.5 + next() } else { 0.0 };
+                [
+                    0.2 * next() - 0.1,
+                    0.2 * next() - 0.1,
+                    0.2 * next() - 0.1,
+                    w,
+                ]
+            })
+            .collect();
+        // ... and keep coinciding: r = 0, which the kernels skip.
+        let first = pos[0];
+        pos[1][..3].copy_from_slice(&first[..3]);
+        let vel: Vec<[f32; 4]> = (0..n_free)
+            .map(|_| [next() - 0.5, next() - 0.5, 0.0, 0.0])
+            .collect();
+        let forces: Vec<[f32; 4]> = (0..n_free)
+            .map(|_| [next() - 0.5, 0.0, next(), 0.0])
+            .collect();
+        for chebyshev in [false, true] {
+            let params = StepParams {
+                n_free: n_free as u32,
+                use_forces: true,
+                dt: 0.05,
+                damping: if chebyshev { 0.9 } else { 0.5 },
+                gain: 1.7,
+                materials: mats,
+            };
+            let (mut out, mut v_out) = (pos.clone(), vel.clone());
+            let kernel = if chebyshev {
+                cpu::spring_chebyshev
+            } else {
+                cpu::spring_step
+            };
+            kernel(
+                &params, &net.csr, &net.rest, &forces, &pos, &mut out, &mut v_out,
+            );
+            let mut loaded = false;
+            for i in 0..n_free {
+                let g = scalar_gather(&net, &pos, &mats, i);
+                loaded |= g.iter().any(|&c| c != 0.0);
+                for c in 0..3 {
+                    let v = vel[i][c];
+                    let raw = if chebyshev {
+                        params.damping * v + params.gain * ((forces[i][c] - g[c]) * pos[i][3])
+                    } else {
+                        v + params.dt * ((forces[i][c] - params.damping * v - g[c]) * pos[i][3])
+                    };
+                    let v2 = if raw.abs() < VELOCITY_FLUSH { 0.0 } else { raw };
+                    let u2 = pos[i][c] + params.dt * v2;
+                    let what =
+                        format!("n_free {n_free}, chebyshev {chebyshev}, node {i}, axis {c}");
+                    assert_eq!(v_out[i][c].to_bits(), v2.to_bits(), "velocity: {what}");
+                    assert_eq!(out[i][c].to_bits(), u2.to_bits(), "position: {what}");
+                }
+                assert_eq!(out[i][3].to_bits(), pos[i][3].to_bits());
+            }
+            assert!(loaded, "the springs must be loaded");
+            // Only the free nodes are written.
+            assert_eq!(&out[n_free..], &pos[n_free..]);
+        }
+    }
+}
+
 // ---------------------------------------------------------------- stop criteria
 
 fn one_step_plan(

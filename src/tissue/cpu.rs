@@ -4,8 +4,14 @@
 //! Each mirror performs, per node, the same f32 operations in the same order
 //! as its kernel (CSR order of the springs, the same parenthesisation), and
 //! runs the nodes in parallel with rayon (each node writes only its own
-//! outputs, so the result does not depend on scheduling).
+//! outputs, so the result does not depend on scheduling). The step mirrors
+//! gather four nodes at once as the lanes of a `Vec4`, the way a GPU runs
+//! invocations side by side: the per-spring sqrt and division become
+//! vector instructions, each lane still computes its own node's sum in its
+//! own CSR order, and the results stay bit for bit those of the scalar loop
+//! (`tests/parity/spring_step.rs` finds no difference on lavapipe).
 
+use glam::{Mat4, Vec4};
 use rayon::prelude::*;
 
 use super::network::SpringCsr;
@@ -16,9 +22,11 @@ const CHUNK: usize = 512;
 
 /// Nodes per rayon task of the step mirrors for `n` nodes: about eight
 /// tasks per thread (load balance on a shared machine), at least 64 and at
-/// most 2048 nodes (task overhead vs. cache-sized work).
+/// most 2048 nodes (task overhead vs. cache-sized work), whole lane groups.
 fn grain(n: usize) -> usize {
-    (n / (8 * rayon::current_num_threads())).clamp(64, 2048)
+    (n / (8 * rayon::current_num_threads()))
+        .clamp(64, 2048)
+        .next_multiple_of(LANES)
 }
 
 /// Velocity components below this magnitude are flushed to zero after each
@@ -64,37 +72,76 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
     }
 }
 
-/// Spring force sum g_i of eq. 4.4 for node `i` with rest position `x0`
-/// and displacement `u`, in CSR order: r_ij = (x0_i − x0_j) + (u_i − u_j).
+/// Nodes the mirror gathers side by side, like a SIMD group of GPU
+/// invocations (one `Vec4` lane each; SSE2 on x86-64, scalar elsewhere).
+const LANES: usize = 4;
+
+/// Spring force sums g_i of eq. 4.4 of the nodes `i0..i0 + lanes`
+/// (`1 ≤ lanes ≤ LANES`), with rest positions `rest` and displacements
+/// `pos_in`: lane t is node `i0 + t` and sums its springs in its CSR order,
+/// r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs exactly the
+/// float operations of one kernel invocation (vector sqrt, division and
+/// arithmetic round like scalar ones, and nothing is contracted to FMA).
+/// A lane whose row has ended reads its own node (r = 0, |r| = 0: nothing
+/// added, as the kernel skips zero-length springs). Returns `[gx, gy, gz]`
+/// by lane.
 #[inline(always)]
-fn gather(
-    x0: [f32; 3],
-    u: [f32; 3],
-    row: &[[u32; 2]],
+fn gather_group(
+    i0: usize,
+    lanes: usize,
+    csr: &SpringCsr,
     rest: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     materials: &[[f32; 4]; 16],
-) -> [f32; 3] {
-    let mut g = [0.0f32; 3];
-    for &e in row {
-        let (j, m, l) = SpringCsr::unpack(e);
-        let (q0, q) = (rest[j], pos_in[j]);
-        let r = [
-            (x0[0] - q0[0]) + (u[0] - q[0]),
-            (x0[1] - q0[1]) + (u[1] - q[1]),
-            (x0[2] - q0[2]) + (u[2] - q[2]),
-        ];
-        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
-        if len > 0.0 {
-            let mat = materials[m];
-            let ext = len - l;
-            // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
-            let f = mat[0] * ext + mat[1] * (ext - mat[2] * l).max(0.0);
-            let s = f / len;
-            g = [g[0] + s * r[0], g[1] + s * r[1], g[2] + s * r[2]];
-        }
+) -> [Vec4; 3] {
+    // One length for both node arrays: one bounds check per neighbour.
+    let n = rest.len().min(pos_in.len());
+    let (rest, pos_in, entries) = (&rest[..n], &pos_in[..n], &csr.entries[..]);
+    let mut node = [i0; LANES];
+    let mut start = [0usize; LANES];
+    let mut count = [0usize; LANES];
+    for t in 0..lanes {
+        node[t] = i0 + t;
+        start[t] = csr.offsets[i0 + t] as usize;
+        count[t] = csr.offsets[i0 + t + 1] as usize - start[t];
     }
-    g
+    let x0 = node.map(|i| Vec4::from_array(rest[i]));
+    let u = node.map(|i| Vec4::from_array(pos_in[i]));
+    let k_end = count.iter().copied().max().unwrap_or(0);
+    let (mut gx, mut gy, mut gz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+    for k in 0..k_end {
+        let mut r = [Vec4::ZERO; LANES];
+        let mut row = [Vec4::ZERO; LANES];
+        let mut l = [0.0f32; LANES];
+        for t in 0..LANES {
+            let (j, m, lj) = if k < count[t] {
+                SpringCsr::unpack(entries[start[t] + k])
+            } else {
+                (node[t], 0, 0.0)
+            };
+            r[t] = (x0[t] - Vec4::from_array(rest[j])) + (u[t] - Vec4::from_array(pos_in[j]));
+            row[t] = Vec4::from_array(materials[m]);
+            l[t] = lj;
+        }
+        // Lanes as vectors: r by component, the material rows as
+        // (c1, c2 − c1, knee) by lane.
+        let r = Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose();
+        let mat = Mat4::from_cols(row[0], row[1], row[2], row[3]).transpose();
+        let l = Vec4::from_array(l);
+        let (rx, ry, rz) = (r.x_axis, r.y_axis, r.z_axis);
+        let len = (rx * rx + ry * ry + rz * rz).sqrt();
+        // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
+        let ext = len - l;
+        let f = mat.x_axis * ext + mat.y_axis * (ext - mat.z_axis * l).max(Vec4::ZERO);
+        let s = f / len;
+        // A zero (or NaN) length adds +0, which leaves g unchanged: g starts
+        // at +0 and a sum starting at +0 is never −0.
+        let on = len.cmpgt(Vec4::ZERO);
+        gx += Vec4::select(on, s * rx, Vec4::ZERO);
+        gy += Vec4::select(on, s * ry, Vec4::ZERO);
+        gz += Vec4::select(on, s * rz, Vec4::ZERO);
+    }
+    [gx, gy, gz]
 }
 
 #[inline(always)]
@@ -102,7 +149,8 @@ fn flush(v: f32) -> f32 {
     if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
 }
 
-/// Runs `update(u, w, g, v, f) -> (u', v')` over the free nodes.
+/// Runs `update(u, w, g, v, f) -> (u', v')` over the free nodes, in groups
+/// of [`LANES`] nodes.
 #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
 #[inline(always)]
 fn for_free_nodes(
@@ -122,22 +170,28 @@ fn for_free_nodes(
         .zip(vel[..n].par_chunks_mut(chunk))
         .enumerate()
         .for_each(|(c, (po, ve))| {
-            for (k, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
-                let i = c * chunk + k;
-                let p_i = pos_in[i];
-                let u = [p_i[0], p_i[1], p_i[2]];
-                let x0 = [rest[i][0], rest[i][1], rest[i][2]];
-                let row = &csr.entries[csr.offsets[i] as usize..csr.offsets[i + 1] as usize];
-                let g = gather(x0, u, row, rest, pos_in, &p.materials);
-                let f = if p.use_forces {
-                    let f = forces[i];
-                    [f[0], f[1], f[2]]
-                } else {
-                    [0.0; 3]
-                };
-                let (u2, v2) = update(u, p_i[3], g, [v[0], v[1], v[2]], f);
-                *out = [u2[0], u2[1], u2[2], p_i[3]];
-                *v = [v2[0], v2[1], v2[2], 0.0];
+            for (b, (po, ve)) in po.chunks_mut(LANES).zip(ve.chunks_mut(LANES)).enumerate() {
+                let i0 = c * chunk + b * LANES;
+                let [gx, gy, gz] = gather_group(i0, po.len(), csr, rest, pos_in, &p.materials);
+                for (t, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
+                    let i = i0 + t;
+                    let p_i = pos_in[i];
+                    let f = if p.use_forces {
+                        let f = forces[i];
+                        [f[0], f[1], f[2]]
+                    } else {
+                        [0.0; 3]
+                    };
+                    let (u2, v2) = update(
+                        [p_i[0], p_i[1], p_i[2]],
+                        p_i[3],
+                        [gx[t], gy[t], gz[t]],
+                        [v[0], v[1], v[2]],
+                        f,
+                    );
+                    *out = [u2[0], u2[1], u2[2], p_i[3]];
+                    *v = [v2[0], v2[1], v2[2], 0.0];
+                }
             }
         });
 }

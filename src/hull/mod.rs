@@ -247,15 +247,20 @@ impl ConvexHull {
                 )));
             }
             let p = |k: usize| vertices[cycle[k % cycle.len()] as usize];
-            let mut n = [0i64; 3];
+            // Twice the area vector; a convex face within ±MAX_COORD has
+            // |n_c| < 2³⁶, which keeps every later product below 2⁶³.
+            let mut n = [0i128; 3];
             for k in 0..cycle.len() {
                 let c = cross(sub(p(k), p(0)), sub(p(k + 1), p(0)));
-                n = [n[0] + c[0], n[1] + c[1], n[2] + c[2]];
+                n = std::array::from_fn(|a| n[a] + i128::from(c[a]));
             }
             if n == [0, 0, 0] {
                 return Err(bad(format!("face {f} is degenerate")));
             }
-            let normal = primitive(n);
+            if n.iter().any(|c| c.abs() >= 1 << 36) {
+                return Err(bad(format!("face {f} is not a convex polygon of the coordinate range")));
+            }
+            let normal = primitive(n.map(|c| c as i64));
             let plane = HalfSpace {
                 normal,
                 offset: dot(normal, p(0)),

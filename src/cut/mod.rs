@@ -612,9 +612,9 @@ impl EdgeTable {
     /// Never a key: the lower id of an edge is below its higher id.
     const EMPTY: u64 = u64::MAX;
 
-    /// A table for up to `n` edges.
+    /// A table for up to `n` edges (load factor at most 2/3).
     fn with_capacity(n: usize) -> EdgeTable {
-        let len = (2 * n).next_power_of_two().max(16);
+        let len = (n + n / 2 + 1).next_power_of_two().max(16);
         EdgeTable {
             slots: vec![(Self::EMPTY, 0); len],
             shift: 64 - len.trailing_zeros(),
@@ -656,7 +656,8 @@ fn finish_locate(
 ) -> Located {
     let p = &mesh.positions;
     let n = crossed.len();
-    let mut ids = EdgeTable::with_capacity(3 * n);
+    // A mixed triangle has exactly two edges whose ends change side.
+    let mut ids = EdgeTable::with_capacity(2 * n);
     let mut out = Located {
         triangles: Vec::with_capacity(n),
         edge_cuts: Vec::with_capacity(n),

@@ -71,10 +71,17 @@ fn main() {
             ),
         radius: 0.25 * r,
     }));
+    // Shared machines: the load average says how much to trust the run.
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     eprintln!(
-        "cut: surface of {m} triangles, {} groups, {} knives",
+        "cut: surface of {m} triangles, {} groups, {} knives; {} cores, load {}",
         surf.groups.len(),
-        knives.len()
+        knives.len(),
+        rayon::current_num_threads(),
+        load.split_whitespace()
+            .take(3)
+            .collect::<Vec<_>>()
+            .join(" ")
     );
     // Ratio lines (median of runs), then criterion's own figures.
     let time = |f: &dyn Fn()| {

@@ -41,7 +41,7 @@ pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
 use crate::surface::tree::sorted_overlap;
-use crate::surface::{Forest, UnionFind};
+use crate::surface::{CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 use knife::{Kind, PreparedKnife, SideFn};
 
@@ -246,6 +246,15 @@ pub fn locate_full_scan(mesh: &TriMesh, knife: &Knife) -> Result<Located> {
 }
 
 fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Result<Located> {
+    if forest.triangles.len() != mesh.triangles.len() || forest.n_vertices != mesh.positions.len() {
+        return Err(Error::InvalidInput(format!(
+            "cut: the forest was built for a mesh of {} vertices and {} triangles, not {} and {}",
+            forest.n_vertices,
+            forest.triangles.len(),
+            mesh.positions.len(),
+            mesh.triangles.len()
+        )));
+    }
     let mut stats = CutStats {
         nodes_total: forest.n_nodes(),
         triangles_total: mesh.triangles.len(),
@@ -254,30 +263,48 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
     let Some(side) = k.side_fn() else {
         return locate_mesh_knife(mesh, forest, k, stats);
     };
-    // Analytic knife: each leaf's triangles are tested as the walk reaches
-    // them, straight from the leaf's contiguous span of `forest.triangles`.
-    // The side test is branch-free (every candidate is written, the count
-    // advances only for a mixed one), so the loads of many candidates
-    // overlap; a rectangle then drops mixed triangles it does not reach.
-    let mut crossed: Vec<u32> = Vec::new();
+    // Analytic knife: per expanded leaf, each of its distinct vertices is
+    // evaluated once (from the leaf's contiguous vertex table), then its
+    // triangles are tested from the contiguous corner table. The test is
+    // branch-free (every candidate is written, the count advances only for
+    // a mixed one); a rectangle then drops mixed triangles it does not reach.
+    // Crossed triangles as `id << 32 | index into forest.triangles`.
+    let mut crossed: Vec<u64> = Vec::new();
+    let mut neg: Vec<bool> = Vec::new();
     let p = &mesh.positions;
     let exact = k.sign_change_crosses();
-    let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
+    let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
+        let vs = c.vertices.range();
+        let v0 = vs.start;
+        neg.clear();
+        neg.extend(
+            forest.leaf_vertices[vs]
+                .iter()
+                .map(|&v| side.eval(p[v as usize].as_dvec3()) < 0.0),
+        );
+        let tris = c.triangles.range();
         let base = crossed.len();
         crossed.resize(base + tris.len(), 0);
         let mut n = base;
-        for &t in tris {
-            let f = side_values(p, side, mesh.triangles[t as usize]);
-            let (a, b, c) = (f[0] < 0.0, f[1] < 0.0, f[2] < 0.0);
-            crossed[n] = t;
-            n += usize::from(a != b || b != c);
+        for ((&t, &[a, b, cc]), i) in forest.triangles[tris.clone()]
+            .iter()
+            .zip(&forest.corners[tris.clone()])
+            .zip(tris)
+        {
+            let (a, b, cc) = (
+                neg[a as usize - v0],
+                neg[b as usize - v0],
+                neg[cc as usize - v0],
+            );
+            crossed[n] = u64::from(t) << 32 | i as u64;
+            n += usize::from(a != b || b != cc);
         }
         crossed.truncate(n);
         if !exact {
             let mut kept = base;
             for i in base..n {
                 let t = crossed[i];
-                if crossed_sides(mesh, k, side, t).is_some() {
+                if crossed_sides(mesh, k, side, (t >> 32) as u32).is_some() {
                     crossed[kept] = t;
                     kept += 1;
                 }
@@ -294,6 +321,13 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
         }
     }
     crossed.sort_unstable();
+    let vertices = |c: [u32; 3]| c.map(|v| forest.leaf_vertices[v as usize]);
+    let crossed = crossed.iter().map(|&key| {
+        (
+            (key >> 32) as u32,
+            vertices(forest.corners[key as u32 as usize]),
+        )
+    });
     Ok(finish_locate(mesh, crossed, k, side, stats))
 }
 
@@ -315,9 +349,9 @@ fn locate_mesh_knife(
         ));
     };
     let mut tested: Vec<u32> = Vec::new();
-    let expanded = walk(forest, k, &mut stats, &mut |tris: &[u32]| {
-        tested.extend_from_slice(tris);
-        tris.len()
+    let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
+        tested.extend_from_slice(&forest.triangles[c.triangles.range()]);
+        c.triangles.len()
     });
     let pair = corefine::Pair {
         surface: mesh,
@@ -338,7 +372,7 @@ fn locate_mesh_knife(
 }
 
 /// Walks the forest, expanding only nodes the knife may touch, and hands
-/// every expanded leaf's triangles to `leaf` in walk order; `leaf` returns
+/// every expanded leaf to `leaf` in walk order; `leaf` returns
 /// how far to advance a counter (its crossed triangles, or the triangles
 /// handed). Returns, per expanded node, its span `[start, end)` of that
 /// counter (to class it).
@@ -346,7 +380,7 @@ fn walk(
     forest: &Forest,
     k: &PreparedKnife<'_>,
     stats: &mut CutStats,
-    leaf: &mut dyn FnMut(&[u32]) -> usize,
+    leaf: &mut dyn FnMut(&CellNode) -> usize,
 ) -> Vec<(usize, usize)> {
     let mut expanded: Vec<(usize, usize)> = Vec::new();
     let mut handed = 0usize;
@@ -400,10 +434,9 @@ fn walk(
                     if !visit(&c.bbox, stats) {
                         continue;
                     }
-                    let tris = &forest.triangles[c.triangles.range()];
-                    stats.triangles_tested += tris.len();
+                    stats.triangles_tested += c.triangles.len();
                     let start = handed;
-                    handed += leaf(tris);
+                    handed += leaf(c);
                     expanded.push((start, handed));
                 }
                 expanded.push((r_start, handed));
@@ -533,6 +566,7 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
     } else {
         mixed.into_par_iter().filter(test).collect()
     };
+    let crossed = crossed.iter().map(|&t| (t, mesh.triangles[t as usize]));
     Ok(finish_locate(mesh, crossed, k, side, stats))
 }
 
@@ -563,58 +597,76 @@ fn scan_mesh_knife(mesh: &TriMesh, k: &PreparedKnife<'_>, stats: CutStats) -> Re
     Ok(finish_locate_mesh(&pair, crossed, stats))
 }
 
-/// A multiplicative hash for edge keys (vertex-id pairs, not attacker
-/// controlled): the cut-vertex table is on the query's hot path.
-#[derive(Debug, Clone, Copy, Default)]
-struct EdgeHash;
-
-impl std::hash::BuildHasher for EdgeHash {
-    type Hasher = EdgeHasher;
-    fn build_hasher(&self) -> EdgeHasher {
-        EdgeHasher(0)
-    }
+/// Cut-vertex ids of crossed edges, keyed by `(lower id) << 32 | higher id`:
+/// open addressing with linear probing in one flat table of at least twice
+/// as many slots as edges can be inserted (so a probe always ends at the
+/// key or at an empty slot). Keys are vertex-id pairs, not attacker
+/// controlled; a multiplicative hash spreads them.
+struct EdgeTable {
+    /// `(key, id)`; [`EdgeTable::EMPTY`] keys mark free slots.
+    slots: Vec<(u64, u32)>,
+    shift: u32,
 }
 
-#[derive(Debug, Clone, Copy)]
-struct EdgeHasher(u64);
+impl EdgeTable {
+    /// Never a key: the lower id of an edge is below its higher id.
+    const EMPTY: u64 = u64::MAX;
 
-impl std::hash::Hasher for EdgeHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
+    /// A table for up to `n` edges (load factor at most 2/3).
+    fn with_capacity(n: usize) -> EdgeTable {
+        let len = (n + n / 2 + 1).next_power_of_two().max(16);
+        EdgeTable {
+            slots: vec![(Self::EMPTY, 0); len],
+            shift: 64 - len.trailing_zeros(),
         }
     }
-    fn write_u32(&mut self, x: u32) {
-        self.write_u64(u64::from(x));
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(29) ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+
+    /// The id stored for `key`, or `make()`'s id stored for it (nothing
+    /// stored when `make` gives `None`).
+    #[inline]
+    fn get_or_insert(&mut self, key: u64, make: impl FnOnce() -> Option<u32>) -> Option<u32> {
+        let mask = self.slots.len() - 1;
+        let mut i = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize;
+        loop {
+            let (k, id) = self.slots[i];
+            if k == key {
+                return Some(id);
+            }
+            if k == Self::EMPTY {
+                let id = make()?;
+                self.slots[i] = (key, id);
+                return Some(id);
+            }
+            i = (i + 1) & mask;
+        }
     }
 }
 
-/// Cut vertices of the crossed triangles (ascending ids), numbered by
-/// first use in ascending triangle order (so tree and scan number them
-/// identically). Only edges whose ends change side are looked up.
+/// Cut vertices of the crossed triangles, given as `(triangle id, its
+/// vertex ids)` in ascending id order, numbered by first use in that order
+/// (so tree and scan number them identically). Only edges whose ends
+/// change side are looked up; a triangle none of whose edges the knife
+/// reaches (a rectangle's border) is dropped.
 fn finish_locate(
     mesh: &TriMesh,
-    crossed: Vec<u32>,
+    crossed: impl ExactSizeIterator<Item = (u32, [u32; 3])>,
     k: &PreparedKnife<'_>,
     side: SideFn,
     mut stats: CutStats,
 ) -> Located {
     let p = &mesh.positions;
-    let mut ids: HashMap<u64, u32, EdgeHash> =
-        HashMap::with_capacity_and_hasher(2 * crossed.len(), EdgeHash);
+    let n = crossed.len();
+    // A mixed triangle has exactly two edges whose ends change side.
+    let mut ids = EdgeTable::with_capacity(2 * n);
     let mut out = Located {
-        triangles: Vec::with_capacity(crossed.len()),
-        edge_cuts: Vec::with_capacity(crossed.len()),
+        triangles: Vec::with_capacity(n),
+        edge_cuts: Vec::with_capacity(n),
+        points: Vec::with_capacity(n),
+        lower_negative: Vec::with_capacity(n),
+        edges: Vec::with_capacity(n),
         ..Located::default()
     };
-    for t in crossed {
-        let tri = mesh.triangles[t as usize];
+    for (t, tri) in crossed {
         let f = side_values(p, side, tri);
         let mut cuts = [u32::MAX; 3];
         for (e, cut) in cuts.iter_mut().enumerate() {
@@ -624,21 +676,21 @@ fn finish_locate(
             }
             let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
             let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
-            if let Some(&id) = ids.get(&key) {
-                *cut = id;
-                continue;
-            }
-            if let Some(c) = k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j]) {
-                let id = out.points.len() as u32;
-                ids.insert(key, id);
+            let made = ids.get_or_insert(key, || {
+                let c = k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j])?;
                 out.points.push(c.point.as_vec3());
                 out.lower_negative.push(c.first_negative);
                 out.edges.push((tri[i], tri[j]));
+                Some(out.points.len() as u32 - 1)
+            });
+            if let Some(id) = made {
                 *cut = id;
             }
         }
-        out.triangles.push(t);
-        out.edge_cuts.push(cuts);
+        if cuts != [u32::MAX; 3] {
+            out.triangles.push(t);
+            out.edge_cuts.push(cuts);
+        }
     }
     stats.triangles_split = out.triangles.len();
     stats.cut_vertices = out.points.len();

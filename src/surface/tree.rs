@@ -145,8 +145,10 @@ pub struct RowNode {
 pub struct CellNode {
     pub x: u32,
     pub bbox: Aabb,
-    /// Span of [`Forest::triangles`].
+    /// Span of [`Forest::triangles`] (and of [`Forest::corners`]).
     pub triangles: Span,
+    /// Span of [`Forest::leaf_vertices`]: the leaf's distinct vertices.
+    pub vertices: Span,
     /// Next leaf of the same group in (z, y, x) order; `u32::MAX` at the end.
     pub next: u32,
 }
@@ -162,6 +164,15 @@ pub struct Forest {
     pub cells: Vec<CellNode>,
     /// Triangle ids ordered by (group, cell); leaves index this.
     pub triangles: Vec<u32>,
+    /// Per entry of `triangles`, its corners as indices into
+    /// `leaf_vertices` (inside its leaf's `vertices` span), in the
+    /// triangle's winding: a query evaluates each vertex of a leaf once and
+    /// tests the leaf's triangles from a contiguous table.
+    pub corners: Vec<[u32; 3]>,
+    /// Per leaf, its distinct mesh vertex ids, ascending.
+    pub leaf_vertices: Vec<u32>,
+    /// Vertex count of the mesh the forest was built for.
+    pub n_vertices: usize,
     /// Whether the boxes are sorted along their keys: in every row the
     /// cells' `min.x` and `max.x` never decrease, likewise the rows' `y`
     /// bounds in every layer and the layers' `z` bounds in every group. True
@@ -240,6 +251,7 @@ impl Forest {
                                 start: t_start,
                                 end: i as u32,
                             },
+                            vertices: Span { start: 0, end: 0 },
                             next: u32::MAX,
                         });
                         rbox = rbox.union(cbox);
@@ -281,7 +293,47 @@ impl Forest {
             });
         }
         f.axis_sorted = f.boxes_sorted();
+        f.n_vertices = mesh.positions.len();
+        f.leaf_vertex_tables(mesh);
         f
+    }
+
+    /// Fills [`Forest::leaf_vertices`], [`Forest::corners`] and each leaf's
+    /// `vertices` span (leaves in parallel, then concatenated).
+    fn leaf_vertex_tables(&mut self, mesh: &TriMesh) {
+        let per_leaf: Vec<(Vec<u32>, Vec<[u32; 3]>)> = self
+            .cells
+            .par_iter()
+            .map(|c| {
+                let tris = &self.triangles[c.triangles.range()];
+                let mut vs: Vec<u32> = tris
+                    .iter()
+                    .flat_map(|&t| mesh.triangles[t as usize])
+                    .collect();
+                vs.sort_unstable();
+                vs.dedup();
+                let local = tris
+                    .iter()
+                    .map(|&t| {
+                        mesh.triangles[t as usize].map(|v| vs.partition_point(|&x| x < v) as u32)
+                    })
+                    .collect();
+                (vs, local)
+            })
+            .collect();
+        let n: usize = per_leaf.iter().map(|(vs, _)| vs.len()).sum();
+        self.leaf_vertices = Vec::with_capacity(n);
+        self.corners = Vec::with_capacity(self.triangles.len());
+        for (c, (vs, local)) in self.cells.iter_mut().zip(per_leaf) {
+            let start = self.leaf_vertices.len() as u32;
+            self.leaf_vertices.extend_from_slice(&vs);
+            c.vertices = Span {
+                start,
+                end: self.leaf_vertices.len() as u32,
+            };
+            self.corners
+                .extend(local.into_iter().map(|l| l.map(|i| start + i)));
+        }
     }
 
     /// Whether every level's child boxes are sorted along its axis (see

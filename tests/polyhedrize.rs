@@ -154,7 +154,7 @@ fn cavities_are_reversed_shells_and_nesting_recurses() {
                 seed ^= seed << 13;
                 seed ^= seed >> 7;
                 seed ^= seed << 17;
-                seed % 7 == 0
+                seed.is_multiple_of(7)
             })
             .collect();
         let o = carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)]);

@@ -263,7 +263,7 @@ impl Polyhedron {
         count.copy_from_slice(&bytes[12..20]);
         let n = u64::from_le_bytes(count);
         let body = (bytes.len() - HEADER) as u64;
-        if body % 8 != 0 || n.checked_mul(8) != Some(body) {
+        if n.checked_mul(8) != Some(body) {
             return Err(bad(format!(
                 "header announces {n} integers, the file holds {body} bytes after the header"
             )));

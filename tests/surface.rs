@@ -7,6 +7,7 @@ mod common;
 use std::collections::HashMap;
 
 use chisel::Backend;
+use chisel::surface::field::{NativeSamples, SampleVisitor, Scalar};
 use chisel::surface::{IsoSpec, McOptions, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 
@@ -727,8 +728,30 @@ fn crop_to_label(vol: &Volume, label: f64) -> Volume {
     Volume::new(dims, vol.spacing, origin, VolumeData::U8(data)).unwrap()
 }
 
+/// Every sample of the padded grid read through `NativeSamples` (x
+/// fastest, then y, then z).
+struct AllSamples([usize; 3]);
+
+impl SampleVisitor for AllSamples {
+    type Output = Vec<f32>;
+
+    fn visit<T: Scalar>(self, samples: NativeSamples<'_, '_, T>) -> Vec<f32> {
+        let [nx, ny, nz] = self.0;
+        let mut out = Vec::with_capacity(nx * ny * nz);
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    out.push(samples.sample(x, y, z));
+                }
+            }
+        }
+        out
+    }
+}
+
 /// The CPU reads inside flags as bit rows in the native type and samples
-/// only at crossings; both must equal the `f32` layers the GPU uploads
+/// only at crossings (`Field::sample`, and `NativeSamples` with the type
+/// known at compile time); all must equal the `f32` layers the GPU uploads
 /// (`Field::layer`), for every sample type, with and without padding, at
 /// levels between, on and beyond the integer values, and for labels.
 #[test]
@@ -773,6 +796,7 @@ fn field_rows_and_samples_match_layers() {
             for close in [false, true] {
                 let field = chisel::surface::Field::new(&vol, iso, close).unwrap();
                 let [nx, ny, nz] = field.dims;
+                let native = field.visit_samples(AllSamples(field.dims));
                 let mut layer = vec![0f32; nx * ny];
                 let mut row = vec![0u64; field.row_words()];
                 for z in 0..nz {
@@ -790,13 +814,17 @@ fn field_rows_and_samples_match_layers() {
                             );
                             checked_inside += usize::from(want);
                             if x < nx {
+                                let want = layer[x + nx * y].to_bits();
                                 let s = field.sample(x, y, z);
-                                assert_eq!(
-                                    s.to_bits(),
-                                    layer[x + nx * y].to_bits(),
-                                    "{:?} {iso:?} close {close}: sample ({x}, {y}, {z})",
-                                    vol.data.scalar_type()
-                                );
+                                let n = native[x + nx * (y + ny * z)];
+                                for (got, what) in [(s, "sample"), (n, "native sample")] {
+                                    assert_eq!(
+                                        got.to_bits(),
+                                        want,
+                                        "{:?} {iso:?} close {close}: {what} ({x}, {y}, {z})",
+                                        vol.data.scalar_type()
+                                    );
+                                }
                             }
                         }
                     }

@@ -25,11 +25,12 @@
 //! Interpolation (the one expression both backends use, in f32):
 //! `t = (level − a) / (b − a)`, `u[axis] = f32(p[axis]) + t`, with `a` the
 //! sample at the edge's lower end `p` and `b` at `p + e_axis`
-//! ([`Field::sample`], only where an edge crosses).
+//! ([`NativeSamples::sample`], the volume read in its own type, only where
+//! an edge crosses).
 
 use rayon::prelude::*;
 
-use super::field::Field;
+use super::field::{Field, NativeSamples, SampleVisitor, Scalar};
 use super::tables::{self, EDGE_OWNER, corner_offset, edge_axis};
 use crate::{Error, Result};
 
@@ -167,10 +168,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
             });
         }
     }
-    let chunk_groups: Vec<ChunkGroups> = outs
-        .into_par_iter()
-        .map(|out| run_chunk(field, &bits, out))
-        .collect();
+    let chunk_groups = field.visit_samples(RunChunks { bits: &bits, outs });
     let n_groups = stitch(&chunk_groups, &chunks, &vbase, &tbase, &mut groups);
     Ok(RawSurface {
         positions,
@@ -430,7 +428,30 @@ impl Crossings {
     }
 }
 
-fn run_chunk(field: &Field<'_>, bits: &Bits, mut out: ChunkOut<'_>) -> ChunkGroups {
+/// The emit pass over all chunks (in parallel), with the samples read in
+/// the volume's native type.
+struct RunChunks<'b, 'o> {
+    bits: &'b Bits,
+    outs: Vec<ChunkOut<'o>>,
+}
+
+impl SampleVisitor for RunChunks<'_, '_> {
+    type Output = Vec<ChunkGroups>;
+
+    fn visit<T: Scalar>(self, samples: NativeSamples<'_, '_, T>) -> Vec<ChunkGroups> {
+        let bits = self.bits;
+        self.outs
+            .into_par_iter()
+            .map(|out| run_chunk(samples, bits, out))
+            .collect()
+    }
+}
+
+fn run_chunk<T: Scalar>(
+    samples: NativeSamples<'_, '_, T>,
+    bits: &Bits,
+    mut out: ChunkOut<'_>,
+) -> ChunkGroups {
     let rows = &bits.rows;
     let (z0, z1, own_end) = (out.z0, out.z1, out.own_end);
     let mut emit = Emit {
@@ -448,7 +469,7 @@ fn run_chunk(field: &Field<'_>, bits: &Bits, mut out: ChunkOut<'_>) -> ChunkGrou
     let mut vertex_rows = VertexRows::new(rows);
     let mut next_id = emit.groups.first_vertex;
     number_points(
-        field,
+        &samples,
         bits,
         z0,
         true,
@@ -464,7 +485,7 @@ fn run_chunk(field: &Field<'_>, bits: &Bits, mut out: ChunkOut<'_>) -> ChunkGrou
             (c1, c0)
         };
         let own = z + 1 < own_end;
-        number_points(field, bits, z + 1, own, upper, &mut next_id, &mut emit);
+        number_points(&samples, bits, z + 1, own, upper, &mut next_id, &mut emit);
         vertex_rows.clear();
         emit_cells(bits, z, [&*lower, &*upper], &mut vertex_rows, &mut emit);
     }
@@ -475,8 +496,8 @@ fn run_chunk(field: &Field<'_>, bits: &Bits, mut out: ChunkOut<'_>) -> ChunkGrou
 /// fastest, then y; axes x < y < z within a point), a word of 64 points at
 /// a time. Records the masks and row bases in `crossings`; stores positions
 /// and edge ids when the layer is `own`.
-fn number_points(
-    field: &Field<'_>,
+fn number_points<T: Scalar>(
+    samples: &NativeSamples<'_, '_, T>,
     bits: &Bits,
     z: usize,
     own: bool,
@@ -485,7 +506,7 @@ fn number_points(
     emit: &mut Emit<'_, '_>,
 ) {
     let Rows { nx, ny, words, .. } = bits.rows;
-    let level = field.level;
+    let level = samples.level();
     let zf = z as f32;
     for y in 0..ny {
         crossings.row_base[y] = *next_id;
@@ -503,7 +524,7 @@ fn number_points(
                 any &= any - 1;
                 let x = 64 * w + s as usize;
                 let point = (x + nx * (y + ny * z)) as u64;
-                let a = field.sample(x, y, z);
+                let a = samples.sample(x, y, z);
                 let mut vertex = |axis: usize, b: f32| {
                     let t = (level - a) / (b - a);
                     let mut u = [x as f32, y as f32, zf];
@@ -513,13 +534,13 @@ fn number_points(
                     emit.n_positions += 1;
                 };
                 if ex >> s & 1 == 1 {
-                    vertex(0, field.sample(x + 1, y, z));
+                    vertex(0, samples.sample(x + 1, y, z));
                 }
                 if ey >> s & 1 == 1 {
-                    vertex(1, field.sample(x, y + 1, z));
+                    vertex(1, samples.sample(x, y + 1, z));
                 }
                 if ez >> s & 1 == 1 {
-                    vertex(2, field.sample(x, y, z + 1));
+                    vertex(2, samples.sample(x, y, z + 1));
                 }
             }
         }

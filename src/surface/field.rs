@@ -192,10 +192,18 @@ impl<'a> Field<'a> {
         out.fill(0);
         let pad_y = p == 1 && (y == 0 || y == ny - 1);
         let pad_z = p == 1 && (z == 0 || z == nz - 1);
+        let [vx, vy, vz] = self.volume.dims;
         if pad_y || pad_z {
-            let mut row = vec![0.0f32; nx];
-            for (x, v) in row.iter_mut().enumerate() {
-                *v = self.sample(x, y, z);
+            // The padding values of `layer`: `pad_value` of the inner row
+            // next to it, `level − 1` where two coordinates are padding.
+            let mut row = vec![self.level - 1.0; nx];
+            if !(pad_y && pad_z) {
+                let inner = |c: usize, d: usize| c.saturating_sub(1).min(d - 1);
+                let mut inner_row = vec![0.0f32; vx];
+                self.inner_row(inner(y, vy), inner(z, vz), &mut inner_row);
+                for (d, &v) in row[1..=vx].iter_mut().zip(&inner_row) {
+                    *d = self.pad_value(v);
+                }
             }
             pack(&row, out, |v| v >= self.level);
             return;
@@ -204,8 +212,10 @@ impl<'a> Field<'a> {
         self.pack_inner(j, k, out);
         if p == 1 {
             shift_up_one(out);
-            for x in [0, nx - 1] {
-                if self.sample(x, y, z) >= self.level {
+            let ends = [(0, 0), (vx - 1, nx - 1)];
+            for (i, x) in ends {
+                let v = self.inner_value(self.volume.index(i, j, k));
+                if self.pad_value(v) >= self.level {
                     out[x / 64] |= 1 << (x % 64);
                 }
             }
@@ -298,6 +308,21 @@ impl<'a> Field<'a> {
         }
     }
 
+    /// Calls `visitor` with [`NativeSamples`] of the volume's scalar type:
+    /// one type dispatch for a whole pass instead of one per sample.
+    pub fn visit_samples<V: SampleVisitor>(&self, visitor: V) -> V::Output {
+        match &self.volume.data {
+            VolumeData::U8(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::I8(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::U16(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::I16(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::U32(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::I32(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::F32(v) => visitor.visit(NativeSamples::new(self, v)),
+            VolumeData::F64(v) => visitor.visit(NativeSamples::new(self, v)),
+        }
+    }
+
     /// Inner sample `i` (linear index) as `f32`, labels as 0/1: the
     /// conversion of [`Field::inner_row`].
     #[inline]
@@ -335,6 +360,88 @@ impl<'a> Field<'a> {
         let s = self.volume.spacing;
         let w = |a: usize| (o[a] + s[a] * (f64::from(u[a]) - self.pad as f64)) as f32;
         glam::Vec3::new(w(0), w(1), w(2))
+    }
+}
+
+/// A scalar type a volume stores, converted with `as` exactly like
+/// [`Field::layer`] does.
+pub trait Scalar: Copy + Send + Sync {
+    /// The sample as `f32` (level mode).
+    fn to_f32(self) -> f32;
+    /// The sample as `f64` (compared with a label).
+    fn to_f64(self) -> f64;
+}
+
+macro_rules! scalar {
+    ($($t:ty),*) => {$(
+        impl Scalar for $t {
+            #[inline]
+            fn to_f32(self) -> f32 {
+                self as f32
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+        }
+    )*};
+}
+scalar!(u8, i8, u16, i16, u32, i32, f32, f64);
+
+/// Something run with the samples in their native type
+/// ([`Field::visit_samples`]).
+pub trait SampleVisitor {
+    type Output;
+    fn visit<T: Scalar>(self, samples: NativeSamples<'_, '_, T>) -> Self::Output;
+}
+
+/// [`Field::sample`] with the volume's scalar type known at compile time:
+/// inner samples are one index and one conversion; padding samples go
+/// through [`Field::sample`]. Gives exactly [`Field::sample`].
+#[derive(Debug, Clone, Copy)]
+pub struct NativeSamples<'f, 'a, T> {
+    field: &'f Field<'a>,
+    data: &'a [T],
+    dims: [usize; 3],
+    pad: usize,
+    /// `Some(label)` in label mode.
+    label: Option<f64>,
+}
+
+impl<'f, 'a, T: Scalar> NativeSamples<'f, 'a, T> {
+    fn new(field: &'f Field<'a>, data: &'a [T]) -> Self {
+        NativeSamples {
+            field,
+            data,
+            dims: field.volume.dims,
+            pad: field.pad,
+            label: match field.iso {
+                IsoSpec::Level(_) => None,
+                IsoSpec::Label(l) => Some(l),
+            },
+        }
+    }
+
+    /// The iso level ([`Field::level`]).
+    pub fn level(&self) -> f32 {
+        self.field.level
+    }
+
+    /// Sample `(x, y, z)` of the padded grid: exactly [`Field::sample`].
+    #[inline]
+    pub fn sample(&self, x: usize, y: usize, z: usize) -> f32 {
+        let p = self.pad;
+        let d = self.dims;
+        let (i, j, k) = (x.wrapping_sub(p), y.wrapping_sub(p), z.wrapping_sub(p));
+        if i < d[0] && j < d[1] && k < d[2] {
+            let v = self.data[i + d[0] * (j + d[1] * k)];
+            match self.label {
+                None => v.to_f32(),
+                Some(l) => f32::from(u8::from(v.to_f64() == l)),
+            }
+        } else {
+            self.field.sample(x, y, z)
+        }
     }
 }
 

@@ -193,56 +193,30 @@ struct LeafBlocks {
 }
 
 /// The block of each triangle's cell (`cells`: keys `x + cx·(y + cy·z)`).
+/// Consecutive triangles mostly lie in one cell row (marching cubes emits
+/// in cell order), so a key is decoded only when the row changes; inside
+/// a row the block is the row's first block plus `x / LEAF_BLOCK`.
 fn leaf_blocks(cells: &[u32], dims: [usize; 3]) -> LeafBlocks {
     let b = tree::LEAF_BLOCK;
     let cd = dims.map(|d| d.saturating_sub(1).max(1));
     let bd = cd.map(|c| c.div_ceil(b));
-    let (div_x, div_y) = (DivU32::new(cd[0] as u32), DivU32::new(cd[1] as u32));
-    let keys = cells
-        .par_iter()
-        .map(|&c| {
-            let q = div_x.div(c);
-            let z = div_y.div(q) as usize;
-            let x = (c - q * cd[0] as u32) as usize;
-            let y = q as usize - z * cd[1];
-            (x / b + bd[0] * (y / b + bd[1] * (z / b))) as u32
-        })
-        .collect();
+    let mut keys = vec![0u32; cells.len()];
+    keys.par_chunks_mut(FIGURE_CHUNK)
+        .zip(cells.par_chunks(FIGURE_CHUNK))
+        .for_each(|(keys, cells)| {
+            // Cells `row.0..row.1` form the current row, of first block `row.2`.
+            let mut row = (0usize, 0usize, 0usize);
+            for (k, &c) in keys.iter_mut().zip(cells) {
+                let c = c as usize;
+                if !(row.0..row.1).contains(&c) {
+                    let (x, q) = (c % cd[0], c / cd[0]);
+                    let (y, z) = (q % cd[1], q / cd[1]);
+                    row = (c - x, c - x + cd[0], bd[0] * (y / b + bd[1] * (z / b)));
+                }
+                *k = (row.2 + (c - row.0) / b) as u32;
+            }
+        });
     LeafBlocks { keys, dims: bd }
-}
-
-/// Division of any `u32` by a fixed divisor `d ≥ 1` with one 128-bit
-/// multiplication: `⌊n/d⌋ = ⌊M·n / 2⁶⁴⌋` with `M = ⌈2⁶⁴/d⌉`, exact for all
-/// 32-bit `n` (Lemire, Kaser & Kurz 2019, "Faster remainder by direct
-/// computation", Theorem 1). Decoding cell keys with it instead of
-/// hardware division keeps the forest build off the divider.
-#[derive(Debug, Clone, Copy)]
-struct DivU32 {
-    m: u64,
-    d: u32,
-}
-
-impl DivU32 {
-    fn new(d: u32) -> Self {
-        let d = d.max(1);
-        DivU32 {
-            m: if d == 1 {
-                0
-            } else {
-                u64::MAX / u64::from(d) + 1
-            },
-            d,
-        }
-    }
-
-    #[inline]
-    fn div(self, n: u32) -> u32 {
-        if self.d == 1 {
-            n
-        } else {
-            ((u128::from(self.m) * u128::from(n)) >> 64) as u32
-        }
-    }
 }
 
 /// Chunk of triangles or vertices per task of the figure passes; partial
@@ -441,39 +415,4 @@ fn boundary_edges(
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::DivU32;
-
-    #[test]
-    fn div_u32_is_exact() {
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            s
-        };
-        let mut divisors: Vec<u32> = (1..=1025).collect();
-        divisors.extend([
-            u32::MAX,
-            u32::MAX - 1,
-            1 << 31,
-            (1 << 31) + 1,
-            65_535,
-            65_537,
-        ]);
-        divisors.extend((0..200).map(|_| next() as u32 | 1));
-        for d in divisors {
-            let f = DivU32::new(d);
-            let mut ns: Vec<u32> = vec![0, 1, d - 1, d, d.wrapping_add(1), u32::MAX, u32::MAX - 1];
-            ns.extend((0..2000).map(|_| next() as u32));
-            ns.extend((0..200).map(|_| (next() as u32 % 4096).wrapping_mul(d)));
-            for n in ns {
-                assert_eq!(f.div(n), n / d, "{n} / {d}");
-            }
-        }
-    }
 }

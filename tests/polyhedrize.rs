@@ -341,7 +341,11 @@ fn assert_merged_closed(p: &Polyhedron, what: &str) -> chisel::polyhedron::Merge
     }
     let mesh = m.to_mesh(&p.frame).unwrap();
     let topo = chisel::mesh::Topology::of(&mesh);
-    assert!(topo.closed, "{what}: {} boundary edges", topo.boundary_edges);
+    assert!(
+        topo.closed,
+        "{what}: {} boundary edges",
+        topo.boundary_edges
+    );
     assert_eq!(topo.boundary_edges, 0, "{what}");
     assert!(topo.consistently_oriented, "{what}");
     assert_eq!(topo.collapsed_triangles, 0, "{what}");

@@ -20,7 +20,7 @@
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, HashMap};
 
-use crate::mesh::TriMesh;
+use crate::mesh::{ScalarField, TriMesh};
 use crate::voxel::Frame;
 
 use super::{Polyhedron, Role};
@@ -53,6 +53,9 @@ pub struct MergedSurface {
     /// Exact triangulation of the faces, outward winding (indices into
     /// [`MergedSurface::vertices`]); every face-loop vertex is a corner.
     pub triangles: Vec<[u32; 3]>,
+    /// Per vertex, the smallest depth of a shell having it as a hull vertex
+    /// (every merged vertex is one).
+    pub vertex_depth: Vec<u32>,
 }
 
 impl MergedSurface {
@@ -81,7 +84,8 @@ impl MergedSurface {
             .sum()
     }
 
-    /// The triangles as a mesh in world units (`frame`), outward winding.
+    /// The triangles as a mesh in world units (`frame`), outward winding;
+    /// scalar `depth` per vertex ([`MergedSurface::vertex_depth`]).
     pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
         let positions = self
             .vertices
@@ -91,7 +95,13 @@ impl MergedSurface {
                 glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)
             })
             .collect();
-        TriMesh::new(positions, self.triangles.clone())
+        let mut mesh = TriMesh::new(positions, self.triangles.clone())?;
+        mesh.scalars.push(ScalarField {
+            name: "depth".into(),
+            values: self.vertex_depth.iter().map(|&d| d as f32).collect(),
+        });
+        mesh.validate()?;
+        Ok(mesh)
     }
 }
 
@@ -114,10 +124,15 @@ impl Polyhedron {
         // Effective faces by canonical plane: (sign relative to it, cycle).
         type Planes = BTreeMap<([i64; 3], i64), Vec<(i64, Vec<[i64; 3]>)>>;
         let mut planes: Planes = BTreeMap::new();
+        let mut depth_of: HashMap<[i64; 3], u32> = HashMap::new();
         for s in &self.shells {
             let Some(h) = s.geometry.polytope().filter(|h| !h.is_planar()) else {
                 continue;
             };
+            for &v in h.vertices() {
+                let d = depth_of.entry(v).or_insert(s.depth);
+                *d = (*d).min(s.depth);
+            }
             for f in h.faces() {
                 let mut cycle: Vec<[i64; 3]> = f
                     .vertices
@@ -153,10 +168,15 @@ impl Polyhedron {
         for f in &faces {
             triangles.extend(triangulate(f, &vertices)?);
         }
+        let vertex_depth = vertices
+            .iter()
+            .map(|v| depth_of.get(v).copied().unwrap_or(0))
+            .collect();
         Ok(MergedSurface {
             vertices,
             faces,
             triangles,
+            vertex_depth,
         })
     }
 }
@@ -184,7 +204,9 @@ impl VertexTable {
 /// `p` with the dominant axis of `n` dropped, ordered so that
 /// counter-clockwise about `n` is counter-clockwise in the plane.
 fn project(p: [i64; 3], n: [i64; 3]) -> P2 {
-    let k = (0..3).max_by_key(|&a| (n[a].abs(), Reverse(a))).unwrap_or(0);
+    let k = (0..3)
+        .max_by_key(|&a| (n[a].abs(), Reverse(a)))
+        .unwrap_or(0);
     let (i, j) = ((k + 1) % 3, (k + 2) % 3);
     if n[k] > 0 { [p[i], p[j]] } else { [p[j], p[i]] }
 }
@@ -508,7 +530,10 @@ fn faces_of_edges(
 fn contains(lp: &[usize], q: &[P2], t: P2) -> bool {
     let mut inside = false;
     for k in 0..lp.len() {
-        let (a, b) = (q[lp[k]].map(|c| 2 * c), q[lp[(k + 1) % lp.len()]].map(|c| 2 * c));
+        let (a, b) = (
+            q[lp[k]].map(|c| 2 * c),
+            q[lp[(k + 1) % lp.len()]].map(|c| 2 * c),
+        );
         if (a[1] > t[1]) != (b[1] > t[1]) {
             let o = orient(a, b, t);
             if (b[1] > a[1]) == (o > 0) {

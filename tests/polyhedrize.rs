@@ -455,4 +455,13 @@ fn merged_surface_refuses_overlapping_siblings() {
     assert!(!p.summary().volume_exact);
     let e = p.merged_surface().unwrap_err().to_string();
     assert!(e.contains("disjoint"), "{e}");
+    // A corrupted role: the tunnel of the cylinder as an object shell puts
+    // both caps twice over the tunnel's disk (the bottom one, outward −z,
+    // comes first: multiplicity −2 about +z).
+    let o = object(&cylinder_tunnel(25, 10, 15).unwrap());
+    let (mut p, _) = run(&o);
+    p.shells[1].role = Role::Object;
+    assert!(p.summary().volume_exact);
+    let e = p.merged_surface().unwrap_err().to_string();
+    assert!(e.contains("multiplicity -2"), "{e}");
 }

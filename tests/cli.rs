@@ -750,6 +750,12 @@ fn polyhedrize_writes_verified_cells() {
     assert_eq!(v["marching_cubes"]["triangles"], 13952);
     assert_eq!(v["verified"], true);
     assert_eq!(v["zkh"][0]["class"], "Tunnel");
+    // The merged surface: 58 faces, the two caps holed (60 split).
+    assert_eq!(v["mesh"], "merged");
+    assert_eq!(
+        (v["merged_faces"].as_u64(), v["merged_faces_split"].as_u64()),
+        (Some(58), Some(60))
+    );
     let back = chisel::polyhedron::Polyhedron::from_bytes(
         &std::fs::read(&cells).unwrap(),
         "cyl.cells",

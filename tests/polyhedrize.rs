@@ -311,3 +311,157 @@ fn slices_give_nested_polygons() {
         assert_lossless(&p, &o, &format!("headsq slice {z}"));
     }
 }
+
+/// Σ role sign × 6·volume of the 3-D shells (combinatorial units).
+fn signed_volume6(p: &Polyhedron) -> i128 {
+    p.shells
+        .iter()
+        .filter_map(|s| {
+            let h = s.geometry.polytope().filter(|h| !h.is_planar())?;
+            Some(s.role.sign() * h.volume6())
+        })
+        .sum()
+}
+
+/// Checks the merged surface: every face loop and triangle edge paired in
+/// opposite directions, the mesh closed and consistently wound, its exact
+/// volume that of the chain Σ sign·H.
+fn assert_merged_closed(p: &Polyhedron, what: &str) -> chisel::polyhedron::MergedSurface {
+    let m = p.merged_surface().unwrap();
+    assert_eq!(m.volume6(), signed_volume6(p), "{what}: volume");
+    assert!(m.volume6() > 0, "{what}: outward");
+    let mut directed = std::collections::HashMap::new();
+    for t in &m.triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_insert(0i32) += 1;
+        }
+    }
+    for (&(a, b), &c) in &directed {
+        assert_eq!(directed.get(&(b, a)), Some(&c), "{what}: edge {a}–{b}");
+    }
+    let mesh = m.to_mesh(&p.frame).unwrap();
+    let topo = chisel::mesh::Topology::of(&mesh);
+    assert!(
+        topo.closed,
+        "{what}: {} boundary edges",
+        topo.boundary_edges
+    );
+    assert_eq!(topo.boundary_edges, 0, "{what}");
+    assert!(topo.consistently_oriented, "{what}");
+    assert_eq!(topo.collapsed_triangles, 0, "{what}");
+    assert!(m.n_faces() <= m.n_faces_split());
+    m
+}
+
+#[test]
+fn merged_cylinder_surfaces_have_the_face_counts_of_table_8_7() {
+    // Seed Table 8.7: 30/58/78/82 faces with holes, 32/60/80/84 split (the
+    // two caps each have the tunnel as a hole).
+    for (d_o, d_i, holed, split) in [
+        (25, 10, 30, 32),
+        (50, 35, 58, 60),
+        (75, 60, 78, 80),
+        (100, 85, 82, 84),
+    ] {
+        let o = object(&cylinder_tunnel(d_o, d_i, 15).unwrap());
+        let (p, _) = run(&o);
+        let what = format!("cylinder {d_o}/{d_i}");
+        let m = assert_merged_closed(&p, &what);
+        assert_eq!(
+            (m.n_faces(), m.n_faces_split(), m.n_faces_with_holes()),
+            (holed, split, 2),
+            "{what}"
+        );
+        let topo = chisel::mesh::Topology::of(&m.to_mesh(&p.frame).unwrap());
+        assert!(topo.is_manifold(), "{what}");
+        assert_eq!(topo.components.len(), 1, "{what}");
+        assert_eq!(topo.components[0].genus, Some(1), "{what}: one tunnel");
+        assert_eq!(topo.orientation, chisel::mesh::Orientation::Outward);
+    }
+}
+
+#[test]
+fn merged_surface_of_a_cavity_is_two_spheres() {
+    let o = carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
+    let (p, _) = run(&o);
+    assert_eq!(p.shells.len(), 2);
+    let m = assert_merged_closed(&p, "cube with cavity");
+    assert_eq!((m.n_faces(), m.n_faces_with_holes()), (12, 0));
+    // 10³ − 2³ voxels between centres, 48 units per voxel.
+    assert_eq!(m.volume6(), (1000 - 8) * 48);
+    let topo = chisel::mesh::Topology::of(&m.to_mesh(&p.frame).unwrap());
+    assert_eq!(topo.components.len(), 2);
+    assert_eq!(topo.euler, 4);
+    // The cavity's sphere faces inwards.
+    assert!(
+        topo.components
+            .iter()
+            .any(|c| c.orientation == chisel::mesh::Orientation::Inward)
+    );
+}
+
+#[test]
+fn merged_surface_of_the_dented_ellipsoid_is_closed() {
+    let o = object(&ellipsoid_dent(13, 13, 8, 5).unwrap());
+    let (p, _) = run(&o);
+    assert!(p.summary().volume_exact);
+    let m = assert_merged_closed(&p, "dented ellipsoid");
+    println!(
+        "dented ellipsoid: {} shell faces, merged {} ({} split, {} with holes)",
+        p.summary().faces,
+        m.n_faces(),
+        m.n_faces_split(),
+        m.n_faces_with_holes()
+    );
+    // The dent's opening is cut out of the hull faces it reaches.
+    assert!(m.n_faces() < p.summary().faces);
+}
+
+#[test]
+fn merged_surfaces_of_random_carvings_are_closed() {
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut merged = 0;
+    for round in 0..20 {
+        let holes: Vec<bool> = (0..13 * 13 * 13)
+            .map(|_| {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed.is_multiple_of(7)
+            })
+            .collect();
+        let o = carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)]);
+        for (name, (p, _)) in [("recursion", run(&o)), ("balls", run_balls(&o))] {
+            if p.summary().volume_exact {
+                assert_merged_closed(&p, &format!("random carving {round}, {name}"));
+                merged += 1;
+            } else {
+                assert!(p.merged_surface().is_err());
+            }
+        }
+    }
+    println!("{merged} of 40 carvings merged");
+    assert!(merged >= 20, "{merged}");
+}
+
+#[test]
+fn merged_surface_refuses_overlapping_siblings() {
+    // Negative control: a duplicated cavity shell overlaps its twin, so the
+    // chain is not the boundary of the region and the merge is refused.
+    let o = carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
+    let (mut p, _) = run(&o);
+    assert!(p.merged_surface().is_ok());
+    p.shells.push(p.shells[1].clone());
+    assert!(!p.summary().volume_exact);
+    let e = p.merged_surface().unwrap_err().to_string();
+    assert!(e.contains("disjoint"), "{e}");
+    // A corrupted role: the tunnel of the cylinder as an object shell puts
+    // both caps twice over the tunnel's disk (the bottom one, outward −z,
+    // comes first: multiplicity −2 about +z).
+    let o = object(&cylinder_tunnel(25, 10, 15).unwrap());
+    let (mut p, _) = run(&o);
+    p.shells[1].role = Role::Object;
+    assert!(p.summary().volume_exact);
+    let e = p.merged_surface().unwrap_err().to_string();
+    assert!(e.contains("multiplicity -2"), "{e}");
+}

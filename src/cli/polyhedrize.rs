@@ -2,7 +2,9 @@
 //! polyhedral representation of a digital object (seed 003 §4.4–4.5; SPEC
 //! §4.4–4.5) as nested convex shells, written as a `.cells` file (compact
 //! eq. 8.2 encoding) and/or readable JSON, with a triangle mesh of the
-//! shells, a preview coloured by depth, `--verify` (the written cell list is
+//! merged surface (§4.4.1; of the separate shells when siblings overlap,
+//! reported as `"mesh": "shells"` with the reason in `merge_refused`), a
+//! preview coloured by depth, `--verify` (the written cell list is
 //! read back and voxelized against S) and a JSON report. `--slice Z` gives
 //! the 2-D analogue (ch. 9): nested convex polygons for one slice.
 
@@ -44,10 +46,12 @@ pub struct Args {
     /// Cell list as readable JSON (vertices and face cycles per shell).
     #[arg(long)]
     cells_json: Option<PathBuf>,
-    /// The polyhedral shells as a triangle mesh (world units; scalar `depth`).
+    /// The merged surface (§4.4.1) as a triangle mesh (world units; scalar
+    /// `depth`); the separate shells when it is unavailable (overlapping
+    /// siblings), as the report's `mesh` field says.
     #[arg(long)]
     mesh: Option<PathBuf>,
-    /// Preview PNG of the shells coloured by depth.
+    /// Preview PNG of the mesh of `--mesh`, coloured by depth.
     #[arg(long)]
     preview: Option<PathBuf>,
     #[command(flatten)]
@@ -129,12 +133,25 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     } else {
         None
     };
-    let needs_mesh = args.mesh.is_some() || args.preview.is_some();
-    let mesh = if needs_mesh {
-        Some(poly.to_mesh()?)
-    } else {
-        None
+    let t = Instant::now();
+    let (merged, merge_refused) = match poly.merged_surface() {
+        Ok(m) if m.triangles.is_empty() => (None, Some("no 3-D shell".to_string())),
+        Ok(m) => (Some(m), None),
+        Err(e) => (None, Some(e.to_string())),
     };
+    stage("merge", t);
+    let needs_mesh = args.mesh.is_some() || args.preview.is_some();
+    let mesh = match (needs_mesh, &merged) {
+        (false, _) => None,
+        (true, Some(m)) => Some(m.to_mesh(&poly.frame)?),
+        (true, None) => Some(poly.to_mesh()?),
+    };
+    let mesh_kind = if merged.is_some() { "merged" } else { "shells" };
+    if needs_mesh && let Some(why) = &merge_refused {
+        global.note(format!(
+            "mesh: the separate shells (no merged surface: {why})"
+        ));
+    }
     if let (Some(path), Some(mesh)) = (&args.mesh, &mesh) {
         crate::io::write_mesh(path, mesh)?;
     }
@@ -153,10 +170,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             height: 384,
             wireframe: true,
             scalars: Some("depth".into()),
-            title: Some(format!(
-                "chisel polyhedrize: {} shells, {} faces",
-                summary.shells, summary.faces
-            )),
+            title: Some(match &merged {
+                Some(m) => format!(
+                    "chisel polyhedrize: merged surface, {} faces ({} split)",
+                    m.n_faces(),
+                    m.n_faces_split()
+                ),
+                None => format!(
+                    "chisel polyhedrize: {} shells, {} faces",
+                    summary.shells, summary.faces
+                ),
+            }),
             facing: args.view.facing()?,
             ..Default::default()
         };
@@ -179,6 +203,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "integers_eq_8_1": marching_cubes_integers(mc_triangles),
         },
         "zkh": zkh,
+        "mesh": mesh_kind,
+        "merged_faces": merged.as_ref().map(|m| m.n_faces()),
+        "merged_faces_split": merged.as_ref().map(|m| m.n_faces_split()),
+        "merged_faces_with_holes": merged.as_ref().map(|m| m.n_faces_with_holes()),
+        "merged_triangles": merged.as_ref().map(|m| m.triangles.len()),
+        "merge_refused": merge_refused,
         "verified": verified,
         "outputs": {
             "cells": args.output,

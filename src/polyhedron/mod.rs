@@ -7,13 +7,15 @@
 //!   swapped roles of §4.4 as a tree of convex shells, cavities as reversed
 //!   shells, genus > 0 components as maximal digital balls ([`balls`],
 //!   §4.5.4), exact voxelization, storage (eq. 8.2) and `.cells` files.
-//! - [`press`]: the face selection for pressing-in (Def. PR (i)–(iii)), the
-//!   input of the surface merge of §4.4.1, which is not built yet.
+//! - [`press`]: the face selection for pressing-in (Def. PR (i)–(iii)).
+//! - [`surface`]: the single merged surface of §4.4.1 ("Zusammenfügen"),
+//!   by exact boundary evaluation of the shells' face chain.
 
 pub mod balls;
 mod cellfile;
 pub mod polyhedrize;
 pub mod press;
+pub mod surface;
 pub mod zkh;
 
 pub use polyhedrize::{
@@ -21,4 +23,5 @@ pub use polyhedrize::{
     ZkhReport, polyhedrize,
 };
 pub use press::faces_to_press;
+pub use surface::{MergedFace, MergedSurface};
 pub use zkh::{Zkh, ZkhClass, background_components};

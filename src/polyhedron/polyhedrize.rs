@@ -28,13 +28,14 @@
 //! are coplanar, collinear or a single point give flat, segment or point
 //! shells: the stored labels of voxels lying on the surface (§3.4, §7.2).
 //!
-//! **Not done.** The seed merges each child into its parent's surface (the
-//! marked faces M of Def. PR replaced by the child's faces, one 2-manifold
-//! overall). Here shells stay separate closed convex 2-manifolds, each
-//! consistently oriented (background shells reversed), and a child may
-//! share face area with its parent; the surface merge, Theorem KE's
-//! coplanar merges and the ray-parity point-in-polyhedron test of §4.4.3
-//! (unneeded for nested convex shells) are not built yet.
+//! **Surfaces.** Every shell is a closed convex 2-manifold, consistently
+//! oriented (background shells reversed); a child may share face area with
+//! its parent. When sibling shells have disjoint interiors
+//! ([`PolyhedronSummary::volume_exact`]) [`super::surface`] merges them into
+//! the single surface of §4.4.1 (coplanar pieces cancelled, faces with
+//! holes). Not built: merging when siblings overlap, Theorem KE's convex
+//! merges of coplanar faces, and the ray-parity point-in-polyhedron test of
+//! §4.4.3 (voxelization here uses the nested convex tests).
 
 use std::collections::VecDeque;
 

@@ -468,8 +468,9 @@ pub struct PolyhedronSummary {
     /// by construction).
     pub signed_volume_voxels: f64,
     /// Whether every pair of sibling polyhedra was proven interior-disjoint
-    /// (a face plane of one with all vertices of the other on or beyond
-    /// it), so that [`PolyhedronSummary::signed_volume_voxels`] is exact.
+    /// (a separating plane: a face plane of one, or a plane spanned by an
+    /// edge direction of each — the separating-axis theorem, complete for
+    /// convex polyhedra), so that [`PolyhedronSummary::signed_volume_voxels`] is exact.
     pub volume_exact: bool,
     /// Σ shell areas in voxel faces (a child sharing face area with its
     /// parent counts it twice).
@@ -536,7 +537,7 @@ impl Polyhedron {
     }
 
     /// Whether all sibling polyhedra (dimension 3, same parent) have
-    /// disjoint interiors, proven by separating face planes (exact).
+    /// disjoint interiors (separating-axis theorem, exact).
     fn siblings_disjoint(&self) -> bool {
         let mut by_parent: std::collections::BTreeMap<u32, Vec<&ConvexHull>> = Default::default();
         for s in &self.shells {
@@ -551,13 +552,37 @@ impl Polyhedron {
                 .iter()
                 .any(|f| b.vertices().iter().all(|&v| f.plane.side(v) >= 0))
         };
+        // The remaining candidate planes of the separating-axis theorem: one
+        // edge direction of each (complete for convex polyhedra).
+        let edge_separated = |a: &ConvexHull, b: &ConvexHull| {
+            let (ea, eb) = (edge_directions(a), edge_directions(b));
+            let project = |h: &ConvexHull, n: [i128; 3]| {
+                let d = |v: [i64; 3]| (0..3).map(|k| n[k] * i128::from(v[k])).sum::<i128>();
+                h.vertices().iter().fold((i128::MAX, i128::MIN), |(lo, hi), &v| {
+                    (lo.min(d(v)), hi.max(d(v)))
+                })
+            };
+            ea.iter().any(|&u| {
+                eb.iter().any(|&w| {
+                    let n = cross(u, w);
+                    if n == [0, 0, 0] {
+                        return false;
+                    }
+                    let (pa, pb) = (project(a, n), project(b, n));
+                    pa.1 <= pb.0 || pb.1 <= pa.0
+                })
+            })
+        };
         by_parent.values().all(|hulls| {
             let boxes: Vec<_> = hulls.iter().map(|h| h.bbox()).collect();
             (0..hulls.len()).all(|i| {
                 (i + 1..hulls.len()).all(|j| {
                     let apart = (0..3)
                         .any(|a| boxes[i].1[a] <= boxes[j].0[a] || boxes[j].1[a] <= boxes[i].0[a]);
-                    apart || separated(hulls[i], hulls[j]) || separated(hulls[j], hulls[i])
+                    apart
+                        || separated(hulls[i], hulls[j])
+                        || separated(hulls[j], hulls[i])
+                        || edge_separated(hulls[i], hulls[j])
                 })
             })
         })
@@ -655,6 +680,21 @@ impl Polyhedron {
         });
         Ok(mesh)
     }
+}
+
+/// The distinct edge directions of a hull (each undirected edge once).
+fn edge_directions(h: &ConvexHull) -> Vec<[i64; 3]> {
+    let mut out = Vec::new();
+    for f in h.faces() {
+        let k = f.vertices.len();
+        for i in 0..k {
+            let (a, b) = (f.vertices[i], f.vertices[(i + 1) % k]);
+            if a < b {
+                out.push(sub(h.vertices()[b as usize], h.vertices()[a as usize]));
+            }
+        }
+    }
+    out
 }
 
 /// `parent` minus the voxels held by `child` (child box within the parent's).

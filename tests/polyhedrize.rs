@@ -255,6 +255,20 @@ fn real_ct_bone_is_lossless() {
         );
         assert_lossless(&p, &o, &format!("headsq bone, {name}"));
     }
+    // Overlapping siblings merged: exact volume and one closed surface.
+    let (p, _) = run(&o);
+    assert!(p.merges > 0 && p.summary().volume_exact);
+    let m = assert_merged_closed(&p, "headsq bone");
+    eprintln!("headsq bone merged: {} faces ({} split)", m.n_faces(), m.n_faces_split());
+    // Kept apart (no merging) they overlap and the merge is refused.
+    let options = PolyhedrizeOptions {
+        disjoint_siblings: false,
+        ..Default::default()
+    };
+    let (apart, _) = polyhedrize(&o, options, Backend::Cpu, &|_| {}).unwrap();
+    assert!(!apart.summary().volume_exact);
+    assert!(apart.merged_surface().is_err());
+    assert_lossless(&apart, &o, "headsq bone, overlapping siblings");
 }
 
 #[test]
@@ -268,6 +282,7 @@ fn frog_labels_are_lossless() {
         let (p, _) = run(&o);
         eprintln!("frog label {label}: {:?}", p.summary());
         assert_lossless(&p, &o, &format!("frog label {label}"));
+        assert_merged_closed(&p, &format!("frog label {label}"));
     }
 }
 

@@ -33,6 +33,10 @@ pub struct Args {
     /// instead of recursing into them like all others.
     #[arg(long)]
     balls: bool,
+    /// Keep sibling shells whose interiors overlap apart instead of merging
+    /// them into the hull of their union (then no merged surface).
+    #[arg(long)]
+    overlapping_siblings: bool,
     /// Only slice Z of the volume: the 2-D analogue (seed 003 ch. 9),
     /// polygons for the pixel set of one CT slice or label image.
     #[arg(long)]
@@ -95,6 +99,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         candidates: args.hull.kind(),
         hull: args.hull.options(),
         balls: args.balls,
+        disjoint_siblings: !args.overlapping_siblings,
     };
     let t = Instant::now();
     let bar = if global.quiet {
@@ -198,6 +203,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "adapter": gpu.as_ref().map(|g| g.describe()),
         "options": options,
         "polyhedron": summary,
+        "sibling_merges": poly.merges,
         "marching_cubes": {
             "triangles": mc_triangles,
             "integers_eq_8_1": marching_cubes_integers(mc_triangles),

@@ -258,7 +258,9 @@ impl ConvexHull {
                 return Err(bad(format!("face {f} is degenerate")));
             }
             if n.iter().any(|c| c.abs() >= 1 << 36) {
-                return Err(bad(format!("face {f} is not a convex polygon of the coordinate range")));
+                return Err(bad(format!(
+                    "face {f} is not a convex polygon of the coordinate range"
+                )));
             }
             let normal = primitive(n.map(|c| c as i64));
             let plane = HalfSpace {

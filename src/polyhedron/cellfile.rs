@@ -227,7 +227,11 @@ impl Polyhedron {
                 data.len() - r.pos
             )));
         }
-        Ok(Polyhedron { shells, frame })
+        Ok(Polyhedron {
+            shells,
+            frame,
+            merges: 0,
+        })
     }
 
     /// The binary `.cells` bytes (module docs).

@@ -215,6 +215,11 @@ pub struct PolyhedrizeOptions {
     pub candidates: CandidateKind,
     /// Hull options (coplanar policy, order) of every shell.
     pub hull: HullOptions,
+    /// Merge sibling polyhedra whose interiors overlap into the hull of
+    /// their union (default `true`), so that sibling shells are
+    /// interior-disjoint: the signed volume is then exact and the merged
+    /// surface of [`super::surface`] exists (maximal balls are not merged).
+    pub disjoint_siblings: bool,
     /// Decompose genus > 0 components into maximal digital balls (§4.5.4).
     /// Default `false`: they recurse like every other component, which
     /// stores fewer integers on every object measured (torus 5,004 vs
@@ -228,6 +233,7 @@ impl Default for PolyhedrizeOptions {
         PolyhedrizeOptions {
             candidates: CandidateKind::Local26,
             hull: HullOptions::default(),
+            disjoint_siblings: true,
             balls: false,
         }
     }
@@ -241,6 +247,8 @@ pub struct Polyhedron {
     pub shells: Vec<Shell>,
     /// World placement of the source volume.
     pub frame: Frame,
+    /// Sibling merges made during the construction (0 when decoded).
+    pub merges: usize,
 }
 
 /// One ZKH of the root with what became of it.
@@ -293,24 +301,23 @@ pub fn polyhedrize(
             Vec::new()
         }
     };
+    let mut merges = 0usize;
+    let mut children = Vec::new();
     for z in zkhs {
-        let before = shells.len();
-        let genus = add_component(
-            &mut shells,
-            &mut queue,
-            0,
-            &z.object,
-            ShellKind::Zkh(z.class),
-            options,
-        )?;
+        let (made, genus) = component_children(z.object, ShellKind::Zkh(z.class), 1, options)?;
         zkh_reports.push(ZkhReport {
             class: z.class,
             voxels: z.voxels,
             genus,
-            shells: shells.len() - before,
+            shells: made.len(),
         });
-        progress(shells.len());
+        children.extend(made);
     }
+    if options.disjoint_siblings {
+        merges += merge_overlapping(&mut children, options, object.frame())?;
+    }
+    push_children(&mut shells, &mut queue, 0, children);
+    progress(shells.len());
     // Deeper levels: components of the other role inside each shell.
     while let Some(i) = queue.pop_front() {
         let shell = &shells[i as usize];
@@ -333,58 +340,51 @@ pub fn polyhedrize(
                 members[l as usize - 1].push(k);
             }
         }
+        let depth = shells[i as usize].depth + 1;
+        let mut children = Vec::new();
         for voxels in members {
-            let set = component_object(&bbox, &voxels, object.frame())?;
-            add_component(
-                &mut shells,
-                &mut queue,
-                i,
-                &set,
-                ShellKind::Component,
-                options,
-            )?;
+            let at: Vec<[i64; 3]> = voxels.iter().map(|&k| voxel_at(&bbox, k)).collect();
+            let set = object_of(&at, object.frame())?;
+            children.extend(component_children(set, ShellKind::Component, depth, options)?.0);
         }
+        if options.disjoint_siblings {
+            merges += merge_overlapping(&mut children, options, object.frame())?;
+        }
+        push_children(&mut shells, &mut queue, i, children);
         progress(shells.len());
     }
     Ok((
         Polyhedron {
             shells,
             frame: object.frame(),
+            merges,
         },
         zkh_reports,
     ))
 }
 
-/// Adds the shell(s) of component `set` (the other role of `parent`):
-/// its hull, or its maximal balls when its genus is > 0 and balls are on.
-/// Returns the genus when it was needed (balls on, or a ZKH of the root).
-fn add_component(
-    shells: &mut Vec<Shell>,
-    queue: &mut VecDeque<u32>,
-    parent: u32,
-    set: &DigitalObject,
+/// A child shell before it joins the tree.
+struct Child {
+    /// Its voxel set; `None` for a maximal ball (never merged).
+    set: Option<DigitalObject>,
     kind: ShellKind,
+    geometry: ShellGeometry,
+    voxels: u64,
+}
+
+/// The child shell(s) of component `set` at `depth`: its hull, or its
+/// maximal balls when its genus is > 0 and balls are on. Also returns the
+/// genus when it was needed (balls on, or a ZKH of the root).
+fn component_children(
+    set: DigitalObject,
+    kind: ShellKind,
+    depth: u32,
     options: PolyhedrizeOptions,
-) -> crate::Result<Option<i64>> {
-    let (role, depth) = {
-        let p = &shells[parent as usize];
-        (p.role.swapped(), p.depth + 1)
-    };
+) -> crate::Result<(Vec<Child>, Option<i64>)> {
     let genus = if options.balls || depth == 1 {
         Some(set.topology()?.genus)
     } else {
         None
-    };
-    let mut push = |geometry, kind, voxels| {
-        queue.push_back(shells.len() as u32);
-        shells.push(Shell {
-            geometry,
-            parent: Some(parent),
-            depth,
-            role,
-            kind,
-            voxels,
-        });
     };
     if options.balls && genus.is_some_and(|g| g > 0) {
         let (lo, hi) = set.voxel_bbox();
@@ -393,32 +393,191 @@ fn add_component(
         let mask: Vec<bool> = (0..dims.iter().product())
             .map(|k| set.contains(voxel_at(&bbox, k)))
             .collect();
+        let mut out = Vec::new();
         for ball in maximal_balls(dims, &mask) {
             let centres: Vec<[i64; 3]> = ball
                 .voxels
                 .iter()
                 .map(|&k| crate::voxel::voxel_centre(voxel_at(&bbox, k)))
                 .collect();
-            let geometry = ShellGeometry::of_points(&centres, options.hull)?;
-            push(geometry, ShellKind::Ball(ball.r2), ball.voxels.len() as u64);
+            out.push(Child {
+                set: None,
+                kind: ShellKind::Ball(ball.r2),
+                geometry: ShellGeometry::of_points(&centres, options.hull)?,
+                voxels: ball.voxels.len() as u64,
+            });
         }
+        Ok((out, genus))
     } else {
         let geometry = ShellGeometry::of_points(&set.candidates(options.candidates), options.hull)?;
-        push(geometry, kind, set.n_voxels());
+        let voxels = set.n_voxels();
+        Ok((
+            vec![Child {
+                set: Some(set),
+                kind,
+                geometry,
+                voxels,
+            }],
+            genus,
+        ))
     }
-    Ok(genus)
 }
 
-/// The voxels (local indices of `bbox`) as an object of their own box.
-fn component_object(
-    bbox: &VoxelBox,
-    voxels: &[usize],
+/// Merges sibling polyhedra whose interiors overlap into the hull of their
+/// union until all are pairwise interior-disjoint (balls stay apart).
+/// Lossless and terminating as any child: the union hull still lies in the
+/// parent and misses its vertices. Returns the number of merges.
+fn merge_overlapping(
+    children: &mut Vec<Child>,
+    options: PolyhedrizeOptions,
     frame: Frame,
-) -> crate::Result<DigitalObject> {
-    let at: Vec<[i64; 3]> = voxels.iter().map(|&k| voxel_at(bbox, k)).collect();
+) -> crate::Result<usize> {
+    let solid = |c: &Child| c.set.is_some() && c.geometry.dimension() == 3;
+    let mut merges = 0;
+    // Each child in turn is made disjoint from all others, rescanning after
+    // every merge into it; a child that grows later rescans all, so at the
+    // end every pair is disjoint.
+    let mut i = 0;
+    while i < children.len() {
+        let mut j = 0;
+        while j < children.len() {
+            let overlap = j != i
+                && solid(&children[i])
+                && solid(&children[j])
+                && match (
+                    children[i].geometry.polytope(),
+                    children[j].geometry.polytope(),
+                ) {
+                    (Some(a), Some(b)) => !interiors_disjoint(a, b),
+                    _ => false,
+                };
+            if !overlap {
+                j += 1;
+                continue;
+            }
+            let b = children.remove(j);
+            if j < i {
+                i -= 1;
+            }
+            let a = &children[i];
+            let mut voxels: Vec<[i64; 3]> = Vec::with_capacity((a.voxels + b.voxels) as usize);
+            for set in [&a.set, &b.set].into_iter().flatten() {
+                voxels.extend(set.voxels());
+            }
+            let set = object_of(&voxels, frame)?;
+            let kind = if a.kind == b.kind {
+                a.kind
+            } else {
+                ShellKind::Component
+            };
+            children[i] = Child {
+                geometry: ShellGeometry::of_points(
+                    &set.candidates(options.candidates),
+                    options.hull,
+                )?,
+                voxels: set.n_voxels(),
+                kind,
+                set: Some(set),
+            };
+            merges += 1;
+            j = 0;
+        }
+        i += 1;
+    }
+    Ok(merges)
+}
+
+/// Appends `children` under `parent` and queues them.
+fn push_children(
+    shells: &mut Vec<Shell>,
+    queue: &mut VecDeque<u32>,
+    parent: u32,
+    children: Vec<Child>,
+) {
+    let (role, depth) = {
+        let p = &shells[parent as usize];
+        (p.role.swapped(), p.depth + 1)
+    };
+    for c in children {
+        queue.push_back(shells.len() as u32);
+        shells.push(Shell {
+            geometry: c.geometry,
+            parent: Some(parent),
+            depth,
+            role,
+            kind: c.kind,
+            voxels: c.voxels,
+        });
+    }
+}
+
+/// Whether two convex polyhedra have disjoint interiors, exactly: a
+/// separating plane exists among the face planes of either and the planes
+/// spanned by an edge direction of each (separating-axis theorem).
+fn interiors_disjoint(a: &ConvexHull, b: &ConvexHull) -> bool {
+    let (ba, bb) = (a.bbox(), b.bbox());
+    if (0..3).any(|k| ba.1[k] <= bb.0[k] || bb.1[k] <= ba.0[k]) {
+        return true;
+    }
+    let face_separates = |a: &ConvexHull, b: &ConvexHull| {
+        a.faces()
+            .iter()
+            .any(|f| b.vertices().iter().all(|&v| f.plane.side(v) >= 0))
+    };
+    if face_separates(a, b) || face_separates(b, a) {
+        return true;
+    }
+    // Quick certificates of overlap: a vertex or the vertex centroid of one
+    // strictly inside the other (all sides < 0; the centroid scaled by n).
+    let strictly_inside = |h: &ConvexHull, p: [i64; 3], scale: i64| {
+        h.faces().iter().all(|f| {
+            let s = (0..3).map(|k| f.plane.normal[k] * p[k]).sum::<i64>() - f.plane.offset * scale;
+            s < 0
+        })
+    };
+    let centroid_inside = |g: &ConvexHull, h: &ConvexHull| {
+        let n = g.vertices().len() as i64;
+        let sum = g
+            .vertices()
+            .iter()
+            .fold([0i64; 3], |acc, v| std::array::from_fn(|k| acc[k] + v[k]));
+        strictly_inside(h, sum, n)
+    };
+    if centroid_inside(a, b)
+        || centroid_inside(b, a)
+        || a.vertices().iter().any(|&v| strictly_inside(b, v, 1))
+        || b.vertices().iter().any(|&v| strictly_inside(a, v, 1))
+    {
+        return false;
+    }
+    // Edge–edge planes. |edge| ≤ 2¹⁷ per component, so |n| ≤ 2³⁵ and every
+    // projection stays below 3·2³⁵·2¹⁶ < 2⁵³: exact in i64.
+    let project = |h: &ConvexHull, n: [i64; 3]| {
+        h.vertices()
+            .iter()
+            .fold((i64::MAX, i64::MIN), |(lo, hi), v| {
+                let d = n[0] * v[0] + n[1] * v[1] + n[2] * v[2];
+                (lo.min(d), hi.max(d))
+            })
+    };
+    let eb = edge_directions(b);
+    edge_directions(a).iter().any(|&u| {
+        eb.iter().any(|&w| {
+            let n = cross(u, w).map(|c| c as i64);
+            if n == [0, 0, 0] {
+                return false;
+            }
+            let (pa, pb) = (project(a, n), project(b, n));
+            pa.1 <= pb.0 || pb.1 <= pa.0
+        })
+    })
+}
+
+/// The voxels as an object of their own box.
+fn object_of(voxels: &[[i64; 3]], frame: Frame) -> crate::Result<DigitalObject> {
     let mut lo = [i64::MAX; 3];
     let mut hi = [i64::MIN; 3];
-    for v in &at {
+    for v in voxels {
         for a in 0..3 {
             lo[a] = lo[a].min(v[a]);
             hi[a] = hi[a].max(v[a]);
@@ -426,10 +585,10 @@ fn component_object(
     }
     let sub = VoxelBox {
         origin: lo,
-        dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1) as usize),
+        dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize),
     };
     let mut mask = vec![false; sub.n_voxels()?];
-    for v in at {
+    for &v in voxels {
         if let Some(i) = try_local_index(&sub, v) {
             mask[i] = true;
         }
@@ -547,44 +706,9 @@ impl Polyhedron {
                 by_parent.entry(p).or_default().push(h);
             }
         }
-        let separated = |a: &ConvexHull, b: &ConvexHull| {
-            a.faces()
-                .iter()
-                .any(|f| b.vertices().iter().all(|&v| f.plane.side(v) >= 0))
-        };
-        // The remaining candidate planes of the separating-axis theorem: one
-        // edge direction of each (complete for convex polyhedra).
-        let edge_separated = |a: &ConvexHull, b: &ConvexHull| {
-            let (ea, eb) = (edge_directions(a), edge_directions(b));
-            let project = |h: &ConvexHull, n: [i128; 3]| {
-                let d = |v: [i64; 3]| (0..3).map(|k| n[k] * i128::from(v[k])).sum::<i128>();
-                h.vertices().iter().fold((i128::MAX, i128::MIN), |(lo, hi), &v| {
-                    (lo.min(d(v)), hi.max(d(v)))
-                })
-            };
-            ea.iter().any(|&u| {
-                eb.iter().any(|&w| {
-                    let n = cross(u, w);
-                    if n == [0, 0, 0] {
-                        return false;
-                    }
-                    let (pa, pb) = (project(a, n), project(b, n));
-                    pa.1 <= pb.0 || pb.1 <= pa.0
-                })
-            })
-        };
         by_parent.values().all(|hulls| {
-            let boxes: Vec<_> = hulls.iter().map(|h| h.bbox()).collect();
-            (0..hulls.len()).all(|i| {
-                (i + 1..hulls.len()).all(|j| {
-                    let apart = (0..3)
-                        .any(|a| boxes[i].1[a] <= boxes[j].0[a] || boxes[j].1[a] <= boxes[i].0[a]);
-                    apart
-                        || separated(hulls[i], hulls[j])
-                        || separated(hulls[j], hulls[i])
-                        || edge_separated(hulls[i], hulls[j])
-                })
-            })
+            (0..hulls.len())
+                .all(|i| (i + 1..hulls.len()).all(|j| interiors_disjoint(hulls[i], hulls[j])))
         })
     }
 

@@ -210,7 +210,7 @@ impl Forest {
         let (mut order, group_starts) =
             order_by_group_and_layer(cells, grid.layer, groups, n_groups);
         let runs = layer_runs(&order, &group_starts, cells, grid.layer);
-        let n_parts = (order.len() / PART_TRIANGLES).clamp(1, 2 * rayon::current_num_threads());
+        let n_parts = (order.len() / PART_TRIANGLES).clamp(1, rayon::current_num_threads());
         let target = order.len().div_ceil(n_parts).max(1);
         // Contiguous parts of whole runs, each with its slice of `order`.
         let mut jobs: Vec<(&mut [u32], &[LayerRun])> = Vec::with_capacity(n_parts);
@@ -226,7 +226,7 @@ impl Forest {
         let parts: Vec<Part> = jobs
             .into_par_iter()
             .map(|(slice, runs)| {
-                let mut part = Part::new(n_vertices);
+                let mut part = Part::new(n_vertices, slice.len());
                 for r in runs {
                     let base = runs[0].start;
                     part.layer(
@@ -262,7 +262,7 @@ impl Forest {
         self.leaf_vertices
             .reserve_exact(total(|p| p.leaf_vertices.len()));
         self.corners.reserve_exact(total(|p| p.corners.len()));
-        for p in parts {
+        for mut p in parts {
             let rows = self.rows.len() as u32;
             let cells = self.cells.len() as u32;
             let vertices = self.leaf_vertices.len() as u32;
@@ -288,8 +288,11 @@ impl Forest {
                 ..*c
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
-            self.corners
-                .extend(p.corners.iter().map(|c| c.map(|v| v + vertices)));
+            p.corners
+                .as_flattened_mut()
+                .iter_mut()
+                .for_each(|v| *v += vertices);
+            self.corners.extend_from_slice(&p.corners);
         }
         let mut first = 0usize;
         for (i, r) in runs.iter().enumerate() {
@@ -408,7 +411,8 @@ pub fn sorted_overlap<T>(
     start..end.max(start)
 }
 
-/// Triangles per part of the parallel build (at most two parts per thread).
+/// Least triangles per part of the parallel build (at most one part per
+/// thread: each part zeroes a table over the mesh's vertices).
 const PART_TRIANGLES: usize = 1 << 13;
 
 /// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
@@ -447,13 +451,14 @@ struct Part {
 }
 
 impl Part {
-    fn new(n_vertices: usize) -> Part {
+    /// An empty part for `n_triangles` triangles of a mesh of `n_vertices`.
+    fn new(n_vertices: usize, n_triangles: usize) -> Part {
         Part {
             layers: Vec::new(),
             rows: Vec::new(),
             cells: Vec::new(),
-            leaf_vertices: Vec::new(),
-            corners: Vec::new(),
+            leaf_vertices: Vec::with_capacity(n_triangles),
+            corners: Vec::with_capacity(n_triangles),
             seen: vec![[0; 2]; n_vertices],
             buckets: Vec::new(),
             sorted: Vec::new(),
@@ -568,7 +573,7 @@ impl Part {
                 }
             }
         }
-        self.leaf_vertices[start..].sort_unstable();
+        sort_nearly_sorted(&mut self.leaf_vertices[start..]);
         let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
             self.seen[v as usize][1] = (start + i) as u32;
@@ -593,6 +598,25 @@ impl Part {
             },
             next: u32::MAX,
         }
+    }
+}
+
+/// Sorts ascending, by insertion when short: a leaf's vertices arrive
+/// nearly in order (its triangles are in cell order and marching-cubes
+/// vertex ids follow the grid).
+fn sort_nearly_sorted(v: &mut [u32]) {
+    if v.len() > 128 {
+        v.sort_unstable();
+        return;
+    }
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > x {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
     }
 }
 

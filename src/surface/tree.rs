@@ -288,10 +288,12 @@ impl Forest {
                 ..*c
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
-            p.corners
-                .as_flattened_mut()
-                .iter_mut()
-                .for_each(|v| *v += vertices);
+            if vertices > 0 {
+                p.corners
+                    .as_flattened_mut()
+                    .iter_mut()
+                    .for_each(|v| *v += vertices);
+            }
             self.corners.extend_from_slice(&p.corners);
         }
         let mut first = 0usize;
@@ -475,7 +477,7 @@ impl Part {
         run: &LayerRun,
         tris: &mut [u32],
     ) {
-        self.sort_by_cell(cells, tris);
+        self.sort_by_cell(cells, tris, run.z as usize * grid.layer, grid.layer);
         let row_start = self.rows.len() as u32;
         let mut lbox = Aabb::EMPTY;
         let mut i = 0;
@@ -524,18 +526,25 @@ impl Part {
         });
     }
 
-    /// Stable sort of `tris` by `cells[t]`: a counting sort over the keys'
-    /// range when it is small against the count, else a sort by (key, id).
-    fn sort_by_cell(&mut self, cells: &[u32], tris: &mut [u32]) {
+    /// Stable sort of `tris` by `cells[t]`, keys in `first..first + len`
+    /// (the run's layer): a counting sort over the layer when the run is
+    /// long against it, else over the keys' range when that is short, else
+    /// a sort by (key, id).
+    fn sort_by_cell(&mut self, cells: &[u32], tris: &mut [u32], first: usize, len: usize) {
         let key = |t: u32| cells[t as usize];
-        let (lo, hi) = tris.iter().fold((u32::MAX, 0), |(lo, hi), &t| {
-            (lo.min(key(t)), hi.max(key(t)))
-        });
-        if lo >= hi {
-            return;
-        }
-        let range = (hi - lo) as usize + 1;
-        if range > 2 * tris.len() + 64 {
+        let short = |range: usize| range <= 2 * tris.len() + 64;
+        let (lo, range) = if short(len) {
+            (first as u32, len)
+        } else {
+            let (lo, hi) = tris.iter().fold((u32::MAX, 0), |(lo, hi), &t| {
+                (lo.min(key(t)), hi.max(key(t)))
+            });
+            if lo >= hi {
+                return;
+            }
+            (lo, (hi - lo) as usize + 1)
+        };
+        if !short(range) {
             tris.sort_unstable_by_key(|&t| u64::from(key(t)) << 32 | u64::from(t));
             return;
         }

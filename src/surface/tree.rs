@@ -204,8 +204,8 @@ impl Forest {
         let [cx, cy, _] = cell_dims.map(|d| d.max(1));
         let grid = KeyGrid {
             cx,
-            layer: cx * cy,
             cy,
+            layer: cx * cy,
         };
         let (mut order, group_starts) =
             order_by_group_and_layer(cells, grid.layer, groups, n_groups);
@@ -227,8 +227,8 @@ impl Forest {
             .into_par_iter()
             .map(|(slice, runs)| {
                 let mut part = Part::new(n_vertices, slice.len());
+                let base = runs[0].start;
                 for r in runs {
-                    let base = runs[0].start;
                     part.layer(
                         mesh,
                         cells,

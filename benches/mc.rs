@@ -5,13 +5,17 @@
 //! a memory-bound pass would hit. On a software adapter (lavapipe, ~1 M
 //! voxels/s) the GPU runs only the CT head.
 //!
+//! `forest/*` times [`Forest::build`] alone (the tree that
+//! `marching_cubes` builds beside the group figures).
+//!
 //! `CHISEL_BENCH_QUICK=1`: few samples, phantoms of 64³/128³ (CI smoke run).
 
 use std::time::{Duration, Instant};
 
 use chisel::Backend;
 use chisel::gpu::Gpu;
-use chisel::surface::{IsoSpec, McOptions, marching_cubes};
+use chisel::surface::tree::LEAF_BLOCK;
+use chisel::surface::{Forest, IsoSpec, McOptions, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 
@@ -103,6 +107,16 @@ fn main() {
         group.bench_function(format!("cpu/{name}"), |b| {
             b.iter(|| marching_cubes(vol, iso, &opts, Backend::Cpu))
         });
+        if let Ok(s) = marching_cubes(vol, iso, &opts, Backend::Cpu) {
+            let (keys, dims) = leaf_keys(&s);
+            let n_groups = s.groups.len();
+            let build = || Forest::build(&s.mesh, &keys, dims, &s.triangle_groups, n_groups);
+            if build() == s.forest {
+                group.bench_function(format!("forest/{name}"), |b| b.iter(build));
+            } else {
+                eprintln!("mc/{name}: forest skipped (leaf keys differ from marching_cubes')");
+            }
+        }
         if software && voxels > 1 << 22 {
             eprintln!("mc/{name}: gpu skipped on a software adapter");
             continue;
@@ -124,6 +138,24 @@ fn main() {
     }
     group.finish();
     c.final_summary();
+}
+
+/// The forest's leaf keys of a surface (blocks of [`LEAF_BLOCK`]³ cells,
+/// as `marching_cubes` makes them) and the block grid.
+fn leaf_keys(s: &Surface) -> (Vec<u32>, [usize; 3]) {
+    let cd = s.grid.dims.map(|d| d.saturating_sub(1).max(1));
+    let bd = cd.map(|c| c.div_ceil(LEAF_BLOCK));
+    let keys = s
+        .triangle_cells
+        .iter()
+        .map(|&c| {
+            let c = c as usize;
+            let (x, y, z) = (c % cd[0], (c / cd[0]) % cd[1], c / (cd[0] * cd[1]));
+            let b = LEAF_BLOCK;
+            (x / b + bd[0] * (y / b + bd[1] * (z / b))) as u32
+        })
+        .collect();
+    (keys, bd)
 }
 
 /// Median wall time of a few runs, for the ratio line printed next to criterion's figures.

@@ -12,7 +12,7 @@
 //! blocks of [`LEAF_BLOCK`]³ cells; any other mesh (a file, a triangulated
 //! knife) gets a virtual grid over its bounding box.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
 use super::cpu::UnionFind;
@@ -185,6 +185,15 @@ pub struct Forest {
 impl Forest {
     /// Builds the forest from per-triangle cell keys (`x + cx·(y + cy·z)`)
     /// and group ids (`0..n_groups`).
+    ///
+    /// Triangles are ordered by (group, cell, id): one stable counting sort
+    /// by group, which keeps each group's triangles in cell-layer order when
+    /// the layers never decrease along the ids (marching cubes emits
+    /// triangles in cell order; otherwise a counting sort by layer comes
+    /// first), then every (group, layer) run is sorted by cell on its own.
+    /// The runs, with their rows, leaves, boxes and leaf vertex tables, are
+    /// built in parallel in contiguous parts and concatenated in order, so
+    /// the forest does not depend on the number of threads.
     pub fn build(
         mesh: &TriMesh,
         cells: &[u32],
@@ -192,147 +201,116 @@ impl Forest {
         groups: &[u32],
         n_groups: usize,
     ) -> Forest {
-        let order = order_by_group_and_cell(cells, groups, n_groups);
-        let p = &mesh.positions;
-        let tri_box = |t: u32| {
-            let [a, b, c] = mesh.triangles[t as usize];
-            Aabb::triangle(p[a as usize], p[b as usize], p[c as usize])
+        let [cx, cy, _] = cell_dims.map(|d| d.max(1));
+        let grid = KeyGrid {
+            cx,
+            cy,
+            layer: cx * cy,
         };
-        let [cx, cy, _] = cell_dims;
-        let decode = |c: u32| {
-            let c = c as usize;
-            (
-                (c % cx) as u32,
-                ((c / cx) % cy) as u32,
-                (c / (cx * cy)) as u32,
-            )
-        };
+        let (mut order, group_starts) =
+            order_by_group_and_layer(cells, grid.layer, groups, n_groups);
+        let runs = layer_runs(&order, &group_starts, cells, grid.layer);
+        let n_parts = (order.len() / PART_TRIANGLES).clamp(1, rayon::current_num_threads());
+        let target = order.len().div_ceil(n_parts).max(1);
+        // Contiguous parts of whole runs, each with its slice of `order`.
+        let mut jobs: Vec<(&mut [u32], &[LayerRun])> = Vec::with_capacity(n_parts);
+        let (mut rest, mut first, mut taken) = (order.as_mut_slice(), 0usize, 0usize);
+        for (i, r) in runs.iter().enumerate() {
+            if r.end - taken >= target || i + 1 == runs.len() {
+                let (part, tail) = rest.split_at_mut(r.end - taken);
+                jobs.push((part, &runs[first..=i]));
+                (rest, first, taken) = (tail, i + 1, r.end);
+            }
+        }
+        let n_vertices = mesh.positions.len();
+        let parts: Vec<Part> = jobs
+            .into_par_iter()
+            .map(|(slice, runs)| {
+                let mut part = Part::new(n_vertices, slice.len());
+                let base = runs[0].start;
+                for r in runs {
+                    part.layer(
+                        mesh,
+                        cells,
+                        grid,
+                        r,
+                        &mut slice[r.start - base..r.end - base],
+                    );
+                }
+                part
+            })
+            .collect();
         let mut f = Forest {
             cell_dims,
-            triangles: order,
+            n_vertices,
             ..Forest::default()
         };
-        let mut i = 0usize;
-        let n = f.triangles.len();
-        while i < n {
-            let g = groups[f.triangles[i] as usize];
-            let layer_start = f.layers.len() as u32;
-            let mut gbox = Aabb::EMPTY;
-            while i < n && groups[f.triangles[i] as usize] == g {
-                let (_, _, z) = decode(cells[f.triangles[i] as usize]);
-                let row_start = f.rows.len() as u32;
-                let mut lbox = Aabb::EMPTY;
-                while i < n && groups[f.triangles[i] as usize] == g {
-                    let (_, y, z2) = decode(cells[f.triangles[i] as usize]);
-                    if z2 != z {
-                        break;
-                    }
-                    let cell_start = f.cells.len() as u32;
-                    let mut rbox = Aabb::EMPTY;
-                    while i < n && groups[f.triangles[i] as usize] == g {
-                        let key = cells[f.triangles[i] as usize];
-                        let (x, y2, z3) = decode(key);
-                        if y2 != y || z3 != z {
-                            break;
-                        }
-                        let t_start = i as u32;
-                        let mut cbox = Aabb::EMPTY;
-                        while i < n
-                            && groups[f.triangles[i] as usize] == g
-                            && cells[f.triangles[i] as usize] == key
-                        {
-                            cbox = cbox.union(tri_box(f.triangles[i]));
-                            i += 1;
-                        }
-                        f.cells.push(CellNode {
-                            x,
-                            bbox: cbox,
-                            triangles: Span {
-                                start: t_start,
-                                end: i as u32,
-                            },
-                            vertices: Span { start: 0, end: 0 },
-                            next: u32::MAX,
-                        });
-                        rbox = rbox.union(cbox);
-                    }
-                    f.rows.push(RowNode {
-                        y,
-                        bbox: rbox,
-                        cells: Span {
-                            start: cell_start,
-                            end: f.cells.len() as u32,
-                        },
-                    });
-                    lbox = lbox.union(rbox);
-                }
-                f.layers.push(LayerNode {
-                    z,
-                    bbox: lbox,
-                    rows: Span {
-                        start: row_start,
-                        end: f.rows.len() as u32,
-                    },
-                });
-                gbox = gbox.union(lbox);
-            }
-            // Chain the group's leaves.
-            let first_cell = f.rows[f.layers[layer_start as usize].rows.start as usize]
-                .cells
-                .start as usize;
-            let last_cell = f.cells.len();
-            for c in first_cell..last_cell.saturating_sub(1) {
-                f.cells[c].next = c as u32 + 1;
-            }
-            f.groups.push(GroupNode {
-                bbox: gbox,
-                layers: Span {
-                    start: layer_start,
-                    end: f.layers.len() as u32,
-                },
-            });
-        }
+        f.concatenate(parts, &runs);
+        f.triangles = order;
         f.axis_sorted = f.boxes_sorted();
-        f.n_vertices = mesh.positions.len();
-        f.leaf_vertex_tables(mesh);
         f
     }
 
-    /// Fills [`Forest::leaf_vertices`], [`Forest::corners`] and each leaf's
-    /// `vertices` span (leaves in parallel, then concatenated).
-    fn leaf_vertex_tables(&mut self, mesh: &TriMesh) {
-        let per_leaf: Vec<(Vec<u32>, Vec<[u32; 3]>)> = self
-            .cells
-            .par_iter()
-            .map(|c| {
-                let tris = &self.triangles[c.triangles.range()];
-                let mut vs: Vec<u32> = tris
-                    .iter()
-                    .flat_map(|&t| mesh.triangles[t as usize])
-                    .collect();
-                vs.sort_unstable();
-                vs.dedup();
-                let local = tris
-                    .iter()
-                    .map(|&t| {
-                        mesh.triangles[t as usize].map(|v| vs.partition_point(|&x| x < v) as u32)
-                    })
-                    .collect();
-                (vs, local)
-            })
-            .collect();
-        let n: usize = per_leaf.iter().map(|(vs, _)| vs.len()).sum();
-        self.leaf_vertices = Vec::with_capacity(n);
-        self.corners = Vec::with_capacity(self.triangles.len());
-        for (c, (vs, local)) in self.cells.iter_mut().zip(per_leaf) {
-            let start = self.leaf_vertices.len() as u32;
-            self.leaf_vertices.extend_from_slice(&vs);
-            c.vertices = Span {
-                start,
-                end: self.leaf_vertices.len() as u32,
+    /// Appends the parts' nodes and tables (their spans shifted to the
+    /// concatenation) and makes the group nodes over `runs` (one layer
+    /// node per run, in order).
+    fn concatenate(&mut self, parts: Vec<Part>, runs: &[LayerRun]) {
+        let total = |f: fn(&Part) -> usize| parts.iter().map(f).sum::<usize>();
+        self.layers.reserve_exact(runs.len());
+        self.rows.reserve_exact(total(|p| p.rows.len()));
+        self.cells.reserve_exact(total(|p| p.cells.len()));
+        self.leaf_vertices
+            .reserve_exact(total(|p| p.leaf_vertices.len()));
+        self.corners.reserve_exact(total(|p| p.corners.len()));
+        for mut p in parts {
+            let rows = self.rows.len() as u32;
+            let cells = self.cells.len() as u32;
+            let vertices = self.leaf_vertices.len() as u32;
+            let shift = |s: Span, by: u32| Span {
+                start: s.start + by,
+                end: s.end + by,
             };
-            self.corners
-                .extend(local.into_iter().map(|l| l.map(|i| start + i)));
+            self.layers.extend(p.layers.iter().map(|l| LayerNode {
+                rows: shift(l.rows, rows),
+                ..*l
+            }));
+            self.rows.extend(p.rows.iter().map(|r| RowNode {
+                cells: shift(r.cells, cells),
+                ..*r
+            }));
+            self.cells.extend(p.cells.iter().map(|c| CellNode {
+                vertices: shift(c.vertices, vertices),
+                next: if c.next == u32::MAX {
+                    u32::MAX
+                } else {
+                    c.next + cells
+                },
+                ..*c
+            }));
+            self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
+            if vertices > 0 {
+                p.corners
+                    .as_flattened_mut()
+                    .iter_mut()
+                    .for_each(|v| *v += vertices);
+            }
+            self.corners.extend_from_slice(&p.corners);
+        }
+        let mut first = 0usize;
+        for (i, r) in runs.iter().enumerate() {
+            if r.last_of_group {
+                let bbox = self.layers[first..=i]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, l| b.union(l.bbox));
+                self.groups.push(GroupNode {
+                    bbox,
+                    layers: Span {
+                        start: first as u32,
+                        end: i as u32 + 1,
+                    },
+                });
+                first = i + 1;
+            }
         }
     }
 
@@ -435,45 +413,296 @@ pub fn sorted_overlap<T>(
     start..end.max(start)
 }
 
-/// Stable counting sort of `items` by `key(item) < n_keys`.
-fn counting_sort(items: &[u32], n_keys: usize, key: impl Fn(u32) -> usize) -> Vec<u32> {
-    let mut start = vec![0u32; n_keys + 1];
-    for &t in items {
-        start[key(t) + 1] += 1;
-    }
-    for k in 0..n_keys {
-        start[k + 1] += start[k];
-    }
-    let mut out = vec![0u32; items.len()];
-    for &t in items {
-        let k = key(t);
-        out[start[k] as usize] = t;
-        start[k] += 1;
-    }
-    out
+/// Least triangles per part of the parallel build (at most one part per
+/// thread: each part zeroes a table over the mesh's vertices).
+const PART_TRIANGLES: usize = 1 << 13;
+
+/// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
+#[derive(Debug, Clone, Copy)]
+struct KeyGrid {
+    cx: usize,
+    cy: usize,
+    layer: usize,
 }
 
-/// Triangle ids sorted by (group, cell, id): two stable counting sorts
-/// (cell, then group) when the cell keys are few enough, else a sort.
-fn order_by_group_and_cell(cells: &[u32], groups: &[u32], n_groups: usize) -> Vec<u32> {
-    let n = cells.len();
-    let ids: Vec<u32> = (0..n as u32).collect();
-    let n_keys = cells.iter().copied().max().map_or(0, |m| m as usize + 1);
-    if cells.windows(2).all(|w| w[0] <= w[1]) {
-        counting_sort(&ids, n_groups, |t| groups[t as usize] as usize)
-    } else if n_keys <= 4 * n + (1 << 20) {
-        let by_cell = counting_sort(&ids, n_keys, |t| cells[t as usize] as usize);
-        counting_sort(&by_cell, n_groups, |t| groups[t as usize] as usize)
-    } else {
-        let mut out = ids;
-        out.par_sort_unstable_by_key(|&t| {
-            (
-                u64::from(groups[t as usize]) << 32 | u64::from(cells[t as usize]),
-                t,
-            )
-        });
-        out
+/// The triangles of one group in one cell layer: `order[start..end]`.
+#[derive(Debug, Clone, Copy)]
+struct LayerRun {
+    start: usize,
+    end: usize,
+    z: u32,
+    /// Whether the next run belongs to another group.
+    last_of_group: bool,
+}
+
+/// Nodes and leaf tables of consecutive runs; spans are local to the part
+/// except the triangle spans, which index the whole order.
+#[derive(Debug)]
+struct Part {
+    layers: Vec<LayerNode>,
+    rows: Vec<RowNode>,
+    cells: Vec<CellNode>,
+    leaf_vertices: Vec<u32>,
+    corners: Vec<[u32; 3]>,
+    /// Per mesh vertex: tag of the last leaf that listed it (its first
+    /// triangle position + 1) and its index in `leaf_vertices` there.
+    seen: Vec<[u32; 2]>,
+    /// Scratch of the counting sort: bucket starts, sorted ids.
+    buckets: Vec<u32>,
+    sorted: Vec<u32>,
+}
+
+impl Part {
+    /// An empty part for `n_triangles` triangles of a mesh of `n_vertices`.
+    fn new(n_vertices: usize, n_triangles: usize) -> Part {
+        Part {
+            layers: Vec::new(),
+            rows: Vec::new(),
+            cells: Vec::new(),
+            leaf_vertices: Vec::with_capacity(n_triangles),
+            corners: Vec::with_capacity(n_triangles),
+            seen: vec![[0; 2]; n_vertices],
+            buckets: Vec::new(),
+            sorted: Vec::new(),
+        }
     }
+
+    /// Sorts `tris` (the ids of `run`, ascending) by cell and appends the
+    /// run's layer node with its rows and leaves.
+    fn layer(
+        &mut self,
+        mesh: &TriMesh,
+        cells: &[u32],
+        grid: KeyGrid,
+        run: &LayerRun,
+        tris: &mut [u32],
+    ) {
+        self.sort_by_cell(cells, tris, run.z as usize * grid.layer, grid.layer);
+        let row_start = self.rows.len() as u32;
+        let mut lbox = Aabb::EMPTY;
+        let mut i = 0;
+        while i < tris.len() {
+            let row = cells[tris[i] as usize] as usize / grid.cx;
+            let cell_start = self.cells.len() as u32;
+            let mut rbox = Aabb::EMPTY;
+            while i < tris.len() && cells[tris[i] as usize] as usize / grid.cx == row {
+                let key = cells[tris[i] as usize];
+                let end = i + tris[i..].partition_point(|&t| cells[t as usize] == key);
+                let leaf = self.leaf(mesh, &tris[i..end], run.start + i);
+                rbox = rbox.union(leaf.bbox);
+                self.cells.push(CellNode {
+                    x: (key as usize % grid.cx) as u32,
+                    triangles: Span {
+                        start: (run.start + i) as u32,
+                        end: (run.start + end) as u32,
+                    },
+                    next: self.cells.len() as u32 + 1,
+                    ..leaf
+                });
+                i = end;
+            }
+            self.rows.push(RowNode {
+                y: (row % grid.cy) as u32,
+                bbox: rbox,
+                cells: Span {
+                    start: cell_start,
+                    end: self.cells.len() as u32,
+                },
+            });
+            lbox = lbox.union(rbox);
+        }
+        if run.last_of_group
+            && let Some(last) = self.cells.last_mut()
+        {
+            last.next = u32::MAX;
+        }
+        self.layers.push(LayerNode {
+            z: run.z,
+            bbox: lbox,
+            rows: Span {
+                start: row_start,
+                end: self.rows.len() as u32,
+            },
+        });
+    }
+
+    /// Stable sort of `tris` by `cells[t]`, keys in `first..first + len`
+    /// (the run's layer): a counting sort over the layer when the run is
+    /// long against it, else over the keys' range when that is short, else
+    /// a sort by (key, id).
+    fn sort_by_cell(&mut self, cells: &[u32], tris: &mut [u32], first: usize, len: usize) {
+        let key = |t: u32| cells[t as usize];
+        let short = |range: usize| range <= 2 * tris.len() + 64;
+        let (lo, range) = if short(len) {
+            (first as u32, len)
+        } else {
+            let (lo, hi) = tris.iter().fold((u32::MAX, 0), |(lo, hi), &t| {
+                (lo.min(key(t)), hi.max(key(t)))
+            });
+            if lo >= hi {
+                return;
+            }
+            (lo, (hi - lo) as usize + 1)
+        };
+        if !short(range) {
+            tris.sort_unstable_by_key(|&t| u64::from(key(t)) << 32 | u64::from(t));
+            return;
+        }
+        self.buckets.clear();
+        self.buckets.resize(range + 1, 0);
+        for &t in tris.iter() {
+            self.buckets[(key(t) - lo) as usize + 1] += 1;
+        }
+        for k in 0..range {
+            self.buckets[k + 1] += self.buckets[k];
+        }
+        self.sorted.clear();
+        self.sorted.resize(tris.len(), 0);
+        for &t in tris.iter() {
+            let b = &mut self.buckets[(key(t) - lo) as usize];
+            self.sorted[*b as usize] = t;
+            *b += 1;
+        }
+        tris.copy_from_slice(&self.sorted);
+    }
+
+    /// Appends the leaf's distinct vertices (ascending) and its triangles'
+    /// corners; returns a leaf node holding its box and vertex span (the
+    /// box of the distinct vertices, which is that of the triangles).
+    /// `first` is the position of the leaf's first triangle in the order.
+    fn leaf(&mut self, mesh: &TriMesh, tris: &[u32], first: usize) -> CellNode {
+        let tag = first as u32 + 1;
+        let start = self.leaf_vertices.len();
+        for &t in tris {
+            for v in mesh.triangles[t as usize] {
+                let seen = &mut self.seen[v as usize];
+                if seen[0] != tag {
+                    seen[0] = tag;
+                    self.leaf_vertices.push(v);
+                }
+            }
+        }
+        sort_nearly_sorted(&mut self.leaf_vertices[start..]);
+        let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
+            self.seen[v as usize][1] = (start + i) as u32;
+            let p = Vec3A::from(mesh.positions[v as usize]);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        self.corners.extend(
+            tris.iter()
+                .map(|&t| mesh.triangles[t as usize].map(|v| self.seen[v as usize][1])),
+        );
+        CellNode {
+            x: 0,
+            bbox: Aabb {
+                min: lo.into(),
+                max: hi.into(),
+            },
+            triangles: Span { start: 0, end: 0 },
+            vertices: Span {
+                start: start as u32,
+                end: self.leaf_vertices.len() as u32,
+            },
+            next: u32::MAX,
+        }
+    }
+}
+
+/// Sorts ascending, by insertion when short: a leaf's vertices arrive
+/// nearly in order (its triangles are in cell order and marching-cubes
+/// vertex ids follow the grid).
+fn sort_nearly_sorted(v: &mut [u32]) {
+    if v.len() > 128 {
+        v.sort_unstable();
+        return;
+    }
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > x {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+/// Triangle ids sorted by (group, layer, id), layer `cells[t] / layer`,
+/// and the start of each group's ids (`n_groups + 1` entries): one stable
+/// counting sort by group when the layers never decrease along the ids,
+/// else a stable counting sort by layer first.
+fn order_by_group_and_layer(
+    cells: &[u32],
+    layer: usize,
+    groups: &[u32],
+    n_groups: usize,
+) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n_groups + 1];
+    // Keys `lo..hi` form the current layer.
+    let (mut lo, mut hi, mut monotone) = (0usize, 0usize, true);
+    for (&c, &g) in cells.iter().zip(groups) {
+        start[g as usize + 1] += 1;
+        let c = c as usize;
+        if c >= hi {
+            lo = c - c % layer;
+            hi = lo + layer;
+        } else if c < lo {
+            monotone = false;
+        }
+    }
+    for g in 0..n_groups {
+        start[g + 1] += start[g];
+    }
+    let mut next = start.clone();
+    let mut out = vec![0u32; cells.len()];
+    let mut place = |t: u32| {
+        let s = &mut next[groups[t as usize] as usize];
+        out[*s as usize] = t;
+        *s += 1;
+    };
+    if monotone {
+        (0..cells.len() as u32).for_each(&mut place);
+    } else {
+        let n_layers = cells.iter().max().map_or(0, |&m| m as usize / layer + 1);
+        let mut at = vec![0u32; n_layers + 1];
+        for &c in cells {
+            at[c as usize / layer + 1] += 1;
+        }
+        for z in 0..n_layers {
+            at[z + 1] += at[z];
+        }
+        let mut by_layer = vec![0u32; cells.len()];
+        for (t, &c) in cells.iter().enumerate() {
+            let a = &mut at[c as usize / layer];
+            by_layer[*a as usize] = t as u32;
+            *a += 1;
+        }
+        by_layer.into_iter().for_each(&mut place);
+    }
+    (out, start)
+}
+
+/// The (group, layer) runs of `order` (sorted by group, layer, id).
+fn layer_runs(order: &[u32], group_starts: &[u32], cells: &[u32], layer: usize) -> Vec<LayerRun> {
+    let z_of = |t: u32| cells[t as usize] as usize / layer;
+    let mut runs = Vec::new();
+    for w in group_starts.windows(2) {
+        let (mut i, end) = (w[0] as usize, w[1] as usize);
+        while i < end {
+            let z = z_of(order[i]);
+            let stop = i + order[i..end].partition_point(|&t| z_of(t) == z);
+            runs.push(LayerRun {
+                start: i,
+                end: stop,
+                z: z as u32,
+                last_of_group: stop == end,
+            });
+            i = stop;
+        }
+    }
+    runs
 }
 
 /// Vertex-connected components of triangles: per-triangle group ids

@@ -16,6 +16,12 @@
 //! with [`PolyhedrizeOptions::balls`], are decomposed into maximal digital
 //! balls (§4.5.4, [`super::balls`]), each a leaf.
 //!
+//! Sibling polyhedra whose interiors overlap (exact separating-axis test)
+//! are merged into the hull of their union
+//! ([`PolyhedrizeOptions::disjoint_siblings`]), so that siblings are
+//! interior-disjoint and the region's indicator is the alternating sum of
+//! the shells'.
+//!
 //! **Guarantees.** A voxel belongs to the region of a shell when its centre
 //! lies in the closed shell and in no child's region. By induction over the
 //! tree every region contains all voxels of its set and none of the other

@@ -107,24 +107,10 @@ fn torus_and_dented_ellipsoid_are_lossless() {
     assert_lossless(&p, &o, "ellipsoid");
 }
 
-/// A `n³` cube minus the voxels where `hole` holds.
-fn carved(n: usize, hole: impl Fn(usize, usize, usize) -> bool) -> DigitalObject {
-    let d = n + 2;
-    let mut mask = vec![false; d * d * d];
-    for z in 1..=n {
-        for y in 1..=n {
-            for x in 1..=n {
-                mask[x + d * (y + d * z)] = !hole(x, y, z);
-            }
-        }
-    }
-    DigitalObject::from_mask([d; 3], &mask, Frame::default()).unwrap()
-}
-
 #[test]
 fn cavities_are_reversed_shells_and_nesting_recurses() {
     // A cube with a 3³ cavity holding a single object voxel.
-    let o = carved(11, |x, y, z| {
+    let o = common::carved(11, |x, y, z| {
         let c = |a: usize| (5..=7).contains(&a);
         c(x) && c(y) && c(z) && (x, y, z) != (6, 6, 6)
     });
@@ -147,17 +133,7 @@ fn cavities_are_reversed_shells_and_nesting_recurses() {
     assert!(p.summary().volume_exact);
     assert_lossless(&p, &o, "cube with cavity and island");
     // Staircase pits and L-shaped grooves: every random carving is lossless.
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    for round in 0..20 {
-        let holes: Vec<bool> = (0..13 * 13 * 13)
-            .map(|_| {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                seed.is_multiple_of(7)
-            })
-            .collect();
-        let o = carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)]);
+    for (round, o) in common::random_carvings().into_iter().enumerate() {
         let (p, _) = run(&o);
         assert_lossless(&p, &o, &format!("random carving {round}"));
         let (p, _) = run_balls(&o);
@@ -259,7 +235,11 @@ fn real_ct_bone_is_lossless() {
     let (p, _) = run(&o);
     assert!(p.merges > 0 && p.summary().volume_exact);
     let m = assert_merged_closed(&p, "headsq bone");
-    eprintln!("headsq bone merged: {} faces ({} split)", m.n_faces(), m.n_faces_split());
+    eprintln!(
+        "headsq bone merged: {} faces ({} split)",
+        m.n_faces(),
+        m.n_faces_split()
+    );
     // Kept apart (no merging) they overlap and the merge is refused.
     let options = PolyhedrizeOptions {
         disjoint_siblings: false,
@@ -397,7 +377,7 @@ fn merged_cylinder_surfaces_have_the_face_counts_of_table_8_7() {
 
 #[test]
 fn merged_surface_of_a_cavity_is_two_spheres() {
-    let o = carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
+    let o = common::carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
     let (p, _) = run(&o);
     assert_eq!(p.shells.len(), 2);
     let m = assert_merged_closed(&p, "cube with cavity");
@@ -434,18 +414,8 @@ fn merged_surface_of_the_dented_ellipsoid_is_closed() {
 
 #[test]
 fn merged_surfaces_of_random_carvings_are_closed() {
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
     let mut merged = 0;
-    for round in 0..20 {
-        let holes: Vec<bool> = (0..13 * 13 * 13)
-            .map(|_| {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                seed.is_multiple_of(7)
-            })
-            .collect();
-        let o = carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)]);
+    for (round, o) in common::random_carvings().into_iter().enumerate() {
         for (name, (p, _)) in [("recursion", run(&o)), ("balls", run_balls(&o))] {
             if p.summary().volume_exact {
                 assert_merged_closed(&p, &format!("random carving {round}, {name}"));
@@ -463,7 +433,7 @@ fn merged_surfaces_of_random_carvings_are_closed() {
 fn merged_surface_refuses_overlapping_siblings() {
     // Negative control: a duplicated cavity shell overlaps its twin, so the
     // chain is not the boundary of the region and the merge is refused.
-    let o = carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
+    let o = common::carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
     let (mut p, _) = run(&o);
     assert!(p.merged_surface().is_ok());
     p.shells.push(p.shells[1].clone());

@@ -6,7 +6,7 @@ use chisel::hull::{ConvexHull, HullOptions};
 use chisel::phantom::voxel::{cube, cylinder_tunnel, ellipsoid_dent, torus};
 use chisel::polyhedron::{ZkhClass, background_components};
 use chisel::volume::{Volume, VolumeData};
-use chisel::voxel::{CandidateKind, Component, DigitalObject, Frame, Selection};
+use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection};
 
 fn object(v: &Volume) -> DigitalObject {
     DigitalObject::from_volume(v, Selection::Threshold(1.0), Component::All).unwrap()
@@ -14,20 +14,6 @@ fn object(v: &Volume) -> DigitalObject {
 
 fn hull(o: &DigitalObject) -> ConvexHull {
     ConvexHull::of_object(o, CandidateKind::Local26, HullOptions::default()).unwrap()
-}
-
-/// A `n³` cube minus the voxels where `hole` holds.
-fn carved(n: usize, hole: impl Fn(usize, usize, usize) -> bool) -> DigitalObject {
-    let d = n + 2;
-    let mut mask = vec![false; d * d * d];
-    for z in 1..=n {
-        for y in 1..=n {
-            for x in 1..=n {
-                mask[x + d * (y + d * z)] = !hole(x, y, z);
-            }
-        }
-    }
-    DigitalObject::from_mask([d; 3], &mask, Frame::default()).unwrap()
 }
 
 #[test]
@@ -64,7 +50,7 @@ fn cylinder_tunnels_match_table_8_6() {
 #[test]
 fn cavity_concavity_tunnel_branched() {
     // Cube with a 3×3×3 cavity.
-    let o = carved(9, |x, y, z| {
+    let o = common::carved(9, |x, y, z| {
         (4..=6).contains(&x) && (4..=6).contains(&y) && (4..=6).contains(&z)
     });
     let z = background_components(&o, &hull(&o)).unwrap();
@@ -74,7 +60,7 @@ fn cavity_concavity_tunnel_branched() {
     );
     assert!(z[0].face_sets.is_empty());
     // Cube with a pit in the top face: a concavity.
-    let o = carved(9, |x, y, z| {
+    let o = common::carved(9, |x, y, z| {
         (4..=6).contains(&x) && (4..=6).contains(&y) && z >= 7
     });
     let z = background_components(&o, &hull(&o)).unwrap();
@@ -83,13 +69,13 @@ fn cavity_concavity_tunnel_branched() {
         (1, ZkhClass::Concavity, 27)
     );
     // Straight tunnel along x.
-    let o = carved(9, |_, y, z| y == 5 && z == 5);
+    let o = common::carved(9, |_, y, z| y == 5 && z == 5);
     let z = background_components(&o, &hull(&o)).unwrap();
     assert_eq!((z.len(), z[0].class, z[0].voxels), (1, ZkhClass::Tunnel, 9));
     // Crossing tunnels in a cube: the four exits lie on four side faces,
     // which are edge-connected through each other — one set, so by Def. CO
     // a concavity (the seed's Fig. 4.16 shows exactly this case).
-    let o = carved(9, |x, y, z| z == 5 && (y == 5 || x == 5));
+    let o = common::carved(9, |x, y, z| z == 5 && (y == 5 || x == 5));
     let z = background_components(&o, &hull(&o)).unwrap();
     assert_eq!(
         (z.len(), z[0].class, z[0].face_sets.len()),
@@ -119,7 +105,7 @@ fn cavity_concavity_tunnel_branched() {
         "{z:?}"
     );
     // Two separate tunnels: two ZKHs.
-    let o = carved(9, |_, y, z| z == 5 && (y == 3 || y == 7));
+    let o = common::carved(9, |_, y, z| z == 5 && (y == 3 || y == 7));
     let z = background_components(&o, &hull(&o)).unwrap();
     assert_eq!(
         z.iter().map(|c| c.class).collect::<Vec<_>>(),
@@ -213,7 +199,7 @@ fn pressing_in_selects_the_faces_the_component_crosses() {
         assert_eq!(h.faces()[f as usize].plane.normal.map(i64::abs), [0, 0, 1]);
     }
     // A pit in the top face of a cube: only the top face.
-    let o = carved(9, |x, y, z| {
+    let o = common::carved(9, |x, y, z| {
         (4..=6).contains(&x) && (4..=6).contains(&y) && z >= 7
     });
     let h = hull(&o);
@@ -222,7 +208,7 @@ fn pressing_in_selects_the_faces_the_component_crosses() {
     assert_eq!(marked.len(), 1);
     assert_eq!(h.faces()[marked[0] as usize].plane.normal, [0, 0, 1]);
     // A cavity: nothing to press.
-    let o = carved(9, |x, y, z| {
+    let o = common::carved(9, |x, y, z| {
         (4..=6).contains(&x) && (4..=6).contains(&y) && (4..=6).contains(&z)
     });
     let h = hull(&o);
@@ -231,7 +217,7 @@ fn pressing_in_selects_the_faces_the_component_crosses() {
     // A groove along the top edge region of a cube touches the top face
     // only along its interior: the x = max face is crossed too when the
     // groove runs out through it.
-    let o = carved(9, |x, y, z| x >= 5 && y == 5 && z == 9);
+    let o = common::carved(9, |x, y, z| x >= 5 && y == 5 && z == 9);
     let h = hull(&o);
     let z = background_components(&o, &h).unwrap();
     let marked = faces_to_press(&h, &z[0]);

@@ -506,14 +506,7 @@ impl ConvexHull {
     /// Fan-triangulated faces as a mesh in world coordinates (`frame`),
     /// outward winding; one mesh vertex per hull vertex.
     pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
-        let positions = self
-            .vertices
-            .iter()
-            .map(|&v| {
-                let w = frame.world(v);
-                glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)
-            })
-            .collect();
+        let positions = self.vertices.iter().map(|&v| frame.world_f32(v)).collect();
         let mut triangles = Vec::with_capacity(self.n_triangles());
         for f in &self.faces {
             for k in 1..f.vertices.len() - 1 {

@@ -87,14 +87,7 @@ impl MergedSurface {
     /// The triangles as a mesh in world units (`frame`), outward winding;
     /// scalar `depth` per vertex ([`MergedSurface::vertex_depth`]).
     pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
-        let positions = self
-            .vertices
-            .iter()
-            .map(|&v| {
-                let w = frame.world(v);
-                glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)
-            })
-            .collect();
+        let positions = self.vertices.iter().map(|&v| frame.world_f32(v)).collect();
         let mut mesh = TriMesh::new(positions, self.triangles.clone())?;
         mesh.scalars.push(ScalarField {
             name: "depth".into(),

@@ -68,6 +68,12 @@ impl Frame {
     pub fn world(&self, c: [i64; 3]) -> [f64; 3] {
         std::array::from_fn(|a| self.origin[a] + self.spacing[a] * (c[a] as f64 - 1.0) / 2.0)
     }
+
+    /// [`Frame::world`] as an `f32` mesh position.
+    pub fn world_f32(&self, c: [i64; 3]) -> glam::Vec3 {
+        let w = self.world(c);
+        glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)
+    }
 }
 
 impl Default for Frame {

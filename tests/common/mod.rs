@@ -213,3 +213,40 @@ pub fn run_chisel(bin: &str, args: &[&str]) -> std::process::Output {
         .output()
         .expect("run chisel")
 }
+
+/// A `n³` cube of voxels (one background voxel around it) minus the voxels
+/// where `hole(x, y, z)` holds (`1 ≤ x, y, z ≤ n`).
+pub fn carved(
+    n: usize,
+    hole: impl Fn(usize, usize, usize) -> bool,
+) -> chisel::voxel::DigitalObject {
+    let d = n + 2;
+    let mut mask = vec![false; d * d * d];
+    for z in 1..=n {
+        for y in 1..=n {
+            for x in 1..=n {
+                mask[x + d * (y + d * z)] = !hole(x, y, z);
+            }
+        }
+    }
+    chisel::voxel::DigitalObject::from_mask([d; 3], &mask, chisel::voxel::Frame::default()).unwrap()
+}
+
+/// The 20 random carvings of an 11³ cube (a fixed xorshift sequence; about
+/// one voxel in 7 removed): staircase pits, grooves, cavities, islands.
+pub fn random_carvings() -> Vec<chisel::voxel::DigitalObject> {
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    (0..20)
+        .map(|_| {
+            let holes: Vec<bool> = (0..13 * 13 * 13)
+                .map(|_| {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    seed.is_multiple_of(7)
+                })
+                .collect();
+            carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)])
+        })
+        .collect()
+}

@@ -703,7 +703,7 @@ impl Polyhedron {
 
     /// Whether all sibling polyhedra (dimension 3, same parent) have
     /// disjoint interiors (separating-axis theorem, exact).
-    fn siblings_disjoint(&self) -> bool {
+    pub(crate) fn siblings_disjoint(&self) -> bool {
         let mut by_parent: std::collections::BTreeMap<u32, Vec<&ConvexHull>> = Default::default();
         for s in &self.shells {
             if let (Some(p), Some(h)) = (s.parent, s.geometry.polytope())

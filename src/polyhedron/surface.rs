@@ -107,7 +107,7 @@ impl Polyhedron {
     /// region (a multiplicity outside −1..=1, an open or crossing loop, a
     /// face that cannot be triangulated).
     pub fn merged_surface(&self) -> crate::Result<MergedSurface> {
-        if !self.summary().volume_exact {
+        if !self.siblings_disjoint() {
             return Err(invalid(
                 "the merged surface needs sibling shells with disjoint interiors \
                  (volume_exact is false)"

@@ -768,6 +768,20 @@ fn polyhedrize_writes_verified_cells() {
     let m = chisel::io::read_mesh(&mesh).unwrap();
     assert!(m.scalar("depth").is_some());
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    // Cutting-out (Def. AU): both caps marked, same merged surface.
+    let v = ok_json(&[
+        "polyhedrize",
+        path_str(&cyl),
+        "--threshold",
+        "1",
+        "--press-in",
+        "--verify",
+        "--json",
+    ]);
+    assert_eq!(v["verified"], true);
+    assert_eq!(v["options"]["press_in"], true);
+    assert_eq!(v["zkh"][0]["pressed_faces"], 2);
+    assert_eq!(v["merged_faces"], 58);
     // Corner vertices are for hulls only: a clear error.
     assert_clean_error(
         &[

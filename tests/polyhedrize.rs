@@ -218,7 +218,11 @@ fn real_ct_bone_is_lossless() {
     };
     let o =
         DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
-    for (name, (p, z)) in [("recursion", run(&o)), ("balls", run_balls(&o))] {
+    for (name, (p, z)) in [
+        ("recursion", run(&o)),
+        ("balls", run_balls(&o)),
+        ("pressing-in", run_pressed(&o)),
+    ] {
         let s = p.summary();
         eprintln!("headsq bone, {name}: {s:?}");
         assert!(z.iter().any(|z| z.class == ZkhClass::Cavity));
@@ -231,7 +235,11 @@ fn real_ct_bone_is_lossless() {
         );
         assert_lossless(&p, &o, &format!("headsq bone, {name}"));
     }
-    // Overlapping siblings merged: exact volume and one closed surface.
+    // Overlapping siblings merged: exact volume and one closed surface,
+    // also with the ZKH shells pressed into the marked faces.
+    let (pressed, _) = run_pressed(&o);
+    let m = assert_merged_closed(&pressed, "headsq bone, pressing-in");
+    eprintln!("headsq bone pressed in: {} merged faces", m.n_faces());
     let (p, _) = run(&o);
     assert!(p.merges > 0 && p.summary().volume_exact);
     let m = assert_merged_closed(&p, "headsq bone");
@@ -449,4 +457,76 @@ fn merged_surface_refuses_overlapping_siblings() {
     assert!(p.summary().volume_exact);
     let e = p.merged_surface().unwrap_err().to_string();
     assert!(e.contains("multiplicity -2"), "{e}");
+}
+
+fn run_pressed(o: &DigitalObject) -> (Polyhedron, Vec<chisel::polyhedron::ZkhReport>) {
+    let options = PolyhedrizeOptions {
+        press_in: true,
+        ..Default::default()
+    };
+    polyhedrize(o, options, Backend::Cpu, &|_| {}).unwrap()
+}
+
+/// Pressing-in and cutting-out (Def. PR, Def. AU): the ZKH shells span the
+/// marked faces, the representation stays lossless, the merged surface
+/// closed, and the marked faces leave the surface.
+#[test]
+fn pressing_in_and_cutting_out_are_lossless() {
+    let mut objects: Vec<(String, DigitalObject)> = vec![
+        ("torus".into(), object(&torus(40, 12).unwrap())),
+        (
+            "dented ellipsoid".into(),
+            object(&ellipsoid_dent(13, 13, 8, 5).unwrap()),
+        ),
+    ];
+    for (d_o, d_i) in [(25, 10), (50, 35), (75, 60), (100, 85)] {
+        objects.push((
+            format!("cylinder {d_o}/{d_i}"),
+            object(&cylinder_tunnel(d_o, d_i, 15).unwrap()),
+        ));
+    }
+    for (round, o) in common::random_carvings().into_iter().enumerate() {
+        objects.push((format!("random carving {round}"), o));
+    }
+    for (what, o) in &objects {
+        let (plain, _) = run(o);
+        let (p, z) = run_pressed(o);
+        assert_lossless(&p, o, what);
+        for r in &z {
+            assert_eq!(
+                r.pressed_faces == 0,
+                r.class == ZkhClass::Cavity,
+                "{what}: {r:?}"
+            );
+        }
+        let (a, b) = (plain.summary(), p.summary());
+        let faces = |q: &Polyhedron| q.merged_surface().map(|m| m.n_faces()).ok();
+        println!(
+            "{what}: plain {} shells {} faces {:?} merged, pressed {} shells {} faces {:?} merged",
+            a.shells,
+            a.faces,
+            faces(&plain),
+            b.shells,
+            b.faces,
+            faces(&p)
+        );
+        if b.volume_exact {
+            assert_merged_closed(&p, &format!("{what}, pressed"));
+        }
+        if what.starts_with("cylinder") {
+            // Def. AU: P′ = CH(S₁ ∪ S₂ ∪ S′) spans both caps, so it is the
+            // whole hull; the recursion takes the ring back out, and the
+            // merged surface keeps the seed's face counts.
+            let hull6 =
+                |q: &Polyhedron, i: usize| q.shells[i].geometry.polytope().unwrap().volume6();
+            assert_eq!(hull6(&p, 1), hull6(&p, 0), "{what}");
+            assert_eq!(z[0].pressed_faces, 2, "{what}");
+            let (m, m0) = (p.merged_surface().unwrap(), plain.merged_surface().unwrap());
+            assert_eq!(
+                (m.n_faces(), m.n_faces_split()),
+                (m0.n_faces(), m0.n_faces_split()),
+                "{what}"
+            );
+        }
+    }
 }

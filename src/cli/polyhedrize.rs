@@ -37,6 +37,11 @@ pub struct Args {
     /// them into the hull of their union (then no merged surface).
     #[arg(long)]
     overlapping_siblings: bool,
+    /// Pressing-in and cutting-out (Def. PR, Def. AU): the shell of each
+    /// concavity or tunnel of CH(S) spans its marked faces (criteria
+    /// (i)–(iii)) and the ZKH, instead of the ZKH alone.
+    #[arg(long)]
+    press_in: bool,
     /// Only slice Z of the volume: the 2-D analogue (seed 003 ch. 9),
     /// polygons for the pixel set of one CT slice or label image.
     #[arg(long)]
@@ -100,6 +105,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         hull: args.hull.options(),
         balls: args.balls,
         disjoint_siblings: !args.overlapping_siblings,
+        press_in: args.press_in,
     };
     let t = Instant::now();
     let bar = if global.quiet {

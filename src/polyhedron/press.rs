@@ -50,26 +50,31 @@ fn min_edge_side(hull: &ConvexHull, face: &HullFace, p: [i64; 3]) -> i128 {
 
 /// Faces of `hull` to press in towards `zkh` (indices into
 /// [`ConvexHull::faces`], ascending). Empty for a cavity.
+///
+/// Cost: one plane test per (face, voxel); corners are tested only for
+/// voxels whose centre lies within `|n|₁` of the face's plane, since a
+/// corner differs from its centre by `(±1, ±1, ±1)` in combinatorial
+/// coordinates.
 pub fn faces_to_press(hull: &ConvexHull, zkh: &Zkh) -> Vec<u32> {
-    let faces = hull.faces();
-    let mut marked = vec![false; faces.len()];
-    for v in zkh.object.voxels() {
-        let c3 = voxel_centre(v);
-        for o in 0..8i64 {
-            let c0 = voxel_corner([v[0] + (o & 1), v[1] + (o >> 1 & 1), v[2] + (o >> 2 & 1)]);
-            for (f, face) in faces.iter().enumerate() {
-                if marked[f] {
-                    continue;
-                }
-                marked[f] = match face.plane.side(c0) {
+    let voxels: Vec<[i64; 3]> = zkh.object.voxels().collect();
+    let marked = |face: &HullFace| {
+        let reach = face.plane.normal.iter().map(|c| c.abs()).sum::<i64>();
+        voxels.iter().any(|&v| {
+            let c3 = voxel_centre(v);
+            if face.plane.side(c3) < -reach {
+                return false;
+            }
+            (0..8i64).any(|o| {
+                let c0 = voxel_corner([v[0] + (o & 1), v[1] + (o >> 1 & 1), v[2] + (o >> 2 & 1)]);
+                match face.plane.side(c0) {
                     s if s > 0 => min_edge_side(hull, face, c3) >= 0,
                     0 => min_edge_side(hull, face, c0) > 0,
                     _ => false,
-                };
-            }
-        }
-    }
-    (0..faces.len() as u32)
-        .filter(|&f| marked[f as usize])
+                }
+            })
+        })
+    };
+    (0..hull.faces().len() as u32)
+        .filter(|&f| marked(&hull.faces()[f as usize]))
         .collect()
 }

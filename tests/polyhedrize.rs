@@ -260,6 +260,26 @@ fn real_ct_bone_is_lossless() {
 }
 
 #[test]
+fn real_ct_skin_is_lossless() {
+    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    // The head at the skin level (≥ 500, largest component): the soft
+    // tissue with the airways and sinuses as concavities and cavities.
+    let o =
+        DigitalObject::from_volume(&v, Selection::Threshold(500.0), Component::Largest).unwrap();
+    let (p, z) = run(&o);
+    let s = p.summary();
+    eprintln!("headsq skin: {s:?}, {} ZKHs", z.len());
+    assert!(z.iter().any(|z| z.class == ZkhClass::Cavity));
+    assert!(z.iter().any(|z| z.class == ZkhClass::Concavity));
+    assert!(s.volume_exact);
+    assert_lossless(&p, &o, "headsq skin");
+    let m = assert_merged_closed(&p, "headsq skin");
+    assert!(m.n_faces() < s.faces);
+}
+
+#[test]
 fn frog_labels_are_lossless() {
     let Some(v) = common::real_volume("froggy/frogtissue.mhd") else {
         return;

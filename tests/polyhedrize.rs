@@ -5,7 +5,7 @@ mod common;
 
 use chisel::hscan::VoxelBox;
 use chisel::parity::Backend;
-use chisel::phantom::voxel::{cube, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
+use chisel::phantom::voxel::{blob, cube, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
 use chisel::polyhedron::{PolyhedrizeOptions, Polyhedron, Role, ShellKind, ZkhClass, polyhedrize};
 use chisel::volume::Volume;
 use chisel::voxel::{Component, DigitalObject, Frame, Selection};
@@ -549,4 +549,74 @@ fn pressing_in_and_cutting_out_are_lossless() {
             );
         }
     }
+}
+
+/// The benchmarks' smooth random blobs: deterministic per seed, inside the
+/// grid with a background margin, and polyhedrized losslessly.
+#[test]
+fn smooth_random_blobs_are_lossless() {
+    let a = blob(40, 7).unwrap();
+    assert_eq!(a.data, blob(40, 7).unwrap().data, "same seed, same blob");
+    assert_ne!(a.data, blob(40, 8).unwrap().data, "seeds differ");
+    assert!(blob(8, 1).is_err() && blob(4096, 1).is_err());
+    for (n, seed) in [(40, 1), (40, 2), (40, 3), (64, 6)] {
+        let o = object(&blob(n, seed).unwrap());
+        let (lo, hi) = o.voxel_bbox();
+        let last = i64::from(n) - 2;
+        assert!(lo.iter().all(|&c| c >= 1) && hi.iter().all(|&c| c <= last));
+        assert!(o.n_voxels() > u64::from(n).pow(3) / 50, "{}", o.n_voxels());
+        let (p, _) = run(&o);
+        let what = format!("blob {n}, seed {seed}");
+        assert_lossless(&p, &o, &what);
+        // Blob 64/6 has two ZKH hulls touching face to face with crossing
+        // edges: they are merged, so the merged surface exists.
+        assert_merged_closed(&p, &what);
+    }
+}
+
+/// Siblings touching through a common plane with positive face area are
+/// not separated: their edges cross, so the merged surface is refused even
+/// though the volume is exact. Touching along an edge is fine.
+#[test]
+fn merged_surface_needs_separated_siblings() {
+    let cuboid = |lo: [i64; 3], hi: [i64; 3]| {
+        let pts: Vec<[i64; 3]> = (0..8)
+            .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { hi[a] } else { lo[a] }))
+            .collect();
+        chisel::polyhedron::ShellGeometry::of_points(&pts, Default::default()).unwrap()
+    };
+    let shell = |geometry, parent: Option<u32>| chisel::polyhedron::Shell {
+        geometry,
+        parent,
+        depth: u32::from(parent.is_some()),
+        role: if parent.is_some() {
+            Role::Background
+        } else {
+            Role::Object
+        },
+        kind: if parent.is_some() {
+            ShellKind::Component
+        } else {
+            ShellKind::Hull
+        },
+        voxels: 1,
+    };
+    let with = |b: [[i64; 3]; 2]| Polyhedron {
+        shells: vec![
+            shell(cuboid([1; 3], [21; 3]), None),
+            shell(cuboid([3; 3], [9; 3]), Some(0)),
+            shell(cuboid(b[0], b[1]), Some(0)),
+        ],
+        frame: Frame::default(),
+        merges: 0,
+    };
+    // Face x = 9 shared over [5, 9]² with crossing edges.
+    let crossing = with([[9, 5, 5], [15, 13, 13]]);
+    assert!(crossing.summary().volume_exact);
+    let err = crossing.merged_surface().unwrap_err().to_string();
+    assert!(err.contains("common face area"), "{err}");
+    // Along the edge x = y = 9 only.
+    let edge = with([[9, 9, 3], [15, 15, 9]]);
+    let m = edge.merged_surface().unwrap();
+    assert_eq!(m.volume6(), signed_volume6(&edge));
 }

@@ -49,6 +49,13 @@ pub enum Kind {
         #[arg(long)]
         dent: u32,
     },
+    /// Smooth random blob in an N³ grid: twelve integer metaballs from SEED.
+    Blob {
+        #[arg(long)]
+        n: u32,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The demo's CT-like head (air 0, soft tissue 1000, bone 2000; mm).
     Head {
         #[arg(long, default_value_t = 5.0)]
@@ -83,6 +90,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         } => voxel::cylinder_tunnel(outer, inner, height)?,
         Kind::Torus { major, minor } => voxel::torus(major, minor)?,
         Kind::EllipsoidDent { a, b, c, dent } => voxel::ellipsoid_dent(a, b, c, dent)?,
+        Kind::Blob { n, seed } => voxel::blob(n, seed)?,
         Kind::Head { voxel } => crate::tissue::phantom::ct_head_phantom(voxel)?,
     };
     crate::io::write_volume(output, &volume)?;

@@ -30,17 +30,24 @@
 //!   Table 8.4 figures (e.g. a = b = 10, c = 7: 2 664 voxels) are not
 //!   reproduced by this ellipsoid-minus-ball; it is a qualitative stand-in.
 
+use rayon::prelude::*;
+
 use crate::volume::{Volume, VolumeData};
 
-/// A `u8` 0/1 volume of `dims` with `inside(x, y, z)` marking the object.
-fn mask_volume(dims: [usize; 3], inside: impl Fn(i64, i64, i64) -> bool) -> crate::Result<Volume> {
-    let mut data = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
-    for z in 0..dims[2] as i64 {
-        for y in 0..dims[1] as i64 {
-            for x in 0..dims[0] as i64 {
-                data.push(u8::from(inside(x, y, z)));
+/// A `u8` 0/1 volume of `dims` with `inside(x, y, z)` marking the object
+/// (z-slices in parallel).
+fn mask_volume(
+    dims: [usize; 3],
+    inside: impl Fn(i64, i64, i64) -> bool + Sync,
+) -> crate::Result<Volume> {
+    let slice = dims[0] * dims[1];
+    let mut data = vec![0u8; slice * dims[2]];
+    if slice > 0 {
+        data.par_chunks_mut(slice).enumerate().for_each(|(z, out)| {
+            for (k, o) in out.iter_mut().enumerate() {
+                *o = u8::from(inside((k % dims[0]) as i64, (k / dims[0]) as i64, z as i64));
             }
-        }
+        });
     }
     Volume::new(dims, [1.0; 3], [0.0; 3], VolumeData::U8(data))
 }
@@ -163,5 +170,53 @@ pub fn ellipsoid_dent(a: u32, b: u32, c: u32, dent_r: u32) -> crate::Result<Volu
         let ell = x * x * b * b * c * c + y * y * a * a * c * c + z * z * a * a * b * b
             <= a * a * b * b * c * c;
         ell && x * x + y * y + (z - c) * (z - c) > d * d
+    })
+}
+
+/// A smooth random blob in an `n³` grid (the benchmarks' "smooth random
+/// blobs"): twelve metaballs with centres and radii from a SplitMix64
+/// stream of `seed`, blended by the exact integer field
+/// F(c) = Σₖ max(0, Rₖ² − |c − cₖ|²)² over doubled voxel-centre
+/// coordinates; a voxel is in the object iff F(c) ≥ ρ⁴, ρ = n/10 voxels
+/// (a lone ball keeps radius √(Rₖ² − ρ²); close balls merge with smooth
+/// necks). Radii n/8…n/4 voxels, centres at least one radius plus one voxel
+/// from the border. `16 ≤ n ≤ 2048`.
+pub fn blob(n: u32, seed: u64) -> crate::Result<Volume> {
+    if !(16..=2048).contains(&n) {
+        return Err(crate::Error::InvalidInput(format!(
+            "blob grid must be in 16..=2048 voxels, got {n}"
+        )));
+    }
+    let mut state = seed;
+    let mut next = |lo: i64, hi: i64| {
+        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        lo + (z % (hi - lo + 1) as u64) as i64
+    };
+    let n2 = 2 * i64::from(n);
+    let balls: Vec<([i64; 3], i64)> = (0..12)
+        .map(|_| {
+            let r = next(n2 / 8, n2 / 4);
+            (std::array::from_fn(|_| next(r + 2, n2 - r - 2)), r)
+        })
+        .collect();
+    let t = (n2 / 10).pow(2).pow(2);
+    mask_volume([n as usize; 3], |x, y, z| {
+        let c = [2 * x + 1, 2 * y + 1, 2 * z + 1];
+        let mut f = 0i64;
+        for (centre, r) in &balls {
+            let d2: i64 = (0..3).map(|a| (c[a] - centre[a]).pow(2)).sum();
+            let w = r * r - d2;
+            if w > 0 {
+                f += w * w;
+                if f >= t {
+                    return true;
+                }
+            }
+        }
+        false
     })
 }

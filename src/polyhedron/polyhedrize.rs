@@ -34,11 +34,12 @@
 //! but more shells and integers (CT bone 1,443 vs 1,377 shells), so it is
 //! not the default.
 //!
-//! Sibling polyhedra whose interiors overlap (exact separating-axis test)
-//! are merged into the hull of their union
-//! ([`PolyhedrizeOptions::disjoint_siblings`]), so that siblings are
-//! interior-disjoint and the region's indicator is the alternating sum of
-//! the shells'.
+//! Sibling polyhedra whose interiors overlap (exact separating-axis test),
+//! or that touch with positive area in a common face plane, are merged
+//! into the hull of their union ([`PolyhedrizeOptions::disjoint_siblings`]),
+//! so that siblings are interior-disjoint — the region's indicator is the
+//! alternating sum of the shells' — and no two faces of shells that do not
+//! nest cross in a plane (the merged surface keeps lattice vertices).
 //!
 //! **Guarantees.** A voxel belongs to the region of a shell when its centre
 //! lies in the closed shell and in no child's region. By induction over the
@@ -66,7 +67,7 @@
 use std::collections::VecDeque;
 
 use crate::hscan::{self, VoxelBox};
-use crate::hull::{ConvexHull, HullOptions};
+use crate::hull::{ConvexHull, HullFace, HullOptions};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
 use crate::volume::analysis::label_6_connected;
@@ -241,9 +242,9 @@ pub struct PolyhedrizeOptions {
     pub candidates: CandidateKind,
     /// Hull options (coplanar policy, order) of every shell.
     pub hull: HullOptions,
-    /// Merge sibling polyhedra whose interiors overlap into the hull of
-    /// their union (default `true`), so that sibling shells are
-    /// interior-disjoint: the signed volume is then exact and the merged
+    /// Merge sibling polyhedra whose interiors overlap, or that share face
+    /// area, into the hull of their union (default `true`), so that sibling
+    /// shells are separated: the signed volume is then exact and the merged
     /// surface of [`super::surface`] exists (maximal balls are not merged).
     pub disjoint_siblings: bool,
     /// Decompose genus > 0 components into maximal digital balls (§4.5.4).
@@ -512,7 +513,7 @@ fn merge_overlapping(
                     children[i].geometry.polytope(),
                     children[j].geometry.polytope(),
                 ) {
-                    (Some(a), Some(b)) => !interiors_disjoint(a, b),
+                    (Some(a), Some(b)) => !separated(a, b),
                     _ => false,
                 };
             if !overlap {
@@ -576,6 +577,59 @@ fn push_children(
             voxels: c.voxels,
         });
     }
+}
+
+/// Whether two convex polyhedra are *separated*: disjoint interiors and no
+/// face area in common. Two touching polyhedra may share part of a plane
+/// through opposite faces; where those polygons overlap with positive area
+/// their edges can cross properly — and so can faces of their descendants
+/// in that plane — at points that are not lattice points, which the
+/// merged surface cannot represent. Separated siblings exclude this for
+/// every pair of shells that do not nest: such a pair lies in two
+/// different children of its lowest common ancestor, whose contact has
+/// zero area in every plane.
+fn separated(a: &ConvexHull, b: &ConvexHull) -> bool {
+    let (ba, bb) = (a.bbox(), b.bbox());
+    if (0..3).any(|k| ba.1[k] < bb.0[k] || bb.1[k] < ba.0[k]) {
+        return true;
+    }
+    interiors_disjoint(a, b) && !share_face_area(a, b)
+}
+
+/// Whether faces of `a` and `b` on one plane (opposite normals; normals
+/// are primitive, so equal planes compare equal) overlap with positive
+/// area: no edge line of either polygon separates them (2-D
+/// separating-axis test, touching counts as separated; exact in `i128`).
+fn share_face_area(a: &ConvexHull, b: &ConvexHull) -> bool {
+    let points = |h: &ConvexHull, f: &HullFace| -> Vec<[i64; 3]> {
+        f.vertices
+            .iter()
+            .map(|&v| h.vertices()[v as usize])
+            .collect()
+    };
+    // An edge p → q of a face listed counter-clockwise about its normal n
+    // has the face on the side of n × (q − p).
+    let edge_separates = |n: [i64; 3], poly: &[[i64; 3]], other: &[[i64; 3]]| {
+        (0..poly.len()).any(|i| {
+            let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+            let inward = cross(n, sub(q, p));
+            other.iter().all(|&x| {
+                let w = sub(x, p).map(i128::from);
+                inward[0] * w[0] + inward[1] * w[1] + inward[2] * w[2] <= 0
+            })
+        })
+    };
+    a.faces().iter().any(|fa| {
+        let opposite = (fa.plane.normal.map(|c| -c), -fa.plane.offset);
+        b.faces()
+            .iter()
+            .filter(|fb| (fb.plane.normal, fb.plane.offset) == opposite)
+            .any(|fb| {
+                let (pa, pb) = (points(a, fa), points(b, fb));
+                !edge_separates(fa.plane.normal, &pa, &pb)
+                    && !edge_separates(fb.plane.normal, &pb, &pa)
+            })
+    })
 }
 
 /// Whether two convex polyhedra have disjoint interiors, exactly: a
@@ -765,6 +819,16 @@ impl Polyhedron {
     /// Whether all sibling polyhedra (dimension 3, same parent) have
     /// disjoint interiors (separating-axis theorem, exact).
     pub(crate) fn siblings_disjoint(&self) -> bool {
+        self.siblings_all(interiors_disjoint)
+    }
+
+    /// Whether all sibling polyhedra are separated: disjoint interiors and
+    /// no face area in common (what the merged surface needs).
+    pub(crate) fn siblings_separated(&self) -> bool {
+        self.siblings_all(separated)
+    }
+
+    fn siblings_all(&self, pair: fn(&ConvexHull, &ConvexHull) -> bool) -> bool {
         let mut by_parent: std::collections::BTreeMap<u32, Vec<&ConvexHull>> = Default::default();
         for s in &self.shells {
             if let (Some(p), Some(h)) = (s.parent, s.geometry.polytope())
@@ -774,8 +838,7 @@ impl Polyhedron {
             }
         }
         by_parent.values().all(|hulls| {
-            (0..hulls.len())
-                .all(|i| (i + 1..hulls.len()).all(|j| interiors_disjoint(hulls[i], hulls[j])))
+            (0..hulls.len()).all(|i| (i + 1..hulls.len()).all(|j| pair(hulls[i], hulls[j])))
         })
     }
 

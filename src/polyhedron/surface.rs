@@ -107,10 +107,10 @@ impl Polyhedron {
     /// region (a multiplicity outside −1..=1, an open or crossing loop, a
     /// face that cannot be triangulated).
     pub fn merged_surface(&self) -> crate::Result<MergedSurface> {
-        if !self.siblings_disjoint() {
+        if !self.siblings_separated() {
             return Err(invalid(
                 "the merged surface needs sibling shells with disjoint interiors \
-                 (volume_exact is false)"
+                 and no common face area"
                     .into(),
             ));
         }

@@ -1,7 +1,9 @@
 //! Inside-hull scan benchmarks (SPEC §4.3): a ball of radius r voxels in an
 //! n³ box (r = 100 in 256³, r = 200 in 512³), enclosed by its 1154 tangent
 //! planes in the primitive integer directions with components in −5..=5
-//! (many faces, as hulls of big digital balls have). Groups, in voxels/s:
+//! (many faces, as hulls of big digital balls have), and the exact hull of
+//! a smooth random blob in the same box (`blob_N`, `chisel phantom blob
+//! --n N --seed 1`). Groups, in voxels/s:
 //! `hull_scan/cpu_rows` (row spans), `hull_scan/cpu_classify` (spans + side
 //! codes: the "512³ in under 1 s" target), `hull_scan/cpu_brute` (every
 //! voxel × every face; 128³ and below), `hull_scan/gpu_rows_{int64,i32x2}`
@@ -16,6 +18,9 @@ use chisel::Backend;
 use chisel::gpu::{Gpu, GpuOptions};
 use chisel::hscan::gpu::{Arithmetic, HullScanInput};
 use chisel::hscan::{self, HalfSpace, VoxelBox};
+use chisel::hull::{ConvexHull, HullOptions};
+use chisel::phantom::voxel::blob;
+use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
 #[path = "common/mod.rs"]
@@ -50,12 +55,27 @@ fn ball_faces(n: usize, r: i64, k: i64) -> Vec<HalfSpace> {
     out
 }
 
-fn cases() -> Vec<(usize, i64)> {
-    if quick() {
-        vec![(64, 25), (128, 50)]
+/// (label, n, half-spaces): the tangent-plane balls, then the exact hull
+/// of a smooth random blob (`chisel phantom blob`) in the same n³ box.
+fn cases() -> Vec<(String, usize, Vec<HalfSpace>)> {
+    let sizes: &[(usize, i64)] = if quick() {
+        &[(64, 25), (128, 50)]
     } else {
-        vec![(256, 100), (512, 200)]
+        &[(256, 100), (512, 200)]
+    };
+    let mut out: Vec<(String, usize, Vec<HalfSpace>)> = sizes
+        .iter()
+        .map(|&(n, r)| (n.to_string(), n, ball_faces(n, r, 5)))
+        .collect();
+    for &(n, _) in sizes {
+        let v = blob(n as u32, 1).expect("blob");
+        let o = DigitalObject::from_volume(&v, Selection::Threshold(1.0), Component::Largest)
+            .expect("blob object");
+        let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default())
+            .expect("blob hull");
+        out.push((format!("blob_{n}"), n, h.half_spaces()));
     }
+    out
 }
 
 fn bench(c: &mut Criterion) {
@@ -90,31 +110,30 @@ fn bench(c: &mut Criterion) {
     let software = gpus
         .first()
         .is_some_and(|(g, _)| g.info.device_type == wgpu::DeviceType::Cpu);
-    for (n, r) in cases() {
-        let faces = ball_faces(n, r, 5);
+    for (label, n, faces) in cases() {
         let bbox = VoxelBox {
             origin: [0; 3],
             dims: [n; 3],
         };
         let voxels = (n * n * n) as u64;
-        eprintln!("box {n}³, ball r = {r}, {} faces", faces.len());
+        eprintln!("box {n}³, {label}: {} faces", faces.len());
         g.throughput(Throughput::Elements(voxels));
-        g.bench_with_input(BenchmarkId::new("cpu_rows", n), &n, |b, _| {
+        g.bench_with_input(BenchmarkId::new("cpu_rows", &label), &n, |b, _| {
             b.iter(|| hscan::row_spans(black_box(&faces), &bbox, Backend::Cpu).unwrap())
         });
-        g.bench_with_input(BenchmarkId::new("cpu_classify", n), &n, |b, _| {
+        g.bench_with_input(BenchmarkId::new("cpu_classify", &label), &n, |b, _| {
             b.iter(|| hscan::classify(black_box(&faces), &bbox, Backend::Cpu).unwrap())
         });
         // Brute force is ~100× slower than rows: 256³ on 2 cores takes a minute.
         if n <= 128 {
-            g.bench_with_input(BenchmarkId::new("cpu_brute", n), &n, |b, _| {
+            g.bench_with_input(BenchmarkId::new("cpu_brute", &label), &n, |b, _| {
                 b.iter(|| hscan::classify_voxels(black_box(&faces), &bbox, Backend::Cpu).unwrap())
             });
         }
         for (gpu, name) in &gpus {
             let arith = Arithmetic::of(gpu);
             g.bench_with_input(
-                BenchmarkId::new(format!("gpu_rows_{name}"), n),
+                BenchmarkId::new(format!("gpu_rows_{name}"), &label),
                 &n,
                 |b, _| {
                     b.iter(|| {
@@ -126,7 +145,7 @@ fn bench(c: &mut Criterion) {
             );
             if !software || n <= 64 {
                 g.bench_with_input(
-                    BenchmarkId::new(format!("gpu_brute_{name}"), n),
+                    BenchmarkId::new(format!("gpu_brute_{name}"), &label),
                     &n,
                     |b, _| {
                         b.iter(|| {

@@ -1,5 +1,6 @@
 //! Hull benches: exact incremental hulls of the seed's digital balls
-//! (combinatorial radius r = 12…400), the seed objects and the CT head bone.
+//! (combinatorial radius r = 12…400), the seed objects, smooth random blobs
+//! in 256³ and 512³ grids (`chisel phantom blob`) and the CT head bone.
 //!
 //! `hull/<object>` times candidate extraction (26-neighbourhood local
 //! corners) plus the hull with coplanar faces merged; `hull_points/ball_24`
@@ -16,7 +17,7 @@ use std::time::Duration;
 
 use chisel::hull::{ConvexHull, HullOptions};
 use chisel::parity::Backend;
-use chisel::phantom::voxel::{cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
+use chisel::phantom::voxel::{blob, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
 use chisel::polyhedron::{PolyhedrizeOptions, polyhedrize};
 use chisel::volume::Volume;
 use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection, voxel_centre};
@@ -117,6 +118,14 @@ fn main() {
             "torus_60_20",
             &object(&torus(60, 20).expect("torus"), thr),
         );
+        let blobs: &[u32] = if quick() { &[64] } else { &[256, 512] };
+        for &n in blobs {
+            bench_object(
+                &mut g,
+                &format!("blob_{n}"),
+                &object(&blob(n, 1).expect("blob"), thr),
+            );
+        }
         let head = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../shared/data/headsq/quarter.nhdr");
         match chisel::io::read_volume(&head) {

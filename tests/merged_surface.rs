@@ -139,13 +139,13 @@ fn assert_ray_parity(p: &Polyhedron, o: &DigitalObject, stride: usize, what: &st
     let m = p.merged_surface().unwrap();
     let b = margin_box(o);
     let sides = m.classify(&b).unwrap();
-    let by_rays = p.voxelize_ray_parity(&m, &b).unwrap();
+    let by_rays = p.voxelize_ray_parity(&m, &b, Backend::Cpu).unwrap();
     let nested = p.voxelize(&b, Backend::Cpu).unwrap();
     let differ = (0..nested.len())
         .filter(|&k| by_rays[k] != nested[k])
         .count();
     assert_eq!(differ, 0, "{what}: ray parity vs voxelize");
-    let (n, first) = p.mismatches_ray_parity(&m, o, 5).unwrap();
+    let (n, first) = p.mismatches_ray_parity(&m, o, Backend::Cpu, 5).unwrap();
     assert_eq!(n, 0, "{what}: {first:?}");
     let [nx, ny, _] = b.dims;
     for k in (0..sides.len()).step_by(stride) {
@@ -369,7 +369,10 @@ fn ray_parity_detects_a_missing_triangle() {
     let o = object(&cylinder_tunnel(25, 10, 15).unwrap());
     let p = run(&o);
     let m = p.merged_surface().unwrap();
-    assert_eq!(p.mismatches_ray_parity(&m, &o, 1).unwrap().0, 0);
+    assert_eq!(
+        p.mismatches_ray_parity(&m, &o, Backend::Cpu, 1).unwrap().0,
+        0
+    );
     let mut broken = m.clone();
     // The largest triangle whose projection to xy has area (a cap piece).
     let area = |t: &[u32; 3]| {
@@ -383,7 +386,9 @@ fn ray_parity_detects_a_missing_triangle() {
         .max_by_key(|&k| area(&m.triangles[k]))
         .unwrap();
     broken.triangles.remove(k);
-    let (n, _) = p.mismatches_ray_parity(&broken, &o, 1).unwrap();
+    let (n, _) = p
+        .mismatches_ray_parity(&broken, &o, Backend::Cpu, 1)
+        .unwrap();
     assert!(n > 0, "a missing cap triangle must show");
     // And the single-point rays see it too, for a centre under the
     // triangle's centroid column.

@@ -140,7 +140,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         // when it exists; the stage includes merging the read-back shells.
         let t = Instant::now();
         let ray_parity = match back.merged_surface() {
-            Ok(m) => Some(back.mismatches_ray_parity(&m, &object, 10)?),
+            Ok(m) => Some(back.mismatches_ray_parity(&m, &object, backend, 10)?),
             Err(_) => None,
         };
         stage("verify_ray_parity", t);

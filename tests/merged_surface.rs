@@ -480,3 +480,30 @@ fn cli_verify_reports_ray_parity() {
     assert!(v["verify_ray_parity_mismatches"].is_null());
     assert!(v["timings_s"].get("verify_ray_parity").is_none());
 }
+
+#[test]
+fn ray_parity_labels_on_the_gpu_match_the_cpu() {
+    // The shell-tree labels use the hull-scan row spans; on the GPU
+    // backend they must give the same voxelization.
+    let Some(gpu) = common::gpu() else {
+        return;
+    };
+    let o = object(&cylinder_tunnel(25, 10, 15).unwrap());
+    let carving = common::random_carvings().swap_remove(0);
+    for (what, o) in [("cylinder 25/10", o), ("random carving 0", carving)] {
+        let p = run(&o);
+        let Ok(m) = p.merged_surface() else {
+            continue;
+        };
+        let b = margin_box(&o);
+        let cpu = p.voxelize_ray_parity(&m, &b, Backend::Cpu).unwrap();
+        let on_gpu = p.voxelize_ray_parity(&m, &b, Backend::Gpu(&gpu)).unwrap();
+        assert_eq!(cpu, on_gpu, "{what}");
+        assert_eq!(
+            p.mismatches_ray_parity(&m, &o, Backend::Gpu(&gpu), 1)
+                .unwrap()
+                .0,
+            0
+        );
+    }
+}

@@ -194,8 +194,8 @@ fn theorem_ke_refuses_reflex_merges_and_accepts_collinear_ones() {
 #[test]
 fn theorem_ke_is_convexity_of_both_corners() {
     // Seeded random convex pairs: triangle F1 = P1 P2 A (left of P1→P2)
-    // and F2 = P2 P1 B (right of it); KE must say whether the quadrilateral
-    // A P1 B P2 ... is convex at P1 and P2 (orientation tests).
+    // and F2 = P2 P1 B (right of it); KE must say whether their union
+    // P1 B P2 A is convex at P1 and at P2 (orientation tests).
     let mut s = 0x9e37_79b9_7f4a_7c15u64;
     let mut rnd = |m: i64| {
         s ^= s << 13;

@@ -6,8 +6,9 @@
 //! reported as `"mesh": "shells"` with the reason in `merge_refused`), a
 //! preview coloured by depth, `--verify` (the written cell list is
 //! read back and voxelized against S, by the nested shells and, when the
-//! merged surface exists, by ray parity, §4.4.3) and a JSON report. `--slice Z` gives
-//! the 2-D analogue (ch. 9): nested convex polygons for one slice.
+//! merged surface exists, by ray parity, §4.4.3) and a JSON report.
+//! `--slice Z` gives the 2-D analogue (ch. 9): nested convex polygons for
+//! one slice.
 
 use std::path::PathBuf;
 use std::time::Instant;

@@ -5,8 +5,10 @@
 //! merged surface (§4.4.1; of the separate shells when siblings overlap,
 //! reported as `"mesh": "shells"` with the reason in `merge_refused`), a
 //! preview coloured by depth, `--verify` (the written cell list is
-//! read back and voxelized against S) and a JSON report. `--slice Z` gives
-//! the 2-D analogue (ch. 9): nested convex polygons for one slice.
+//! read back and voxelized against S, by the nested shells and, when the
+//! merged surface exists, by ray parity, §4.4.3) and a JSON report.
+//! `--slice Z` gives the 2-D analogue (ch. 9): nested convex polygons for
+//! one slice.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -65,7 +67,8 @@ pub struct Args {
     preview: Option<PathBuf>,
     #[command(flatten)]
     view: ViewAxes,
-    /// Read the encoded cell list back and voxelize it: must reproduce S exactly.
+    /// Read the encoded cell list back and voxelize it: must reproduce S
+    /// exactly, by the nested shells and (merged surface) by ray parity.
     #[arg(long)]
     verify: bool,
     /// JSON report.
@@ -129,7 +132,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             serde_json::to_string_pretty(&poly.to_json())?.as_bytes(),
         )?;
     }
-    let verified = if args.verify {
+    let (verified, ray_parity) = if args.verify {
         let t = Instant::now();
         let back = Polyhedron::from_bytes(&bytes, "encoded cell list", object.frame())?;
         let (n, first) = back.mismatches(&object, backend, 10)?;
@@ -140,9 +143,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 args.volume.display()
             );
         }
-        Some(true)
+        // The same check by ray parity on the merged surface (§4.4.3),
+        // when it exists; the stage includes merging the read-back shells.
+        let t = Instant::now();
+        let ray_parity = match back.merged_surface() {
+            Ok(m) => Some(back.mismatches_ray_parity(&m, &object, backend, 10)?),
+            Err(_) => None,
+        };
+        stage("verify_ray_parity", t);
+        (Some(true), ray_parity)
     } else {
-        None
+        (None, None)
     };
     let t = Instant::now();
     let (merged, merge_refused) = match poly.merged_surface() {
@@ -219,9 +230,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "merged_faces": merged.as_ref().map(|m| m.n_faces()),
         "merged_faces_split": merged.as_ref().map(|m| m.n_faces_split()),
         "merged_faces_with_holes": merged.as_ref().map(|m| m.n_faces_with_holes()),
+        "merged_convex_faces": merged.as_ref().map(|m| m.n_convex_faces()),
         "merged_triangles": merged.as_ref().map(|m| m.triangles.len()),
         "merge_refused": merge_refused,
         "verified": verified,
+        "verify_ray_parity_mismatches": ray_parity.as_ref().map(|r| r.0),
         "outputs": {
             "cells": args.output,
             "cells_json": args.cells_json,
@@ -245,6 +258,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &args.report {
         super::report::write_json(path, &value)?;
+    }
+    if let Some((n, first)) = ray_parity.filter(|r| r.0 > 0) {
+        anyhow::bail!(
+            "{}: ray parity on the merged surface differs from the object in {n} voxels \
+             (first: {first:?})",
+            args.volume.display()
+        );
     }
     Ok(())
 }

@@ -9,10 +9,14 @@
 //!   §4.5.4), exact voxelization, storage (eq. 8.2) and `.cells` files.
 //! - [`press`]: the face selection for pressing-in (Def. PR (i)–(iii)).
 //! - [`surface`]: the single merged surface of §4.4.1 ("Zusammenfügen"),
-//!   by exact boundary evaluation of the shells' face chain.
+//!   by exact boundary evaluation of the shells' face chain, with its
+//!   convex faces (Theorem KE, §4.5.6).
+//! - [`inside`]: point-in-polyhedron for the non-convex merged surface by
+//!   exact ray parity (§4.4.3), and the voxelization it gives.
 
 pub mod balls;
 mod cellfile;
+pub mod inside;
 pub mod polyhedrize;
 pub mod press;
 pub mod surface;
@@ -23,5 +27,5 @@ pub use polyhedrize::{
     ZkhReport, polyhedrize,
 };
 pub use press::faces_to_press;
-pub use surface::{MergedFace, MergedSurface};
+pub use surface::{ConvexFace, MergedFace, MergedSurface, theorem_ke};
 pub use zkh::{Zkh, ZkhClass, background_components};

@@ -11,8 +11,10 @@
 //! region. Loops are then split where a neighbouring face has an edge
 //! endpoint on their edge (T-junctions), so every edge is used as often in
 //! one direction as in the other, and faces are triangulated by ear
-//! clipping. Every predicate is exact integer arithmetic on combinatorial
-//! coordinates (voxel centres odd); no epsilons, no rounding.
+//! clipping. Every face is also split into convex faces by the merges of
+//! Theorem KE (§4.5.6, [`MergedSurface::convex_faces`]). Every predicate
+//! is exact integer arithmetic on combinatorial coordinates (voxel centres
+//! odd); no epsilons, no rounding.
 //!
 //! Lower-dimensional and flat shells carry no volume (they label voxels on
 //! the surface) and are left out.
@@ -41,6 +43,18 @@ pub struct MergedFace {
     pub loops: Vec<Vec<u32>>,
 }
 
+/// One convex piece of a [`MergedFace`] ([`MergedSurface::convex_faces`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConvexFace {
+    /// Index of the merged face (into [`MergedSurface::faces`]) it lies in.
+    pub face: u32,
+    /// Vertex cycle (indices into [`MergedSurface::vertices`]),
+    /// counter-clockwise seen from outside, at least 3 corners, every
+    /// corner convex or straight (straight corners are kept: loop vertices
+    /// and T-junctions that neighbouring faces share).
+    pub vertices: Vec<u32>,
+}
+
 /// The merged surface: one closed, consistently oriented polyhedral
 /// surface of the object region (possibly several components, e.g. around
 /// a cavity; edges at pinch vertices may be used by four faces).
@@ -56,6 +70,17 @@ pub struct MergedSurface {
     /// Per vertex, the smallest depth of a shell having it as a hull vertex
     /// (every merged vertex is one).
     pub vertex_depth: Vec<u32>,
+    /// Every face split into convex faces (Theorem KE, §4.5.6), ordered by
+    /// face: starting from the face's triangles, two pieces sharing a
+    /// diagonal are merged when [`theorem_ke`] says the union stays convex.
+    /// The merges are greedy (Hertel–Mehlhorn style, one pass over the
+    /// diagonals): every diagonal left is essential, so a face without
+    /// holes with `r` reflex corners gets at most `2r + 1` convex faces,
+    /// at most four times the minimum (any convex partition needs
+    /// `⌈r/2⌉ + 1`). Not optimal, and no such bound is claimed for faces
+    /// with holes. The convex faces of a face tile it exactly: they meet
+    /// only along whole edges and their areas sum to the face's.
+    pub convex_faces: Vec<ConvexFace>,
 }
 
 impl MergedSurface {
@@ -73,6 +98,12 @@ impl MergedSurface {
     /// (seed Table 8.7, "split").
     pub fn n_faces_split(&self) -> usize {
         self.faces.iter().map(|f| f.loops.len()).sum()
+    }
+
+    /// Convex faces ([`MergedSurface::convex_faces`]), at least
+    /// [`MergedSurface::n_faces_split`].
+    pub fn n_convex_faces(&self) -> usize {
+        self.convex_faces.len()
     }
 
     /// 6·volume enclosed, combinatorial units (one voxel = 8 units, so
@@ -157,9 +188,11 @@ impl Polyhedron {
         let vertices = table.points;
         split_t_junctions(&vertices, &mut faces);
         check_closed(&faces, &vertices)?;
-        let mut triangles = Vec::new();
-        for f in &faces {
-            triangles.extend(triangulate(f, &vertices)?);
+        let (mut triangles, mut convex_faces) = (Vec::new(), Vec::new());
+        for (fi, f) in faces.iter().enumerate() {
+            let tris = triangulate(f, &vertices)?;
+            convex_faces.extend(convex_faces_of(fi as u32, f.normal, &tris, &vertices));
+            triangles.extend(tris);
         }
         let vertex_depth = vertices
             .iter()
@@ -170,6 +203,7 @@ impl Polyhedron {
             faces,
             triangles,
             vertex_depth,
+            convex_faces,
         })
     }
 }
@@ -835,4 +869,122 @@ fn split_triangle(t: [usize; 3], dropped: &[usize], pos: &[P2], out: &mut Vec<[u
         }
     }
     out.push(t);
+}
+
+/// Theorem KE (seed 003 §4.5.6): two coplanar convex faces F1 and F2
+/// sharing the edge E = P1P2 merge into a convex face when the points
+/// S1 = E1 ∩ line(P1, P2) and S2 = E2 ∩ line(P1, P2) lie on the closed
+/// segment [P1, P2], where E1 joins F1's other neighbour of P1 (`p1v`) to
+/// F2's other neighbour of P1 (`p2n`), and E2 joins F2's other neighbour
+/// of P2 (`p2v`) to F1's other neighbour of P2 (`p1n`). Planar
+/// coordinates, counter-clockwise seen from outside: F1 runs
+/// `p1v → p1 → p2 → p1n`, F2 runs `p2v → p2 → p1 → p2n`.
+///
+/// Equivalent to both ends of E staying convex or straight corners of the
+/// union; S1 = P1 (`p1v`, P1, `p2n` collinear) is accepted. Exact: S1 =
+/// P1 + t·(P2 − P1) with t a ratio of i128 cross products, compared with
+/// 0 and 1 without division. E1 parallel to E (no intersection) refuses.
+pub fn theorem_ke(
+    p1: [i64; 2],
+    p2: [i64; 2],
+    p1v: [i64; 2],
+    p1n: [i64; 2],
+    p2v: [i64; 2],
+    p2n: [i64; 2],
+) -> bool {
+    let on_edge = |a: P2, b: P2| {
+        let ab = sub2(b, a);
+        let (num, den) = (cross2(sub2(a, p1), ab), cross2(sub2(p2, p1), ab));
+        match den.signum() {
+            1 => 0 <= num && num <= den,
+            -1 => den <= num && num <= 0,
+            _ => false,
+        }
+    };
+    on_edge(p1v, p2n) && on_edge(p2v, p1n)
+}
+
+/// The convex faces of face `face` (outward `normal`) from its triangles
+/// (counter-clockwise about `normal`): one greedy pass over the shared
+/// diagonals in triangle order, merging the two pieces on either side when
+/// [`theorem_ke`] holds. Pieces are kept as cycles of half-edges, so a
+/// merge relinks four pointers.
+fn convex_faces_of(
+    face: u32,
+    normal: [i64; 3],
+    tris: &[[u32; 3]],
+    vertices: &[[i64; 3]],
+) -> Vec<ConvexFace> {
+    // Half-edge h runs from corner h % 3 of triangle h / 3 to the next one.
+    let n = 3 * tris.len();
+    let from = |h: usize| tris[h / 3][h % 3];
+    let to = |h: usize| tris[h / 3][(h + 1) % 3];
+    let mut next: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 1) % 3).collect();
+    let mut prev: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 2) % 3).collect();
+    let mut piece: Vec<usize> = (0..tris.len()).collect();
+    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for h in 0..n {
+        by_edge.entry((from(h), to(h))).or_default().push(h);
+    }
+    let pos = |v: u32| project(vertices[v as usize], normal);
+    let mut alive = vec![true; n];
+    for h in 0..n {
+        let (u, v) = (from(h), to(h));
+        let (Some([_]), Some(&[g])) = (
+            by_edge.get(&(u, v)).map(Vec::as_slice),
+            by_edge.get(&(v, u)).map(Vec::as_slice),
+        ) else {
+            continue;
+        };
+        if u > v {
+            continue;
+        }
+        let (ph, pg) = (find(&mut piece, h / 3), find(&mut piece, g / 3));
+        if ph == pg {
+            continue;
+        }
+        let (p1v, p1n) = (pos(from(prev[h])), pos(to(next[h])));
+        let (p2v, p2n) = (pos(from(prev[g])), pos(to(next[g])));
+        if !theorem_ke(pos(u), pos(v), p1v, p1n, p2v, p2n) {
+            continue;
+        }
+        let (hp, hn, gp, gn) = (prev[h], next[h], prev[g], next[g]);
+        next[hp] = gn;
+        prev[gn] = hp;
+        next[gp] = hn;
+        prev[hn] = gp;
+        alive[h] = false;
+        alive[g] = false;
+        piece[pg] = ph;
+    }
+    let mut out = Vec::new();
+    for start in 0..n {
+        if !alive[start] {
+            continue;
+        }
+        let mut cycle = Vec::new();
+        let mut h = start;
+        loop {
+            alive[h] = false;
+            cycle.push(from(h));
+            h = next[h];
+            if h == start {
+                break;
+            }
+        }
+        out.push(ConvexFace {
+            face,
+            vertices: cycle,
+        });
+    }
+    out
+}
+
+/// Union-find root with path halving.
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
 }

@@ -73,7 +73,8 @@ fn cases() -> Vec<(String, usize, Vec<HalfSpace>)> {
             .expect("blob object");
         let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default())
             .expect("blob hull");
-        out.push((format!("blob_{n}"), n, h.half_spaces()));
+        let faces = h.half_spaces().into_iter().map(HalfSpace::from).collect();
+        out.push((format!("blob_{n}"), n, faces));
     }
     out
 }

@@ -451,10 +451,7 @@ fn scan_structure(
     let faces: Vec<hscan::HalfSpace> = hull
         .half_spaces()
         .iter()
-        .map(|h| hscan::HalfSpace {
-            normal: h.normal,
-            offset: h.offset,
-        })
+        .map(|&h| hscan::HalfSpace::from(h))
         .collect();
     times.hull += t.elapsed().as_secs_f64();
 

@@ -87,6 +87,16 @@ pub struct HalfSpace {
     pub offset: i64,
 }
 
+impl From<HalfSpace> for crate::hscan::HalfSpace {
+    /// The same half-space as input of the inside-hull scans.
+    fn from(h: HalfSpace) -> Self {
+        crate::hscan::HalfSpace {
+            normal: h.normal,
+            offset: h.offset,
+        }
+    }
+}
+
 impl HalfSpace {
     /// `normal·p − offset`: `> 0` outside (the face is visible from `p`),
     /// `0` on the plane, `< 0` inside.

@@ -407,10 +407,7 @@ impl ClosedShell {
                 let spaces: Vec<hscan::HalfSpace> = h
                     .half_spaces()
                     .iter()
-                    .map(|s| hscan::HalfSpace {
-                        normal: s.normal,
-                        offset: s.offset,
-                    })
+                    .map(|&s| hscan::HalfSpace::from(s))
                     .collect();
                 ClosedShell::Polytope(hscan::row_spans(&spaces, &bbox, backend)?)
             }

@@ -57,12 +57,13 @@
 //!
 //! **Surfaces.** Every shell is a closed convex 2-manifold, consistently
 //! oriented (background shells reversed); a child may share face area with
-//! its parent. When sibling shells have disjoint interiors
-//! ([`PolyhedronSummary::volume_exact`]) [`super::surface`] merges them into
-//! the single surface of §4.4.1 (coplanar pieces cancelled, faces with
-//! holes). Not built: merging when siblings overlap, Theorem KE's convex
-//! merges of coplanar faces, and the ray-parity point-in-polyhedron test of
-//! §4.4.3 (voxelization here uses the nested convex tests).
+//! its parent. When sibling shells are separated (the default
+//! construction) [`super::surface`] merges them into the single surface of
+//! §4.4.1 (coplanar pieces cancelled, faces with holes, and their convex
+//! split by Theorem KE), and [`super::inside`] tests voxels against it by
+//! the ray parity of §4.4.3; [`Polyhedron::voxelize`] uses the nested
+//! convex tests. With `disjoint_siblings` off, overlapping siblings have no
+//! merged surface.
 
 use std::collections::VecDeque;
 
@@ -202,10 +203,7 @@ impl ShellGeometry {
                 let spaces: Vec<hscan::HalfSpace> = h
                     .half_spaces()
                     .iter()
-                    .map(|s| hscan::HalfSpace {
-                        normal: s.normal,
-                        offset: s.offset,
-                    })
+                    .map(|&s| hscan::HalfSpace::from(s))
                     .collect();
                 let sides = hscan::classify(&spaces, &bbox, backend)?;
                 let flags = (0..sides.sides.len())

@@ -133,7 +133,7 @@ impl Polyhedron {
     /// The seed's single merged surface (module docs).
     ///
     /// Errors: [`crate::Error::InvalidInput`] when sibling shells are not
-    /// proven interior-disjoint (`volume_exact` false), and — for a
+    /// proven separated (disjoint interiors, no common face area), and — for a
     /// malformed tree only — when the face chain is not the boundary of a
     /// region (a multiplicity outside −1..=1, an open or crossing loop, a
     /// face that cannot be triangulated).

@@ -69,10 +69,7 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let at = |x: usize, y: usize, z: usize| [lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64];
     let spaces: Vec<crate::hscan::HalfSpace> = hs
         .iter()
-        .map(|h| crate::hscan::HalfSpace {
-            normal: h.normal,
-            offset: h.offset,
-        })
+        .map(|&h| crate::hscan::HalfSpace::from(h))
         .collect();
     let bbox = crate::hscan::VoxelBox { origin: lo, dims };
     let sides = crate::hscan::classify(&spaces, &bbox, crate::parity::Backend::Cpu)?;

@@ -8,7 +8,9 @@
 //! input the Qhull comparison in the README uses, ~2.4 ms via scipy).
 //! `polyhedrize/<object>` times the whole lossless polyhedrization (nested
 //! shells, §4.4) with `polyhedrize/<object>/verify` the exact voxelization
-//! of the result over the object's box, and prints shells, faces and
+//! of the result over the object's box by the nested convex tests,
+//! `polyhedrize/<object>/verify_ray_parity` the same by ray parity on the
+//! merged surface (§4.4.3) with the stored labels, and prints shells, faces and
 //! integers (eq. 8.2) against marching cubes (eq. 8.1).
 //! `CHISEL_BENCH_QUICK=1`: small cases and sample counts, for CI smoke runs.
 
@@ -83,6 +85,13 @@ fn bench_polyhedrize(g: &mut BenchmarkGroup<'_, WallTime>, name: &str, o: &Digit
     g.bench_function(BenchmarkId::from_parameter(name), |b| b.iter(run));
     g.bench_function(BenchmarkId::new(name, "verify"), |b| {
         b.iter(|| p.mismatches(black_box(o), Backend::Cpu, 1).expect("verify"))
+    });
+    let surface = p.merged_surface().expect("merged surface");
+    g.bench_function(BenchmarkId::new(name, "verify_ray_parity"), |b| {
+        b.iter(|| {
+            p.mismatches_ray_parity(&surface, black_box(o), Backend::Cpu, 1)
+                .expect("verify")
+        })
     });
 }
 

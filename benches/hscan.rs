@@ -5,7 +5,8 @@
 //! a smooth random blob in the same box (`blob_N`, `chisel phantom blob
 //! --n N --seed 1`). Groups, in voxels/s:
 //! `hull_scan/cpu_rows` (row spans), `hull_scan/cpu_classify` (spans + side
-//! codes: the "512³ in under 1 s" target), `hull_scan/cpu_brute` (every
+//! codes: the "512³ in under 1 s" target), `hull_scan/cpu_rows_culled`
+//! (blobs: each layer scans only the faces meeting it), `hull_scan/cpu_brute` (every
 //! voxel × every face; 128³ and below), `hull_scan/gpu_rows_{int64,i32x2}`
 //! and `hull_scan/gpu_brute_{int64,i32x2}` (upload + dispatch + readback;
 //! brute force only up to 64³ on software adapters).
@@ -55,17 +56,20 @@ fn ball_faces(n: usize, r: i64, k: i64) -> Vec<HalfSpace> {
     out
 }
 
-/// (label, n, half-spaces): the tangent-plane balls, then the exact hull
-/// of a smooth random blob (`chisel phantom blob`) in the same n³ box.
-fn cases() -> Vec<(String, usize, Vec<HalfSpace>)> {
+/// (label, n, half-spaces, face z ranges): the tangent-plane balls, then
+/// the exact hull of a smooth random blob (`chisel phantom blob`) in the
+/// same n³ box, with its faces' z ranges for the culled scan.
+type Case = (String, usize, Vec<HalfSpace>, Option<Vec<[i64; 2]>>);
+
+fn cases() -> Vec<Case> {
     let sizes: &[(usize, i64)] = if quick() {
         &[(64, 25), (128, 50)]
     } else {
         &[(256, 100), (512, 200)]
     };
-    let mut out: Vec<(String, usize, Vec<HalfSpace>)> = sizes
+    let mut out: Vec<Case> = sizes
         .iter()
-        .map(|&(n, r)| (n.to_string(), n, ball_faces(n, r, 5)))
+        .map(|&(n, r)| (n.to_string(), n, ball_faces(n, r, 5), None))
         .collect();
     for &(n, _) in sizes {
         let v = blob(n as u32, 1).expect("blob");
@@ -74,7 +78,7 @@ fn cases() -> Vec<(String, usize, Vec<HalfSpace>)> {
         let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default())
             .expect("blob hull");
         let faces = h.half_spaces().into_iter().map(HalfSpace::from).collect();
-        out.push((format!("blob_{n}"), n, faces));
+        out.push((format!("blob_{n}"), n, faces, Some(h.face_z_extents())));
     }
     out
 }
@@ -111,7 +115,7 @@ fn bench(c: &mut Criterion) {
     let software = gpus
         .first()
         .is_some_and(|(g, _)| g.info.device_type == wgpu::DeviceType::Cpu);
-    for (label, n, faces) in cases() {
+    for (label, n, faces, extents) in cases() {
         let bbox = VoxelBox {
             origin: [0; 3],
             dims: [n; 3],
@@ -125,6 +129,14 @@ fn bench(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("cpu_classify", &label), &n, |b, _| {
             b.iter(|| hscan::classify(black_box(&faces), &bbox, Backend::Cpu).unwrap())
         });
+        if let Some(extents) = &extents {
+            g.bench_with_input(BenchmarkId::new("cpu_rows_culled", &label), &n, |b, _| {
+                b.iter(|| {
+                    hscan::row_spans_culled(black_box(&faces), extents, &bbox, Backend::Cpu)
+                        .unwrap()
+                })
+            });
+        }
         // Brute force is ~100× slower than rows: 256³ on 2 cores takes a minute.
         if n <= 128 {
             g.bench_with_input(BenchmarkId::new("cpu_brute", &label), &n, |b, _| {

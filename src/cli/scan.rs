@@ -448,11 +448,7 @@ fn scan_structure(
         "area_world": summary.area_world,
         "planar": summary.planar,
     });
-    let faces: Vec<hscan::HalfSpace> = hull
-        .half_spaces()
-        .iter()
-        .map(|&h| hscan::HalfSpace::from(h))
-        .collect();
+    let faces: Vec<hscan::HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
     times.hull += t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -461,8 +457,7 @@ fn scan_structure(
         origin: hlo,
         dims: std::array::from_fn(|a| (hhi[a] - hlo[a] + 1).max(0) as usize),
     };
-    let classification: Classification =
-        hscan::row_spans(&faces, &bbox, backend)?.to_classification()?;
+    let classification: Classification = hull.row_spans(&bbox, backend)?.to_classification()?;
     let [outside, on, inside] = classification.counts();
     row["scan"] = json!({
         "box": bbox,

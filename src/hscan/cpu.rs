@@ -50,12 +50,31 @@ pub fn hull_scan(faces: &[HalfSpace], bbox: &VoxelBox) -> Result<Classification>
 pub fn hull_rows(faces: &[HalfSpace], bbox: &VoxelBox) -> RowSpans {
     RowSpans {
         bbox: *bbox,
-        spans: lattice_rows(faces, bbox.origin, bbox.dims, 1),
+        spans: lattice_rows(faces, None, bbox.origin, bbox.dims, 1),
+    }
+}
+
+/// [`hull_rows`] of a convex polytope whose face `f` spans the
+/// combinatorial z range `z_extents[f]` (inclusive; same length as
+/// `faces`): each layer uses only the faces whose range holds it, and
+/// layers outside every range are empty. The spans are those of
+/// [`hull_rows`]: for z in the polytope's range, P ∩ {z} is the
+/// intersection of the half-spaces of the faces meeting the plane — a
+/// point q of the plane outside P leaves P, on the segment from a point of
+/// P ∩ {z}, at a boundary point b, and q violates a face through b, whose
+/// range holds z.
+pub fn hull_rows_culled(faces: &[HalfSpace], z_extents: &[[i64; 2]], bbox: &VoxelBox) -> RowSpans {
+    RowSpans {
+        bbox: *bbox,
+        spans: lattice_rows(faces, Some(z_extents), bbox.origin, bbox.dims, 1),
     }
 }
 
 /// Per-row intervals on the lattice of points `2·(origin + local) + parity`
-/// (parity 1: voxel centres, 0: cell corners), `dims[1]·dims[2]` rows.
+/// (parity 1: voxel centres, 0: cell corners), `dims[1]·dims[2]` rows; with
+/// `z_extents` (one inclusive combinatorial z range per face of a convex
+/// polytope) each layer keeps only the faces meeting it
+/// ([`hull_rows_culled`]).
 ///
 /// The faces are split once by the sign of `n_x`, and per z layer reduced
 /// to `[a, b, d − c·z]`, so a row costs two products per face. Splitting
@@ -63,6 +82,7 @@ pub fn hull_rows(faces: &[HalfSpace], bbox: &VoxelBox) -> RowSpans {
 /// minima/maxima, the same in any order (and the same as the kernel's).
 pub(crate) fn lattice_rows(
     faces: &[HalfSpace],
+    z_extents: Option<&[[i64; 2]]>,
     origin: [i64; 3],
     dims: [usize; 3],
     parity: i64,
@@ -72,19 +92,28 @@ pub(crate) fn lattice_rows(
     if nx == 0 || ny == 0 {
         return spans;
     }
-    let by_sign = |sign: i64| -> Vec<HalfSpace> {
-        faces
-            .iter()
-            .filter(|f| f.normal[0].signum() == sign)
-            .copied()
+    let extent = |f: usize| z_extents.and_then(|e| e.get(f)).copied();
+    let by_sign = |sign: i64| -> Vec<(HalfSpace, Option<[i64; 2]>)> {
+        (0..faces.len())
+            .filter(|&f| faces[f].normal[0].signum() == sign)
+            .map(|f| (faces[f], extent(f)))
             .collect()
     };
     let (pos, neg, zero) = (by_sign(1), by_sign(-1), by_sign(0));
+    let range = z_extents.map(|e| {
+        e.iter().fold([i64::MAX, i64::MIN], |r, x| {
+            [r[0].min(x[0]), r[1].max(x[1])]
+        })
+    });
     spans.par_chunks_mut(ny).enumerate().for_each(|(k, layer)| {
         let z = 2 * (origin[2] + k as i64) + parity;
-        let at_z = |fs: &[HalfSpace]| -> Vec<[i64; 3]> {
+        if range.is_some_and(|r| z < r[0] || z > r[1]) {
+            return;
+        }
+        let at_z = |fs: &[(HalfSpace, Option<[i64; 2]>)]| -> Vec<[i64; 3]> {
             fs.iter()
-                .map(|f| [f.normal[0], f.normal[1], f.offset - f.normal[2] * z])
+                .filter(|(_, e)| e.is_none_or(|e| e[0] <= z && z <= e[1]))
+                .map(|(f, _)| [f.normal[0], f.normal[1], f.offset - f.normal[2] * z])
                 .collect()
         };
         let layer_faces = LayerFaces {

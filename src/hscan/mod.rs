@@ -268,6 +268,33 @@ pub fn row_spans(
     }
 }
 
+/// [`row_spans`] of a convex polytope whose face `f` (half-space `f`)
+/// spans the combinatorial z range `z_extents[f]` (inclusive; e.g.
+/// [`crate::hull::ConvexHull::face_z_extents`]). CPU: each layer uses only
+/// the faces meeting it ([`cpu::hull_rows_culled`], the same spans); GPU:
+/// every face, as [`row_spans`].
+///
+/// Errors: as [`row_spans`]; `z_extents` not one range per half-space.
+pub fn row_spans_culled(
+    half_spaces: &[HalfSpace],
+    z_extents: &[[i64; 2]],
+    bbox: &VoxelBox,
+    backend: Backend<'_>,
+) -> Result<RowSpans> {
+    if z_extents.len() != half_spaces.len() {
+        return Err(Error::InvalidInput(format!(
+            "hull scan: {} z ranges for {} faces",
+            z_extents.len(),
+            half_spaces.len()
+        )));
+    }
+    check_range(half_spaces, bbox)?;
+    match backend {
+        Backend::Cpu => Ok(cpu::hull_rows_culled(half_spaces, z_extents, bbox)),
+        Backend::Gpu(g) => gpu::hull_rows(g, half_spaces, bbox),
+    }
+}
+
 /// Every voxel of `bbox` inside / on / outside, by the per-row method
 /// ([`row_spans`] expanded on the host).
 pub fn classify(

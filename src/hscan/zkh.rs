@@ -164,8 +164,8 @@ fn incident_faces(
         return Vec::new();
     }
     let corner_dims = [nx + 1, ny + 1, nz + 1];
-    let corner_open = lattice_rows(faces, bbox.origin, corner_dims, 0);
-    let voxel_rows = lattice_rows(faces, bbox.origin, bbox.dims, 1);
+    let corner_open = lattice_rows(faces, None, bbox.origin, corner_dims, 0);
+    let voxel_rows = lattice_rows(faces, None, bbox.origin, bbox.dims, 1);
     let label_at = |x: usize, y: usize, z: usize| labels[x + nx * (y + ny * z)];
     let mut pairs: Vec<(u32, u32)> = (0..=nz)
         .into_par_iter()

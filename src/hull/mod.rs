@@ -372,6 +372,43 @@ impl ConvexHull {
         out
     }
 
+    /// Per-row intervals of the voxel rows of `bbox` in the closed hull,
+    /// exactly ([`crate::hscan::row_spans_culled`]: on the CPU each layer
+    /// uses only the faces meeting it).
+    ///
+    /// Errors: the hull-scan range limits of [`crate::hscan::check_range`].
+    pub fn row_spans(
+        &self,
+        bbox: &crate::hscan::VoxelBox,
+        backend: crate::parity::Backend<'_>,
+    ) -> crate::Result<crate::hscan::RowSpans> {
+        let spaces: Vec<crate::hscan::HalfSpace> =
+            self.half_spaces().into_iter().map(Into::into).collect();
+        crate::hscan::row_spans_culled(&spaces, &self.face_z_extents(), bbox, backend)
+    }
+
+    /// The combinatorial z range `[min, max]` of each half-space of
+    /// [`Self::half_spaces`], in the same order: the range of its face's
+    /// vertices (a flat hull: the polygon's range for every half-space), for
+    /// [`crate::hscan::row_spans_culled`].
+    pub fn face_z_extents(&self) -> Vec<[i64; 2]> {
+        let range = |vs: &mut dyn Iterator<Item = &u32>| {
+            vs.fold([i64::MAX, i64::MIN], |r, &v| {
+                let z = self.vertices[v as usize][2];
+                [r[0].min(z), r[1].max(z)]
+            })
+        };
+        let n = self.half_spaces().len();
+        if self.planar.is_some() {
+            let all = range(&mut self.faces.iter().flat_map(|f| &f.vertices));
+            return vec![all; n];
+        }
+        self.faces
+            .iter()
+            .map(|f| range(&mut f.vertices.iter()))
+            .collect()
+    }
+
     /// Exact position of `p` relative to the hull.
     pub fn containment(&self, p: [i64; 3]) -> Containment {
         let mut on = false;

@@ -29,7 +29,7 @@
 //! All arithmetic is exact integer arithmetic on combinatorial coordinates
 //! (i128 for products), within ±2^24 ([`MAX_COORD`]).
 
-use crate::hscan::{self, RowSpans, Side, VoxelBox};
+use crate::hscan::{RowSpans, Side, VoxelBox};
 use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 
@@ -404,12 +404,7 @@ impl ClosedShell {
                     origin: lo,
                     dims: std::array::from_fn(|k| (hi[k] - lo[k] + 1).max(0) as usize),
                 };
-                let spaces: Vec<hscan::HalfSpace> = h
-                    .half_spaces()
-                    .iter()
-                    .map(|&s| hscan::HalfSpace::from(s))
-                    .collect();
-                ClosedShell::Polytope(hscan::row_spans(&spaces, &bbox, backend)?)
+                ClosedShell::Polytope(h.row_spans(&bbox, backend)?)
             }
         })
     }

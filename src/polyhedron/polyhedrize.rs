@@ -67,7 +67,7 @@
 
 use std::collections::VecDeque;
 
-use crate::hscan::{self, VoxelBox};
+use crate::hscan::VoxelBox;
 use crate::hull::{ConvexHull, HullFace, HullOptions};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
@@ -200,12 +200,7 @@ impl ShellGeometry {
                     origin: lo,
                     dims: std::array::from_fn(|k| (hi[k] - lo[k] + 1).max(0) as usize),
                 };
-                let spaces: Vec<hscan::HalfSpace> = h
-                    .half_spaces()
-                    .iter()
-                    .map(|&s| hscan::HalfSpace::from(s))
-                    .collect();
-                let sides = hscan::classify(&spaces, &bbox, backend)?;
+                let sides = h.row_spans(&bbox, backend)?.to_classification()?;
                 let flags = (0..sides.sides.len())
                     .map(|i| sides.in_closed_hull(i))
                     .collect();

@@ -67,12 +67,10 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let (lo, hi) = hull.voxel_bbox();
     let dims: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize);
     let at = |x: usize, y: usize, z: usize| [lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64];
-    let spaces: Vec<crate::hscan::HalfSpace> = hs
-        .iter()
-        .map(|&h| crate::hscan::HalfSpace::from(h))
-        .collect();
     let bbox = crate::hscan::VoxelBox { origin: lo, dims };
-    let sides = crate::hscan::classify(&spaces, &bbox, crate::parity::Backend::Cpu)?;
+    let sides = hull
+        .row_spans(&bbox, crate::parity::Backend::Cpu)?
+        .to_classification()?;
     let mut inside = Vec::with_capacity(dims.iter().product());
     for z in 0..dims[2] {
         for y in 0..dims[1] {

@@ -17,7 +17,7 @@ use std::collections::HashMap;
 
 use crate::hull::ConvexHull;
 use crate::volume::analysis::label_6_connected;
-use crate::voxel::{DigitalObject, voxel_corner};
+use crate::voxel::{DigitalObject, voxel_centre};
 
 /// Kind of a ZKH by the number of edge-connected sets of hull faces it
 /// touches.
@@ -84,6 +84,10 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let n = lab.n_components();
     // Per component: bbox and the faces its 0-cells see / touch.
     let mut bbox = vec![([i64::MAX; 3], [i64::MIN; 3]); n];
+    let reach: Vec<i64> = hs
+        .iter()
+        .map(|h| h.normal.iter().map(|c| c.abs()).sum())
+        .collect();
     let mut visible: Vec<Vec<bool>> = vec![vec![false; hs.len()]; n];
     let mut coplanar: Vec<Vec<bool>> = vec![vec![false; hs.len()]; n];
     let label = |x: i64, y: i64, z: i64| -> u32 {
@@ -120,12 +124,19 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
                 if interior {
                     continue;
                 }
-                for o in 0..8i64 {
-                    let corner =
-                        voxel_corner([v[0] + (o & 1), v[1] + (o >> 1 & 1), v[2] + (o >> 2 & 1)]);
-                    for (f, h) in hs.iter().enumerate() {
-                        match h.side(corner) {
-                            s if s > 0 => visible[c][f] = true,
+                // Corners are the centre ± 1 per axis (combinatorial), so
+                // a corner's side is the centre's plus Σ ±n_a: one product
+                // per face, and the eight sums only near the plane.
+                let centre = voxel_centre(v);
+                for (f, h) in hs.iter().enumerate() {
+                    let s = h.side(centre);
+                    if s + reach[f] < 0 {
+                        continue;
+                    }
+                    for o in 0..8i64 {
+                        let d = [o & 1, o >> 1 & 1, o >> 2 & 1].map(|b| 2 * b - 1);
+                        match s + h.normal[0] * d[0] + h.normal[1] * d[1] + h.normal[2] * d[2] {
+                            t if t > 0 => visible[c][f] = true,
                             0 => coplanar[c][f] = true,
                             _ => {}
                         }

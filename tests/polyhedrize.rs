@@ -412,6 +412,9 @@ fn merged_surface_of_a_cavity_is_two_spheres() {
     assert_eq!((m.n_faces(), m.n_faces_with_holes()), (12, 0));
     // 10³ − 2³ voxels between centres, 48 units per voxel.
     assert_eq!(m.volume6(), (1000 - 8) * 48);
+    assert_eq!(m.volume_voxels(), 992.0);
+    // Outer cube of side 10, cavity of side 2 (between centres).
+    assert!((m.area_voxels() - (600.0 + 24.0)).abs() < 1e-9);
     let topo = chisel::mesh::Topology::of(&m.to_mesh(&p.frame).unwrap());
     assert_eq!(topo.components.len(), 2);
     assert_eq!(topo.euler, 4);

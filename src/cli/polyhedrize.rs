@@ -232,6 +232,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "merged_faces_with_holes": merged.as_ref().map(|m| m.n_faces_with_holes()),
         "merged_convex_faces": merged.as_ref().map(|m| m.n_convex_faces()),
         "merged_triangles": merged.as_ref().map(|m| m.triangles.len()),
+        "merged_volume_voxels": merged.as_ref().map(|m| m.volume_voxels()),
+        "merged_area_voxels": merged.as_ref().map(|m| m.area_voxels()),
         "merge_refused": merge_refused,
         "verified": verified,
         "verify_ray_parity_mismatches": ray_parity.as_ref().map(|r| r.0),

@@ -115,6 +115,33 @@ impl MergedSurface {
             .sum()
     }
 
+    /// Enclosed volume in voxel units (`volume6 / 48`: combinatorial
+    /// coordinates are doubled), exact up to the final division.
+    pub fn volume_voxels(&self) -> f64 {
+        self.volume6() as f64 / 48.0
+    }
+
+    /// Surface area in voxel units: Σ |(b − a) × (c − a)| / 8 over the
+    /// triangles (exact `i128` cross products, one square root each).
+    pub fn area_voxels(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| self.vertices[v as usize].map(i128::from));
+                let (u, w) = (
+                    [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+                    [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+                );
+                let n = [
+                    u[1] * w[2] - u[2] * w[1],
+                    u[2] * w[0] - u[0] * w[2],
+                    u[0] * w[1] - u[1] * w[0],
+                ];
+                ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt() / 8.0
+            })
+            .sum()
+    }
+
     /// The triangles as a mesh in world units (`frame`), outward winding;
     /// scalar `depth` per vertex ([`MergedSurface::vertex_depth`]).
     pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {

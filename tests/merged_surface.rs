@@ -223,6 +223,16 @@ fn theorem_ke_is_convexity_of_both_corners() {
     assert!(yes > 1000 && no > 1000, "{yes} {no}");
 }
 
+fn print_counts(m: &chisel::polyhedron::MergedSurface, what: &str) {
+    println!(
+        "{what}: {} merged faces ({} split), {} convex, {} triangles",
+        m.n_faces(),
+        m.n_faces_split(),
+        m.n_convex_faces(),
+        m.triangles.len()
+    );
+}
+
 #[test]
 fn cylinders_torus_and_dent_split_into_convex_faces() {
     for (d_o, d_i) in [(25, 10), (50, 35), (75, 60), (100, 85)] {
@@ -230,13 +240,7 @@ fn cylinders_torus_and_dent_split_into_convex_faces() {
         let m = run(&o).merged_surface().unwrap();
         let what = format!("cylinder {d_o}/{d_i}");
         assert_convex_tiling(&m, &what);
-        println!(
-            "{what}: {} merged faces ({} split), {} convex, {} triangles",
-            m.n_faces(),
-            m.n_faces_split(),
-            m.n_convex_faces(),
-            m.triangles.len()
-        );
+        print_counts(&m, &what);
         // The side faces are convex already; each cap (a ring around a
         // convex hole) needs at least three convex pieces: each lies in a
         // half-plane missing the hole, and two such half-planes leave part
@@ -253,13 +257,7 @@ fn cylinders_torus_and_dent_split_into_convex_faces() {
     ] {
         let m = run(&object(&v)).merged_surface().unwrap();
         assert_convex_tiling(&m, what);
-        println!(
-            "{what}: {} merged faces ({} split), {} convex, {} triangles",
-            m.n_faces(),
-            m.n_faces_split(),
-            m.n_convex_faces(),
-            m.triangles.len()
-        );
+        print_counts(&m, what);
     }
 }
 

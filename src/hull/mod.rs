@@ -398,8 +398,9 @@ impl ConvexHull {
                 [r[0].min(z), r[1].max(z)]
             })
         };
-        let n = self.half_spaces().len();
         if self.planar.is_some() {
+            // The plane faces, then one in-plane half-space per polygon edge.
+            let n = self.faces.len() + self.faces.first().map_or(0, |f| f.vertices.len());
             let all = range(&mut self.faces.iter().flat_map(|f| &f.vertices));
             return vec![all; n];
         }

@@ -33,7 +33,7 @@ use crate::hscan::{RowSpans, Side, VoxelBox};
 use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 
-use super::polyhedrize::voxel_at;
+use super::polyhedrize::{differences, verify_box, voxel_at};
 use super::{MergedSurface, Polyhedron, ShellGeometry};
 
 /// Largest combinatorial coordinate magnitude (surface vertices and voxel
@@ -600,24 +600,9 @@ impl Polyhedron {
         backend: Backend<'_>,
         limit: usize,
     ) -> crate::Result<(u64, Vec<[i64; 3]>)> {
-        let (lo, hi) = object.voxel_bbox();
-        let bbox = VoxelBox {
-            origin: lo.map(|c| c - 1),
-            dims: std::array::from_fn(|a| (hi[a] - lo[a] + 3).max(0) as usize),
-        };
+        let bbox = verify_box(object);
         let held = self.voxelize_ray_parity(surface, &bbox, backend)?;
-        let mut count = 0u64;
-        let mut first = Vec::new();
-        for (k, &h) in held.iter().enumerate() {
-            let v = voxel_at(&bbox, k);
-            if h != object.contains(v) {
-                count += 1;
-                if first.len() < limit {
-                    first.push(v);
-                }
-            }
-        }
-        Ok((count, first))
+        Ok(differences(object, &bbox, &held, limit))
     }
 }
 

@@ -687,6 +687,37 @@ fn interiors_disjoint(a: &ConvexHull, b: &ConvexHull) -> bool {
     })
 }
 
+/// The box a lossless check voxelizes: the object's plus a one-voxel margin.
+pub(crate) fn verify_box(object: &DigitalObject) -> VoxelBox {
+    let (lo, hi) = object.voxel_bbox();
+    VoxelBox {
+        origin: lo.map(|c| c - 1),
+        dims: std::array::from_fn(|a| (hi[a] - lo[a] + 3).max(0) as usize),
+    }
+}
+
+/// The voxels of `bbox` where `held` (one flag per voxel, x fastest) differs
+/// from `object`: their count and the first `limit`.
+pub(crate) fn differences(
+    object: &DigitalObject,
+    bbox: &VoxelBox,
+    held: &[bool],
+    limit: usize,
+) -> (u64, Vec<[i64; 3]>) {
+    let mut count = 0u64;
+    let mut first = Vec::new();
+    for (k, &h) in held.iter().enumerate() {
+        let v = voxel_at(bbox, k);
+        if h != object.contains(v) {
+            count += 1;
+            if first.len() < limit {
+                first.push(v);
+            }
+        }
+    }
+    (count, first)
+}
+
 /// The voxels as an object of their own box.
 fn object_of(voxels: &[[i64; 3]], frame: Frame) -> crate::Result<DigitalObject> {
     let mut lo = [i64::MAX; 3];
@@ -880,24 +911,13 @@ impl Polyhedron {
         backend: Backend<'_>,
         limit: usize,
     ) -> crate::Result<(u64, Vec<[i64; 3]>)> {
-        let (lo, hi) = object.voxel_bbox();
-        let bbox = VoxelBox {
-            origin: lo.map(|c| c - 1),
-            dims: std::array::from_fn(|a| (hi[a] - lo[a] + 3) as usize),
-        };
-        let held = self.voxelize(&bbox, backend)?;
-        let mut count = 0u64;
-        let mut first = Vec::new();
-        for (k, &h) in held.iter().enumerate() {
-            let v = voxel_at(&bbox, k);
-            if h != object.contains(v) {
-                count += 1;
-                if first.len() < limit {
-                    first.push(v);
-                }
-            }
-        }
-        Ok((count, first))
+        let bbox = verify_box(object);
+        Ok(differences(
+            object,
+            &bbox,
+            &self.voxelize(&bbox, backend)?,
+            limit,
+        ))
     }
 
     /// The polyhedral shells as one triangle mesh in world units: fan

@@ -36,11 +36,12 @@ impl fmt::Display for Position {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// An operating-system I/O error on `path`.
-    #[error("{path}: {source}")]
+    /// (The OS error is part of the message, not a `source`, so that a
+    /// printed error chain names it once.)
+    #[error("{path}: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Malformed input: `path` at `at`, with what was expected and what was found.
     #[error("{path}: {at}: expected {expected}, found {found}")]
@@ -116,10 +117,10 @@ impl Error {
     }
 
     /// Shorthand for [`Error::Io`].
-    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            error,
         }
     }
 }

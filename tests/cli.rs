@@ -619,6 +619,65 @@ fn mc_and_capped_cut_of_the_ct_bone() {
         path_str(&pieces),
     ]);
     assert_eq!(out.status.code(), Some(1), "a plane needs 6 numbers");
+
+    // A sphere whose summed loop area points at a pole inside a cap: the
+    // caps must still be the sphere's part inside the bone (no piece with a
+    // whole, inside-out sphere), and the earlier run's pieces are replaced.
+    let sphere = ok_json(&[
+        "cut",
+        path_str(&closed),
+        "--sphere",
+        "100,100,70,40",
+        "--cap",
+        "-o",
+        path_str(&pieces),
+        "--json",
+    ]);
+    let volumes: Vec<f64> = sphere["pieces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["signed_volume"].as_f64().unwrap())
+        .collect();
+    let ball = 4.0 / 3.0 * std::f64::consts::PI * 40f64.powi(3);
+    assert!(
+        volumes.iter().all(|&v| v > -0.01 * ball && v < original),
+        "{volumes:?}"
+    );
+    assert!(((volumes.iter().sum::<f64>() - original) / original).abs() < 1e-6);
+    assert_eq!(
+        std::fs::read_dir(&pieces).unwrap().count(),
+        volumes.len(),
+        "stale pieces of the plane cut removed"
+    );
+
+    // Outputs are checked before the work; an empty surface writes nothing.
+    let surface = tmp.path().join("never.ply");
+    assert_clean_error(
+        &[
+            "mc",
+            path_str(&dir.join("headsq/quarter.nhdr")),
+            "--level",
+            "1150",
+            "-o",
+            path_str(&surface),
+            "--report",
+            path_str(&tmp.path().join("no/such/r.json")),
+        ],
+        "does not exist",
+    );
+    assert_clean_error(
+        &[
+            "mc",
+            path_str(&dir.join("headsq/quarter.nhdr")),
+            "--level",
+            "-500",
+            "-o",
+            path_str(&surface),
+        ],
+        "is empty",
+    );
+    assert!(!surface.exists());
 }
 
 /// `phantom` writes the seed's objects; `hull` reproduces the seed's

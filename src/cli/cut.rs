@@ -15,6 +15,7 @@ use crate::render::{RenderOptions, View};
 /// Arguments of `chisel cut`. Knives apply in the order planes, rectangles,
 /// spheres, meshes; each may be given several times.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Mesh to cut.
     mesh: PathBuf,
@@ -114,10 +115,14 @@ fn merged(pieces: &[TriMesh]) -> TriMesh {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    super::check_output_dir(&args.output)?;
+    for path in [&args.preview, &args.report].into_iter().flatten() {
+        crate::io::check_output_path(path)?;
+    }
     let mesh = crate::io::read_mesh(&args.mesh)?;
     let knives = knives(args)?;
     let result = cut_sequence(&mesh, &knives, &CutOptions { cap: args.cap })?;
-    std::fs::create_dir_all(&args.output).map_err(|e| crate::Error::io(&args.output, e))?;
+    super::clear_numbered_outputs(global, &args.output, "piece_")?;
     let mut pieces = Vec::new();
     for (k, (piece, side)) in result.pieces.iter().zip(&result.sides).enumerate() {
         let path = args.output.join(format!("piece_{k:03}.ply"));

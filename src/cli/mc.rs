@@ -13,6 +13,7 @@ use crate::surface::{IsoSpec, McOptions, marching_cubes};
 
 /// Arguments of `chisel mc`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Scalar or label volume.
     volume: PathBuf,
@@ -49,6 +50,13 @@ pub struct Args {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
+    crate::io::check_mesh_output(&args.output)?;
+    for path in [&args.preview, &args.report].into_iter().flatten() {
+        crate::io::check_output_path(path)?;
+    }
+    if let Some(dir) = &args.groups_dir {
+        super::check_output_dir(dir)?;
+    }
     let volume = crate::io::read_volume(&args.volume)?;
     let read_s = t.elapsed().as_secs_f64();
     let iso = match (args.level, args.label) {
@@ -71,9 +79,24 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         backend,
     )?;
     let mc_s = t.elapsed().as_secs_f64();
+    if surface.mesh.n_triangles() == 0 {
+        let what = match iso {
+            IsoSpec::Level(l) => format!("level {l}"),
+            IsoSpec::Label(l) => format!("label {l}"),
+        };
+        anyhow::bail!(
+            "{}: the surface at {what} is empty (no voxel on one side of it{}); nothing written",
+            args.volume.display(),
+            if args.close_border {
+                ""
+            } else {
+                ", or only at the volume border: try --close-border"
+            }
+        );
+    }
     crate::io::write_mesh(&args.output, &surface.mesh)?;
     if let Some(dir) = &args.groups_dir {
-        std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+        super::clear_numbered_outputs(global, dir, "group_")?;
         let bar = global.progress(surface.groups.len() as u64, "groups");
         for (g, mesh) in crate::mesh::split_by_label(&surface.mesh, &surface.triangle_groups)
             .iter()

@@ -97,6 +97,59 @@ pub(super) fn vec3_arg(name: &str, v: Option<&[f32]>) -> anyhow::Result<Option<g
     }
 }
 
+/// Checks an output folder before any work is done: not an existing file,
+/// in a folder that exists (it is created when the outputs are written).
+pub(super) fn check_output_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!("{}: is a file; expected an output folder", dir.display());
+    }
+    let parent = dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    if !parent.is_dir() {
+        anyhow::bail!(
+            "{}: folder {} does not exist",
+            dir.display(),
+            parent.display()
+        );
+    }
+    Ok(())
+}
+
+/// Creates `dir` and removes the `{prefix}NNN.ply` files an earlier run
+/// left there, so that the folder holds this run's numbered outputs only;
+/// other files are left alone.
+pub(super) fn clear_numbered_outputs(
+    global: &Global,
+    dir: &std::path::Path,
+    prefix: &str,
+) -> anyhow::Result<()> {
+    let io = |e| crate::Error::io(dir, e);
+    std::fs::create_dir_all(dir).map_err(io)?;
+    let mut removed = 0;
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let entry = entry.map_err(io)?;
+        let name = entry.file_name();
+        let numbered = name
+            .to_string_lossy()
+            .strip_prefix(prefix)
+            .and_then(|r| r.strip_suffix(".ply"))
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+        if numbered && entry.file_type().is_ok_and(|t| t.is_file()) {
+            std::fs::remove_file(entry.path()).map_err(|e| crate::Error::io(entry.path(), e))?;
+            removed += 1;
+        }
+    }
+    if removed > 0 {
+        global.note(format!(
+            "removed {removed} {prefix}*.ply files of an earlier run from {}",
+            dir.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Where data-parallel work runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BackendArg {

@@ -18,12 +18,13 @@ use crate::parity::Backend;
 use crate::render::{Facing, Panel, RenderOptions, View};
 use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
 use crate::tissue::{
-    Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork, cut_bone,
-    layers_from_ct,
+    Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork, Status,
+    cut_bone, layers_from_ct,
 };
 
 /// Arguments of `chisel relax`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Epidermis mesh (any format `chisel stats` reads); omit with `--ct`.
     #[arg(required_unless_present = "ct", conflicts_with = "ct")]
@@ -246,6 +247,25 @@ pub fn write_preview(
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
+    // Every output is checked before the work starts.
+    crate::io::check_mesh_output(&args.output)?;
+    if let Some(path) = &args.bone_output {
+        crate::io::check_mesh_output(path)?;
+    }
+    for path in [&args.preview, &args.bone_preview, &args.report]
+        .into_iter()
+        .flatten()
+    {
+        crate::io::check_output_path(path)?;
+    }
+    if args.bone.is_none() {
+        if args.bone_output.is_some() {
+            anyhow::bail!("--bone-output needs a bone mesh (--bone or --ct)");
+        }
+        if args.bone_preview.is_some() {
+            anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
+        }
+    }
     let gpu = match args.backend {
         BackendArg::Gpu => Some(global.gpu()?),
         BackendArg::Cpu => None,
@@ -308,13 +328,76 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     let report = run_job(global, &job, &opts, backend)?;
+    let diverged =
+        report.status == Status::Diverged || report.epidermis.iter().any(|p| !p.is_finite());
+    let value = |outputs: bool| {
+        json!({
+            "command": "relax",
+            "mesh": args.mesh,
+            "ct": ct.as_ref().map(|figures| json!({ "volume": args.ct, "figures": figures })),
+            "bone": args.bone,
+            "plan": args.plan,
+            "cut": job.cut,
+            "network": {
+                "nodes": job.network.n_nodes(),
+                "free_nodes": job.network.n_free,
+                "springs": job.network.springs.len(),
+                "springs_per_class": job.network.class_counts(),
+                "origin": job.network.origin,
+                "subcutis_depth": params.subcutis_depth,
+                "build_seconds": build_s,
+            },
+            "relax": report,
+            "outputs": outputs.then(|| json!({
+                "mesh": args.output,
+                "bone": args.bone_output,
+                "preview": args.preview,
+                "bone_preview": args.bone_preview,
+            })),
+        })
+    };
+    if diverged {
+        // The report says where and how; the garbage state is not written.
+        if let Some(path) = &args.report {
+            super::report::write_json(path, &value(false))?;
+        }
+        let at = report
+            .steps
+            .iter()
+            .find_map(|s| {
+                s.increments
+                    .iter()
+                    .find(|i| i.status == Status::Diverged)
+                    .map(|i| format!(" in step `{}`, increment {}", s.name, i.increment))
+            })
+            .unwrap_or_default();
+        anyhow::bail!(
+            "the relaxation diverged{at} after {} iterations; {} \
+             (use more increments, or a smaller --dt)",
+            report.iterations,
+            if args.report.is_some() {
+                "only the report was written"
+            } else {
+                "nothing was written"
+            }
+        );
+    }
+    for s in &report.steps {
+        for i in s
+            .increments
+            .iter()
+            .filter(|i| i.status != Status::Converged)
+        {
+            eprintln!(
+                "warning: step `{}`, increment {}: {} after {} iterations (max |v| {:.3e})",
+                s.name, i.increment, i.status, i.iterations, i.max_speed
+            );
+        }
+    }
     let relaxed = report.skin_mesh(&job.network);
     crate::io::write_mesh(&args.output, &relaxed)?;
     let bones = bone_before_after(&job, &report);
-    if let Some(path) = &args.bone_output {
-        let Some((_, after)) = &bones else {
-            anyhow::bail!("--bone-output needs a bone mesh (--bone or --ct)");
-        };
+    if let (Some(path), Some((_, after))) = (&args.bone_output, &bones) {
         crate::io::write_mesh(path, after)?;
     }
     let facing = args.view.facing()?;
@@ -334,50 +417,23 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 (&before_mesh(&job.skin), &relaxed),
                 vec![View::Front, View::Right],
                 facing,
-                format!("relax: {title} - skin (mm)"),
+                format!("relax: {title} - skin displacement (mesh units)"),
                 path,
             )?;
         }
-        if let Some(path) = &args.bone_preview {
-            let Some((before, after)) = &bones else {
-                anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
-            };
+        if let (Some(path), Some((before, after))) = (&args.bone_preview, &bones) {
             write_preview(
                 preview_gpu,
                 (before, after),
                 vec![View::Front, View::Right],
                 facing,
-                format!("relax: {title} - bone (mm)"),
+                format!("relax: {title} - bone displacement (mesh units)"),
                 path,
             )?;
         }
     }
-    let value = json!({
-        "command": "relax",
-        "mesh": args.mesh,
-        "ct": ct.as_ref().map(|figures| json!({ "volume": args.ct, "figures": figures })),
-        "bone": args.bone,
-        "plan": args.plan,
-        "cut": job.cut,
-        "network": {
-            "nodes": job.network.n_nodes(),
-            "free_nodes": job.network.n_free,
-            "springs": job.network.springs.len(),
-            "springs_per_class": job.network.class_counts(),
-            "origin": job.network.origin,
-            "subcutis_depth": params.subcutis_depth,
-            "build_seconds": build_s,
-        },
-        "relax": report,
-        "outputs": {
-            "mesh": args.output,
-            "bone": args.bone_output,
-            "preview": args.preview,
-            "bone_preview": args.bone_preview,
-        },
-    });
     global.note(format!(
-        "{:?} after {} iterations ({:.2} s, {:.0} it/s); max displacement {:.4}; wrote {}",
+        "{} after {} iterations ({:.2} s, {:.0} it/s); max displacement {:.4}; wrote {}",
         report.status,
         report.iterations,
         report.seconds,
@@ -386,10 +442,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         args.output.display()
     ));
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        println!("{}", serde_json::to_string_pretty(&value(true))?);
     }
     if let Some(path) = &args.report {
-        super::report::write_json(path, &value)?;
+        super::report::write_json(path, &value(true))?;
     }
     Ok(())
 }

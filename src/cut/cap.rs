@@ -143,6 +143,28 @@ fn inside_polygon(pts: &[DVec2], lp: &[usize], q: DVec2) -> bool {
     inside
 }
 
+/// Whether loops mapped to the plane nest as a cap needs: every loop
+/// inside an even number of others runs counter-clockwise (an outer
+/// boundary) and every other loop clockwise (a hole). A sphere projected
+/// from a pole inside a cap region fails this (its outermost loops come out
+/// clockwise), so the caller tries another pole.
+pub fn nests_as_cap(pts: &[DVec2], loops: &[Vec<usize>]) -> bool {
+    loops.iter().enumerate().all(|(h, lp)| {
+        let area = area2(pts, lp);
+        if area == 0.0 {
+            // A degenerate loop (coincident cut points) bounds nothing.
+            return true;
+        }
+        let q = pts[lp[0]];
+        let depth = loops
+            .iter()
+            .enumerate()
+            .filter(|&(o, other)| o != h && inside_polygon(pts, other, q))
+            .count();
+        (depth % 2 == 0) == (area > 0.0)
+    })
+}
+
 /// Triangulates loops (indices into `pts`, cap orientation) into
 /// triangles of the same indices, counter-clockwise in the plane. Outer
 /// loops have positive area; every hole goes to the smallest outer loop

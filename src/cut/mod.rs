@@ -1015,18 +1015,65 @@ fn make_caps(
                 .flatten()
                 .map(|&v| (pos(v) - *c).normalize_or_zero())
                 .sum();
-            let d = area
-                .try_normalize()
-                .or_else(|| mean.try_normalize())
-                .unwrap_or(DVec3::Z);
-            let (u, v) = cap::frame(d);
-            cap::Projection::Sphere {
-                c: *c,
-                r: *r,
-                d,
-                u,
-                v,
-            }
+            // With many loops the summed area can point into a region of
+            // the sphere outside the solid while the pole opposite it lies
+            // in a cap; then the loops do not nest as a cap in the plane and
+            // the next direction is tried (the axes and diagonals).
+            let preferred = area.try_normalize().or_else(|| mean.try_normalize());
+            let fallback = (0..27).filter(|&i| i != 13).map(|i| {
+                DVec3::new(
+                    (i % 3) as f64 - 1.0,
+                    (i / 3 % 3) as f64 - 1.0,
+                    (i / 9) as f64 - 1.0,
+                )
+                .normalize()
+            });
+            // Then poles just right of each loop's first edge, outside its
+            // cap (the cap lies left of its loops seen from outside).
+            let beside = loops.iter().map(|lp| {
+                let (a, b) = (pos(lp[0]), pos(lp[1 % lp.len()]));
+                let m = (a + b) * 0.5 - *c;
+                let right = (b - a).cross(m).normalize_or_zero();
+                let p = m.normalize_or_zero() + right * 0.01 * ((b - a).length() / *r).max(1e-6);
+                -p.normalize_or_zero()
+            });
+            preferred
+                .into_iter()
+                .chain(fallback)
+                .chain(beside)
+                .map(|d| {
+                    let (u, v) = cap::frame(d);
+                    cap::Projection::Sphere {
+                        c: *c,
+                        r: *r,
+                        d,
+                        u,
+                        v,
+                    }
+                })
+                .find(|proj| {
+                    let mut pts = Vec::new();
+                    let mut index_loops = Vec::with_capacity(loops.len());
+                    for lp in loops {
+                        let mut il = Vec::with_capacity(lp.len());
+                        for &v in lp {
+                            let Some(q) = proj.apply(pos(v)) else {
+                                return false;
+                            };
+                            il.push(pts.len());
+                            pts.push(q);
+                        }
+                        index_loops.push(il);
+                    }
+                    cap::nests_as_cap(&pts, &index_loops)
+                })
+                .ok_or_else(|| {
+                    Error::InvalidInput(
+                        "cap: found no projection pole of the sphere outside the cap regions; \
+                         move the sphere slightly"
+                            .into(),
+                    )
+                })?
         }
         Kind::Mesh { .. } => return Ok(Vec::new()),
     };

@@ -97,6 +97,47 @@ pub(crate) fn read_whole(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
+/// Refuses a directory where a file is expected (before the extension is
+/// looked at, so the message says what is wrong).
+fn not_a_directory(path: &Path, expected: &str) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::format(
+            path,
+            Position::Whole,
+            expected,
+            "a directory",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks, before any work is done, that `path` can be an output file: not
+/// a directory, in a folder that exists. Commands call it for every output
+/// up front, so a long job does not fail at its end.
+pub fn check_output_path(path: &Path) -> Result<()> {
+    not_a_directory(path, "an output file path")?;
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("folder {} does not exist", dir.display()),
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks an output mesh path: [`check_output_path`] and a known extension.
+pub fn check_mesh_output(path: &Path) -> Result<()> {
+    check_output_path(path)?;
+    mesh_format(path).map(|_| ())
+}
+
 /// Lower-case file name, for extension dispatch (`.nii.gz` is one extension).
 fn file_name_lower(path: &Path) -> String {
     path.file_name()
@@ -115,6 +156,7 @@ enum MeshFormat {
 }
 
 fn mesh_format(path: &Path) -> Result<MeshFormat> {
+    not_a_directory(path, "a mesh file")?;
     let name = file_name_lower(path);
     let ext = name.rsplit_once('.').map_or("", |(_, e)| e);
     Ok(match ext {
@@ -188,6 +230,7 @@ enum VolumeFormat {
 }
 
 fn volume_format(path: &Path) -> Result<VolumeFormat> {
+    not_a_directory(path, "a volume file")?;
     let name = file_name_lower(path);
     if name.ends_with(".nii.gz") {
         return Ok(VolumeFormat::NiiGz);
@@ -249,6 +292,7 @@ pub fn write_atomic_with<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
 {
+    check_output_path(path)?;
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())

@@ -230,7 +230,14 @@ pub struct Plan {
     /// The steps (`[[step]]` in TOML, `"steps"` or `"step"` in JSON).
     #[serde(rename = "step", alias = "steps")]
     pub steps: Vec<Step>,
+    /// Where the plan was read from (file name), for error messages.
+    #[serde(skip)]
+    pub source: Option<String>,
 }
+
+/// Most increments one step may have: each runs at least one iteration
+/// and keeps a report line.
+pub const MAX_INCREMENTS: u32 = 100_000;
 
 /// Line (1-based) of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
@@ -250,8 +257,11 @@ impl Plan {
                 .map_or(Position::Whole, |s| Position::Line(line_of(text, s.start)));
             Error::format(origin, at, "a surgery plan", e.message().to_string())
         })?;
-        plan.validate()?;
-        Ok(plan)
+        Plan {
+            source: Some(origin.to_string()),
+            ..plan
+        }
+        .validated()
     }
 
     /// Parses and validates a JSON plan; `origin` names the source in errors.
@@ -264,8 +274,11 @@ impl Plan {
                 e.to_string(),
             )
         })?;
-        plan.validate()?;
-        Ok(plan)
+        Plan {
+            source: Some(origin.to_string()),
+            ..plan
+        }
+        .validated()
     }
 
     /// Reads a plan file: `.json` is JSON, anything else TOML.
@@ -282,6 +295,20 @@ impl Plan {
         }
     }
 
+    fn validated(self) -> Result<Plan> {
+        self.validate()?;
+        Ok(self)
+    }
+
+    /// `plan step i `name`` for messages, after the plan's source if known.
+    fn step_label(&self, i: usize) -> String {
+        let step = format!("plan step {} `{}`", i + 1, self.step_name(i));
+        match &self.source {
+            Some(src) => format!("{src}: {step}"),
+            None => step,
+        }
+    }
+
     /// The display name of step `i` (0-based).
     pub fn step_name(&self, i: usize) -> String {
         self.steps[i]
@@ -294,15 +321,22 @@ impl Plan {
     /// k ≥ 1, fixed counts ≥ 1, finite vectors, valid selectors and axes.
     pub fn validate(&self) -> Result<()> {
         if self.steps.is_empty() {
-            return Err(Error::InvalidInput("plan has no steps".into()));
+            let src = self
+                .source
+                .as_deref()
+                .map_or(String::new(), |s| format!("{s}: "));
+            return Err(Error::InvalidInput(format!("{src}plan has no steps")));
         }
         super::fragments::validate_cuts(&self.cuts)?;
         for (i, s) in self.steps.iter().enumerate() {
-            let what = format!("plan step {} `{}`", i + 1, self.step_name(i));
+            let what = self.step_label(i);
             let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
             s.select.validate(&what)?;
-            if s.increments == 0 {
-                return bad("increments (k) must be ≥ 1, got k = 0".into());
+            if !(1..=MAX_INCREMENTS).contains(&s.increments) {
+                return bad(format!(
+                    "increments (k) must be between 1 and {MAX_INCREMENTS}, got k = {}",
+                    s.increments
+                ));
             }
             if s.iterations == Iterations::Fixed(0) {
                 return bad("iterations must be ≥ 1 or \"converge\", got 0".into());
@@ -344,7 +378,7 @@ impl Plan {
         let mut steps = Vec::with_capacity(self.steps.len());
         for (i, s) in self.steps.iter().enumerate() {
             let name = self.step_name(i);
-            let what = format!("plan step {} `{name}`", i + 1);
+            let what = self.step_label(i);
             let ids = select(&s.select, &bone, fragments, &what)?;
             let start: Vec<DVec3> = ids.iter().map(|&k| bone[k as usize]).collect();
             let motion = Motion::new(s);

@@ -128,6 +128,25 @@ pub enum Status {
     IterationLimit,
 }
 
+impl Status {
+    /// The name used in reports (`converged`, `stalled`, `diverged`,
+    /// `iteration_limit`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Converged => "converged",
+            Status::Stalled => "stalled",
+            Status::Diverged => "diverged",
+            Status::IterationLimit => "iteration_limit",
+        }
+    }
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One increment of one step.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IncrementReport {

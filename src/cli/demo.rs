@@ -160,13 +160,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "ct": layers.figures,
         "marching_cubes_gpu_equals_cpu": mc_same,
         "cut": job.cut,
-        "network": {
-            "nodes": job.network.n_nodes(),
-            "free_nodes": job.network.n_free,
-            "springs": job.network.springs.len(),
-            "springs_per_class": job.network.class_counts(),
-            "subcutis_depth": params.subcutis_depth,
-        },
+        "network": super::relax::network_json(&job.network, params.subcutis_depth),
         "relax_gpu": gpu_report,
         "parity": {
             "cpu_status": cpu_report.status,

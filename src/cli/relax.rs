@@ -245,6 +245,18 @@ pub fn write_preview(
     Ok(())
 }
 
+/// The report's `network` figures: node, free-node and spring counts, the
+/// springs per class and the subcutis depth used.
+pub fn network_json(net: &SpringNetwork, subcutis_depth: Option<f32>) -> serde_json::Value {
+    json!({
+        "nodes": net.n_nodes(),
+        "free_nodes": net.n_free,
+        "springs": net.springs.len(),
+        "springs_per_class": net.class_counts(),
+        "subcutis_depth": subcutis_depth,
+    })
+}
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     // Every output is checked before the work starts.
@@ -330,6 +342,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let report = run_job(global, &job, &opts, backend)?;
     let diverged =
         report.status == Status::Diverged || report.epidermis.iter().any(|p| !p.is_finite());
+    let mut network = network_json(&job.network, params.subcutis_depth);
+    network["origin"] = json!(job.network.origin);
+    network["build_seconds"] = json!(build_s);
     let value = |outputs: bool| {
         json!({
             "command": "relax",
@@ -338,15 +353,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "bone": args.bone,
             "plan": args.plan,
             "cut": job.cut,
-            "network": {
-                "nodes": job.network.n_nodes(),
-                "free_nodes": job.network.n_free,
-                "springs": job.network.springs.len(),
-                "springs_per_class": job.network.class_counts(),
-                "origin": job.network.origin,
-                "subcutis_depth": params.subcutis_depth,
-                "build_seconds": build_s,
-            },
+            "network": network,
             "relax": report,
             "outputs": outputs.then(|| json!({
                 "mesh": args.output,

@@ -34,7 +34,7 @@ mod knife;
 use std::collections::HashMap;
 use std::time::Instant;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 pub use corefine::{KnifeSegment, PointOrigin};
@@ -993,10 +993,25 @@ fn make_caps(
     k: &PreparedKnife<'_>,
 ) -> Result<Vec<[u32; 3]>> {
     let pos = |v: u32| points[(v - n_v) as usize].as_dvec3();
-    let projection = match &k.kind {
+    // Loop k's points are `ids[start_k..start_k + len_k]`, in loop order.
+    let ids: Vec<u32> = loops.iter().flatten().copied().collect();
+    let mut next = 0;
+    let index_loops: Vec<Vec<usize>> = loops
+        .iter()
+        .map(|lp| {
+            next += lp.len();
+            (next - lp.len()..next).collect()
+        })
+        .collect();
+    let project = |proj: &cap::Projection| -> Option<Vec<DVec2>> {
+        ids.iter().map(|&v| proj.apply(pos(v))).collect()
+    };
+    let (projection, mut pts) = match &k.kind {
         Kind::Plane { p, n } | Kind::Rect { p, n, .. } => {
             let (u, v) = cap::frame(*n);
-            cap::Projection::Plane { origin: *p, u, v }
+            let proj = cap::Projection::Plane { origin: *p, u, v };
+            let pts = project(&proj).expect("a plane projects every point");
+            (proj, pts)
         }
         Kind::Sphere { c, r } => {
             // The cap lies left of its loops seen from outside: their
@@ -1051,21 +1066,10 @@ fn make_caps(
                         v,
                     }
                 })
-                .find(|proj| {
-                    let mut pts = Vec::new();
-                    let mut index_loops = Vec::with_capacity(loops.len());
-                    for lp in loops {
-                        let mut il = Vec::with_capacity(lp.len());
-                        for &v in lp {
-                            let Some(q) = proj.apply(pos(v)) else {
-                                return false;
-                            };
-                            il.push(pts.len());
-                            pts.push(q);
-                        }
-                        index_loops.push(il);
-                    }
-                    cap::nests_as_cap(&pts, &index_loops)
+                .find_map(|proj| {
+                    project(&proj)
+                        .filter(|pts| cap::nests_as_cap(pts, &index_loops))
+                        .map(|pts| (proj, pts))
                 })
                 .ok_or_else(|| {
                     Error::InvalidInput(
@@ -1077,23 +1081,6 @@ fn make_caps(
         }
         Kind::Mesh { .. } => return Ok(Vec::new()),
     };
-    let mut pts = Vec::new();
-    let mut index_loops = Vec::with_capacity(loops.len());
-    let mut ids = Vec::new();
-    for lp in loops {
-        let mut il = Vec::with_capacity(lp.len());
-        for &v in lp {
-            let q = projection.apply(pos(v)).ok_or_else(|| {
-                Error::InvalidInput(
-                    "cap: the cut loops surround the whole sphere; cannot project them".into(),
-                )
-            })?;
-            il.push(pts.len());
-            pts.push(q);
-            ids.push(v);
-        }
-        index_loops.push(il);
-    }
     let mut tris = cap::triangulate(&pts, &index_loops);
     if let Kind::Sphere { r, .. } = &k.kind {
         let mut pos3: Vec<DVec3> = ids.iter().map(|&v| pos(v)).collect();

@@ -16,7 +16,9 @@
 //                  xyz = position in grid index space, w = bitcast edge id
 //                  3·point + axis; element = vertex id − v_start
 // Interpolation (same f32 expression as the mirror):
-//   t = (level − a) / (b − a), a at p, b at p + e_axis; u[axis] = f32(p[axis]) + t.
+//   t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN), a at p, b at
+//   p + e_axis; u[axis] = f32(p[axis]) + t. T_MIN = 2⁻¹⁰ keeps vertices
+//   inside their edges (no zero-area triangles; surface::cpu::T_MIN).
 // Mirror: surface::cpu::number_points.
 
 struct Params {
@@ -33,6 +35,7 @@ struct Params {
 }
 
 const WG_SIZE: u32 = 256u;
+const T_MIN: f32 = 0.0009765625;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> samples: array<f32>;
@@ -103,7 +106,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     var k = base - params.v_start;
     for (var axis = 0u; axis < 3u; axis++) {
         if (crossing & (1u << axis)) != 0u {
-            let t = (params.level - a) / (far[axis] - a);
+            let t = clamp((params.level - a) / (far[axis] - a), T_MIN, 1.0 - T_MIN);
             var u = vec3<f32>(f32(x), f32(y), f32(z));
             u[axis] += t;
             positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));

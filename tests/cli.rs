@@ -680,6 +680,104 @@ fn mc_and_capped_cut_of_the_ct_bone() {
     assert!(!surface.exists());
 }
 
+/// Triangulated knives on the CT bone at 1150, where samples equal the
+/// level (marching cubes keeps every triangle's area positive, so the exact
+/// predicates place them): an icosphere and a tilted sheet whose triangles
+/// each hold whole cut loops. Closed at the border, every piece is closed
+/// and the volumes add up; open, loops are capped and open curves counted.
+#[test]
+fn mesh_knives_cut_the_ct_bone() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let mut ball = common::icosphere(3);
+    for p in &mut ball.positions {
+        *p = *p * 30.17 + glam::Vec3::new(100.123, 60.377, 40.291);
+    }
+    let ball_ply = tmp.path().join("ball.ply");
+    chisel::io::write_mesh(&ball_ply, &ball).unwrap();
+    let n = 8;
+    let mut sheet = chisel::TriMesh::default();
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, z) = (
+                -20.37 + 250.0 * i as f32 / n as f32,
+                -20.11 + 200.0 * j as f32 / n as f32,
+            );
+            sheet
+                .positions
+                .push(glam::Vec3::new(x, 70.29 + 0.13 * x + 0.21 * z, z));
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            sheet.triangles.push([a, a + 1, a + n + 2]);
+            sheet.triangles.push([a, a + n + 2, a + n + 1]);
+        }
+    }
+    let sheet_ply = tmp.path().join("sheet.ply");
+    chisel::io::write_mesh(&sheet_ply, &sheet).unwrap();
+    let ct = dir.join("headsq/quarter.nhdr");
+    for close in [true, false] {
+        let bone = tmp.path().join(format!("bone_{close}.ply"));
+        let mut args = vec![
+            "mc",
+            path_str(&ct),
+            "--level",
+            "1150",
+            "-o",
+            path_str(&bone),
+            "--json",
+        ];
+        if close {
+            args.push("--close-border");
+        }
+        ok_json(&args);
+        for knife in [&ball_ply, &sheet_ply] {
+            let what = format!("{} close {close}", knife.display());
+            let pieces = tmp.path().join("pieces");
+            let cut = ok_json(&[
+                "cut",
+                path_str(&bone),
+                "--knife",
+                path_str(knife),
+                "--cap",
+                "-o",
+                path_str(&pieces),
+                "--json",
+            ]);
+            let stats = &cut["stats"];
+            assert!(
+                stats["loops_capped"].as_u64().unwrap() > 0,
+                "{what}: {stats}"
+            );
+            let pieces = cut["pieces"].as_array().unwrap();
+            if close {
+                assert_eq!(stats["curves_open"], 0, "{what}");
+                assert!(pieces.iter().all(|p| p["closed"] == true), "{what}");
+                let total: f64 = pieces
+                    .iter()
+                    .map(|p| p["signed_volume"].as_f64().unwrap())
+                    .sum();
+                let original = cut["input_signed_volume"].as_f64().unwrap();
+                assert!(
+                    ((total - original) / original).abs() < 1e-6,
+                    "{what}: {total} vs {original}"
+                );
+            } else if knife == &sheet_ply {
+                // The sheet leaves the bone where it is open at the border.
+                assert!(
+                    stats["curves_open"].as_u64().unwrap() > 0,
+                    "{what}: {stats}"
+                );
+                assert!(pieces.iter().any(|p| p["closed"] == false), "{what}");
+            }
+        }
+    }
+}
+
 /// `phantom` writes the seed's objects; `hull` reproduces the seed's
 /// figures on them (Tables 4.1/4.2 for the r = 24 ball, Table 8.6 for the
 /// 25/10 cylinder with its tunnel of 1,200 background voxels).

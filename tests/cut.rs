@@ -310,6 +310,134 @@ fn triangulated_knife_cuts_like_the_plane_it_samples() {
 }
 
 #[test]
+fn a_cut_loop_inside_one_knife_triangle_is_capped() {
+    // One knife triangle holds the whole cut curve: the polygon around the
+    // loop has no cut edge on its border and takes its side from the loop.
+    let s = mc(&ball_volume(30, 10.0));
+    let z = 14.3f32;
+    let knife = TriMesh::new(
+        vec![
+            glam::Vec3::new(-50.3, -40.1, z),
+            glam::Vec3::new(80.7, -30.2, z),
+            glam::Vec3::new(0.6, 90.9, z),
+        ],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    let r = cut(&s.mesh, &s.forest, &Knife::Mesh(knife), &CAP).unwrap();
+    let p = cut(
+        &s.mesh,
+        &s.forest,
+        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
+        &CAP,
+    )
+    .unwrap();
+    assert_eq!(r.sides, p.sides);
+    assert_eq!(r.stats.loops_capped, 1);
+    assert_conserved(&s.mesh, &r, 1e-6, "ball/one-triangle knife");
+    let c = DVec3::splat(14.5);
+    let (a, b) = (side_volumes(&r, c), side_volumes(&p, c));
+    assert!((a.0 - b.0).abs() < 1e-6 * b.0, "{a:?} vs {b:?}");
+}
+
+#[test]
+fn triangulated_knife_caps_a_hollow_ball_with_a_ring() {
+    // Outer sphere and cavity are two closed components; the cavity's
+    // triangles face into the void, and the cap is the ring between them.
+    let n = 30;
+    let c = 14.5;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let d = DVec3::new(x as f64 - c, y as f64 - c, z as f64 - c).length();
+                data.push((11.0 - d).min(d - 5.0) as f32);
+            }
+        }
+    }
+    let s = mc(&Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap());
+    assert_eq!(s.groups.len(), 2);
+    let z = 14.3f32;
+    let r = cut(&s.mesh, &s.forest, &Knife::Mesh(sheet(z)), &CAP).unwrap();
+    let p = cut(
+        &s.mesh,
+        &s.forest,
+        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
+        &CAP,
+    )
+    .unwrap();
+    assert_eq!(r.pieces.len(), 2);
+    assert_eq!(r.sides, p.sides);
+    assert_eq!(r.stats.curves_open, 0);
+    assert_conserved(&s.mesh, &r, 1e-6, "hollow ball/sheet");
+    let ctr = DVec3::splat(c);
+    let (a, b) = (side_volumes(&r, ctr), side_volumes(&p, ctr));
+    assert!((a.0 - b.0).abs() < 1e-4 * b.0, "{a:?} vs {b:?}");
+}
+
+#[test]
+fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open() {
+    // A ball (a closed loop under the knife) and a slab at x ≥ 25.5 whose
+    // surface ends at the volume border (an open cut curve, ending inside
+    // knife triangles where the surface's border crosses them).
+    let n = 30;
+    let c = 14.5;
+    let mut data = Vec::with_capacity(n * n * n);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let d = DVec3::new(x as f64 - c, y as f64 - c, z as f64 - c).length();
+                data.push((8.0 - d).max(x as f64 - 25.5) as f32);
+            }
+        }
+    }
+    let vol = Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap();
+    let s = marching_cubes(
+        &vol,
+        IsoSpec::Level(0.0),
+        &McOptions {
+            close_border: false,
+        },
+        Backend::Cpu,
+    )
+    .unwrap();
+    let z = 14.3f32;
+    let r = cut(&s.mesh, &s.forest, &Knife::Mesh(sheet(z)), &CAP).unwrap();
+    let p = cut(
+        &s.mesh,
+        &s.forest,
+        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
+        &CAP,
+    )
+    .unwrap();
+    assert_eq!((r.stats.loops_capped, p.stats.loops_capped), (1, 1));
+    assert!(
+        r.stats.curves_open == 1 && p.stats.curves_open == 1,
+        "{:?} {:?}",
+        r.stats,
+        p.stats
+    );
+    assert_eq!(r.sides, p.sides);
+    // The ball's halves are closed and match the plane's; the slab's are not.
+    let ctr = DVec3::splat(c);
+    let mut balls = 0;
+    for (a, b) in r.pieces.iter().zip(&p.pieces) {
+        let Some((lo, _)) = a.bounds() else { continue };
+        if lo.x < 20.0 {
+            assert_closed(a, "ball half");
+            let (va, vb) = (volume(a, ctr), volume(b, ctr));
+            assert!((va - vb).abs() < 1e-6 * vb.abs(), "{va} vs {vb}");
+            balls += 1;
+        }
+    }
+    assert_eq!(balls, 2);
+    same_result(
+        &r,
+        &cut_full_scan(&s.mesh, &Knife::Mesh(sheet(z)), &CAP).unwrap(),
+    );
+}
+
+#[test]
 fn closed_triangulated_knife_cuts_a_cube_into_inside_and_outside() {
     let cube = common::cube();
     // An icosphere of radius 0.4 through the face x = 1: the cut curve
@@ -348,6 +476,17 @@ fn closed_triangulated_knife_cuts_a_cube_into_inside_and_outside() {
     let f = cut_mesh(&cube, &Knife::Mesh(flipped), &CAP).unwrap();
     assert_eq!(f.sides, vec![Side::Negative, Side::Positive]);
     assert_conserved(&cube, &f, 1e-6, "cube/flipped icosphere");
+    // A closed surface wound inward gives the same pieces, wound inward:
+    // its solid is in front of its triangles.
+    let mut inward = cube.clone();
+    inward.flip_winding();
+    let w = cut_mesh(&inward, &knife, &CAP).unwrap();
+    assert_eq!(w.sides, r.sides);
+    assert_eq!(w.stats.loops_capped, 1);
+    for (a, b) in w.pieces.iter().zip(&r.pieces) {
+        let (va, vb) = (volume(a, DVec3::splat(0.5)), volume(b, DVec3::splat(0.5)));
+        assert!((va + vb).abs() < 1e-9, "{va} vs {vb}");
+    }
 }
 
 #[test]

@@ -249,6 +249,14 @@ fn check_closed_oriented(s: &Surface) -> Vec<i64> {
             tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2],
             "triangle {t} repeats a vertex"
         );
+        // Differences and products of these f32 coordinates are exact in
+        // f64, so a zero here is a zero area.
+        let [a, b, c] = tri.map(|i| m.positions[i as usize].as_dvec3());
+        assert_ne!(
+            (b - a).cross(c - a),
+            glam::DVec3::ZERO,
+            "triangle {t} has zero area: {a} {b} {c}"
+        );
         for k in 0..3 {
             let e = (tri[k], tri[(k + 1) % 3]);
             assert!(
@@ -362,11 +370,8 @@ fn check_topology(vol: &Volume, iso: IsoSpec, s: &Surface) {
         assert_eq!(group.euler, want, "group {g}: reported χ vs voxel χ");
         assert_eq!(group.genus, Some((2 - want) / 2));
         assert_eq!(group.boundary_edges, 0);
-        // A sample exactly at the level puts vertices on it: a lone such
-        // voxel gives a degenerate shell with zero area and volume.
-        if group.area == 0.0 {
-            assert_eq!(group.volume, 0.0);
-        } else if topo.outer[&shell] {
+        assert!(group.area > 0.0, "group {g} has no area");
+        if topo.outer[&shell] {
             assert!(
                 group.volume > 0.0,
                 "group {g}: outer shell, volume {}",
@@ -444,7 +449,8 @@ const CLOSE: McOptions = McOptions { close_border: true };
 fn random_volumes_match_voxel_topology() {
     for seed in 1..=12u64 {
         let vol = random_volume(seed, [9, 8, 7]);
-        for level in [60.5f32, 128.5, 200.5] {
+        // Integer levels put samples exactly on the level.
+        for level in [60.0f32, 60.5, 128.0, 128.5, 200.5] {
             let iso = IsoSpec::Level(level);
             let s = marching_cubes(&vol, iso, &CLOSE, Backend::Cpu).unwrap();
             check_topology(&vol, iso, &s);
@@ -459,9 +465,12 @@ fn every_single_cell_case_is_closed_and_matches_voxel_topology() {
             .map(|c| if case >> c & 1 == 1 { 200 } else { 10 })
             .collect();
         let vol = Volume::new([2, 2, 2], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
-        let iso = IsoSpec::Level(100.0);
-        let s = marching_cubes(&vol, iso, &CLOSE, Backend::Cpu).unwrap();
-        check_topology(&vol, iso, &s);
+        // Between the samples, and exactly at the inside ones.
+        for level in [100.0, 200.0] {
+            let iso = IsoSpec::Level(level);
+            let s = marching_cubes(&vol, iso, &CLOSE, Backend::Cpu).unwrap();
+            check_topology(&vol, iso, &s);
+        }
     }
 }
 

@@ -23,7 +23,7 @@ use glam::{DVec2, DVec3};
 
 /// Loops of cut vertices from directed segments `a → b` (as the negative
 /// side's triangles use them), each returned reversed (cap orientation).
-/// Vertices that do not close into a loop are counted as open.
+/// Chains that do not close into a loop are counted as open.
 pub fn loops(segments: &[(u32, u32)]) -> (Vec<Vec<u32>>, usize) {
     let mut succ: HashMap<u32, u32> = HashMap::with_capacity(segments.len());
     let mut bad = std::collections::HashSet::new();
@@ -34,8 +34,25 @@ pub fn loops(segments: &[(u32, u32)]) -> (Vec<Vec<u32>>, usize) {
         }
     }
     let mut out = Vec::new();
-    let mut open = 0;
     let mut seen = std::collections::HashSet::new();
+    // Open chains, walked from their heads (no predecessor): one each.
+    let preds: std::collections::HashSet<u32> = succ.values().copied().collect();
+    let mut heads: Vec<u32> = succ
+        .keys()
+        .filter(|v| !preds.contains(v))
+        .copied()
+        .collect();
+    heads.sort_unstable();
+    let mut open = heads.len();
+    for h in heads {
+        let mut v = h;
+        while seen.insert(v) {
+            match succ.get(&v) {
+                Some(&w) => v = w,
+                None => break,
+            }
+        }
+    }
     let mut starts: Vec<u32> = succ.keys().copied().collect();
     starts.sort_unstable();
     for s in starts {

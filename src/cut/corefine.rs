@@ -34,6 +34,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::cap;
+use crate::surface::tree::vertex_components;
 use crate::surface::{Aabb, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 
@@ -312,6 +313,9 @@ struct Face {
     holes: Vec<Vec<u32>>,
     /// Behind the other mesh (surface: negative side; knife: inside the solid).
     behind: bool,
+    /// Holds an open end of the cut curve (knife triangles only, where the
+    /// surface's own border crosses them): on both sides, never a cap.
+    open: bool,
 }
 
 /// One triangle to split: corner ids and positions, cut points on each
@@ -322,6 +326,8 @@ struct ToSplit<'a> {
     segments: Vec<(u32, u32, DVec3)>,
     pos: &'a dyn Fn(u32) -> DVec3,
     what: &'a str,
+    /// Whether the cut curve may end inside (else an error).
+    open_ends: bool,
 }
 
 impl ToSplit<'_> {
@@ -329,18 +335,23 @@ impl ToSplit<'_> {
         Error::InvalidInput(format!("triangulated knife: {} {why}", self.what))
     }
 
+    fn ends_inside(&self) -> Error {
+        self.err(
+            "holds an end of the cut curve: the knife's border passes through the surface \
+             (an open knife must reach beyond the surface)",
+        )
+    }
+
     fn normal(&self) -> DVec3 {
         let [a, b, c] = self.corners.map(|v| (self.pos)(v));
         (b - a).cross(c - a)
     }
 
-    /// The faces: polygons between the chains, loops as holes + polygons.
-    fn faces(self) -> Result<Vec<Face>> {
+    /// The triangle's border as one cycle: corners with the cut points in
+    /// order along each edge.
+    fn boundary(&self) -> Result<Vec<u32>> {
         let pos = self.pos;
-        let n_own = self.normal();
-        // Boundary cycle with the edge points in order along each edge.
         let mut boundary = Vec::new();
-        let mut on_boundary: HashMap<u32, ()> = HashMap::new();
         for i in 0..3 {
             let (c0, c1) = (pos(self.corners[i]), pos(self.corners[(i + 1) % 3]));
             let d = c1 - c0;
@@ -353,11 +364,22 @@ impl ToSplit<'_> {
                 return Err(self.err("has two cut points at one spot of an edge"));
             }
             boundary.push(self.corners[i]);
-            for &(_, p) in &pts {
-                boundary.push(p);
-                on_boundary.insert(p, ());
-            }
+            boundary.extend(pts.iter().map(|&(_, p)| p));
         }
+        Ok(boundary)
+    }
+
+    /// The faces: polygons between the chains, loops as holes + polygons.
+    fn faces(self) -> Result<Vec<Face>> {
+        let pos = self.pos;
+        let n_own = self.normal();
+        let boundary = self.boundary()?;
+        let on_boundary: HashMap<u32, ()> = self
+            .edge_points
+            .iter()
+            .flatten()
+            .map(|&p| (p, ()))
+            .collect();
         // Adjacency of the segments.
         let mut adj: HashMap<u32, Vec<u32>> = HashMap::new();
         let mut seg_normal: HashMap<(u32, u32), DVec3> = HashMap::new();
@@ -374,6 +396,8 @@ impl ToSplit<'_> {
         // Chains from boundary point to boundary point, then interior loops.
         let mut visited: HashMap<u32, ()> = HashMap::new();
         let mut chains: Vec<Vec<u32>> = Vec::new();
+        // A point of each open chain (its start).
+        let mut dangling: Vec<u32> = Vec::new();
         let mut starts: Vec<u32> = on_boundary.keys().copied().collect();
         starts.sort_unstable();
         for s in starts {
@@ -388,19 +412,41 @@ impl ToSplit<'_> {
                     .get(&cur)
                     .and_then(|v| v.iter().copied().find(|&w| w != prev));
                 let Some(next) = next else {
-                    return Err(self.err(
-                        "holds an end of the cut curve: the knife's border passes through the \
-                         surface (an open knife must reach beyond the surface)",
-                    ));
+                    if !self.open_ends {
+                        return Err(self.ends_inside());
+                    }
+                    dangling.push(s);
+                    break;
                 };
                 chain.push(next);
                 visited.insert(next, ());
                 if on_boundary.contains_key(&next) {
+                    chains.push(chain);
                     break;
                 }
                 (prev, cur) = (cur, next);
             }
-            chains.push(chain);
+        }
+        // Open chains with both ends inside.
+        let mut ends: Vec<u32> = adj
+            .iter()
+            .filter(|(p, v)| v.len() == 1 && !visited.contains_key(p))
+            .map(|(&p, _)| p)
+            .collect();
+        ends.sort_unstable();
+        for e in ends {
+            if visited.insert(e, ()).is_some() {
+                continue;
+            }
+            if !self.open_ends {
+                return Err(self.ends_inside());
+            }
+            dangling.push(e);
+            let (mut prev, mut cur) = (u32::MAX, e);
+            while let Some(next) = adj[&cur].iter().copied().find(|&w| w != prev) {
+                visited.insert(next, ());
+                (prev, cur) = (cur, next);
+            }
         }
         let mut loops: Vec<Vec<u32>> = Vec::new();
         let mut rest: Vec<u32> = adj
@@ -421,7 +467,7 @@ impl ToSplit<'_> {
                     .get(&cur)
                     .and_then(|v| v.iter().copied().find(|&w| w != prev))
                 else {
-                    return Err(self.err("holds an end of the cut curve"));
+                    return Err(self.ends_inside());
                 };
                 if next == s {
                     break;
@@ -473,7 +519,9 @@ impl ToSplit<'_> {
                 })
                 .sum::<f64>()
         };
-        let label = |cyc: &[u32]| -> Result<bool> {
+        // Side of the polygon left of `cyc`, from its cut edges (None: no
+        // cut edge on `cyc` tells it).
+        let label = |cyc: &[u32]| -> Result<Option<bool>> {
             let mut verdict: Option<bool> = None;
             let n = cyc.len();
             for i in 0..n {
@@ -493,14 +541,18 @@ impl ToSplit<'_> {
                 }
                 verdict = Some(behind);
             }
-            verdict.ok_or_else(|| self.err("has a polygon whose side cannot be told"))
+            Ok(verdict)
         };
+        let untold = || self.err("has a polygon whose side cannot be told");
         let mut faces: Vec<Face> = Vec::with_capacity(polys.len() + loops.len());
+        let mut told: Vec<Option<bool>> = Vec::with_capacity(polys.len() + loops.len());
         for p in polys {
+            told.push(label(&p)?);
             faces.push(Face {
-                behind: label(&p)?,
+                behind: false,
                 outer: p,
                 holes: Vec::new(),
+                open: false,
             });
         }
         // Loops: a polygon of their own, and a hole in the smallest face around them.
@@ -511,10 +563,12 @@ impl ToSplit<'_> {
             }
         }
         for lp in &loops {
+            told.push(Some(label(lp)?.ok_or_else(untold)?));
             faces.push(Face {
-                behind: label(lp)?,
+                behind: false,
                 outer: lp.clone(),
                 holes: Vec::new(),
+                open: false,
             });
         }
         for (li, lp) in loops.iter().enumerate() {
@@ -530,6 +584,43 @@ impl ToSplit<'_> {
                 return Err(self.err("has a cut loop outside itself"));
             };
             faces[o].holes.push(lp.iter().rev().copied().collect());
+        }
+        // Open chains mark the face they lie in: the one whose border holds
+        // their boundary start, else the smallest around their inner start.
+        for &d in &dangling {
+            let owner = if on_boundary.contains_key(&d) {
+                faces.iter().position(|f| f.outer.contains(&d))
+            } else {
+                let q = to2(pos(d));
+                (0..faces.len())
+                    .filter(|&f| {
+                        let cyc: Vec<DVec2> = faces[f].outer.iter().map(|&v| to2(pos(v))).collect();
+                        point_in(&cyc, q)
+                    })
+                    .min_by(|&a, &b| area(&faces[a].outer).total_cmp(&area(&faces[b].outer)))
+            };
+            let Some(o) = owner else {
+                return Err(self.err("has an open cut curve outside itself"));
+            };
+            faces[o].open = true;
+        }
+        // A polygon whose outer border has no cut edge (a triangle around
+        // loops only) is told by its holes: it lies left of them too.
+        for (f, t) in faces.iter_mut().zip(told) {
+            if f.open {
+                continue;
+            }
+            let mut side = t;
+            for h in &f.holes {
+                match (side, label(h)?) {
+                    (Some(a), Some(b)) if a != b => {
+                        return Err(self.err("has a polygon on both sides of the other mesh"));
+                    }
+                    (None, b) => side = b,
+                    _ => {}
+                }
+            }
+            f.behind = side.ok_or_else(untold)?;
         }
         Ok(faces)
     }
@@ -606,8 +697,46 @@ pub(crate) struct MeshSplit {
     /// Knife regions used as caps.
     pub regions_capped: usize,
     /// Cut curves with an end (at a surface border), and knife regions
-    /// inside the solid that could not be capped.
+    /// inside the solid that reach the knife's border (not capped).
     pub curves_open: usize,
+}
+
+/// Per triangle, whether its solid lies in front of it: on the closed
+/// components when, together, they enclose a negative volume (the surface
+/// is wound inward; cavities count against their outer surface, as they
+/// should). Open components enclose nothing and keep the convention that
+/// triangles face outward.
+fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
+    let (comp, n) = vertex_components(surface.n_vertices(), &surface.triangles);
+    let mut volume6 = vec![0.0f64; n];
+    for (t, &c) in surface.triangles.iter().zip(&comp) {
+        let [a, b, c3] = t.map(|v| surface.positions[v as usize].as_dvec3());
+        volume6[c as usize] += a.dot(b.cross(c3));
+    }
+    // Closed: every edge used twice, once in each direction.
+    let mut edges: Vec<(u64, bool, u32)> = surface
+        .triangles
+        .par_iter()
+        .zip(&comp)
+        .flat_map_iter(|(t, &c)| {
+            (0..3).map(move |i| {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
+                (key, a < b, c)
+            })
+        })
+        .collect();
+    edges.par_sort_unstable();
+    let mut closed = vec![true; n];
+    for run in edges.chunk_by(|x, y| x.0 == y.0) {
+        if !(run.len() == 2 && run[0].1 != run[1].1) {
+            closed[run[0].2 as usize] = false;
+        }
+    }
+    let enclosed: f64 = (0..n).filter(|&c| closed[c]).map(|c| volume6[c]).sum();
+    comp.iter()
+        .map(|&c| closed[c as usize] && enclosed < 0.0)
+        .collect()
 }
 
 /// Splits the surface and (with `cap`) makes the caps. `points` are the cut
@@ -672,6 +801,7 @@ pub(crate) fn split(
             segments: segs,
             pos: &pos,
             what: &what,
+            open_ends: false,
         }
         .faces()?;
         let n_own = normal(surface, t);
@@ -707,20 +837,15 @@ pub(crate) fn split(
     if !cap {
         return Ok(out);
     }
-    // The solid is behind the surface when it is wound outward.
-    let volume6: f64 = surface
-        .triangles
-        .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| surface.positions[v as usize].as_dvec3());
-            a.dot(b.cross(c))
-        })
-        .sum();
-    let outward = volume6 >= 0.0;
+    // The solid is behind a surface triangle, or in front where its
+    // component is closed and wound inward.
+    let inward = inward_triangles(surface);
     // Knife triangles with segments, split.
     let mut by_knife: Vec<usize> = (0..segments.len()).collect();
     by_knife.sort_by_key(|&i| (segments[i].knife_triangle, segments[i].triangle));
     let mut knife_faces: Vec<(u32, Face)> = Vec::new();
+    // Knife triangles cut by inward-wound surface: their caps face inward too.
+    let mut knife_inward = vec![false; knife.triangles.len()];
     let mut split_knife = vec![false; knife.triangles.len()];
     let mut i = 0;
     while i < by_knife.len() {
@@ -731,6 +856,7 @@ pub(crate) fn split(
         let mut segs = Vec::new();
         while i < by_knife.len() && segments[by_knife[i]].knife_triangle == kt {
             let sg = segments[by_knife[i]];
+            knife_inward[kt as usize] |= inward[sg.triangle as usize];
             for &p in &sg.ends {
                 if let PointOrigin::KnifeEdge { edge, .. } = origins[p as usize] {
                     let e = (0..3)
@@ -741,10 +867,15 @@ pub(crate) fn split(
                     }
                 }
             }
+            let n_solid = normal(surface, sg.triangle);
             segs.push((
                 n_v + sg.ends[0],
                 n_v + sg.ends[1],
-                normal(surface, sg.triangle),
+                if inward[sg.triangle as usize] {
+                    -n_solid
+                } else {
+                    n_solid
+                },
             ));
             i += 1;
         }
@@ -755,13 +886,11 @@ pub(crate) fn split(
             segments: segs,
             pos: &pos,
             what: &what,
+            open_ends: true,
         }
         .faces()?;
         split_knife[kt as usize] = true;
-        for mut f in faces {
-            f.behind = f.behind == outward;
-            knife_faces.push((kt, f));
-        }
+        knife_faces.extend(faces.into_iter().map(|f| (kt, f)));
     }
     // Regions: faces and whole knife triangles joined across shared
     // non-curve edges; an edge used once lies on the knife's border.
@@ -801,34 +930,51 @@ pub(crate) fn split(
         let cyc = knife.triangles[t as usize].map(|v| kbase + v);
         add_cycle(&cyc, (knife_faces.len() + j) as u32, &mut uf);
     }
-    // Per region: inside votes, outside votes, border.
-    let mut region: HashMap<u32, (bool, bool, bool)> = HashMap::new();
-    for (u, (_, f)) in knife_faces.iter().enumerate() {
+    // Per region: what its faces say, and whether it reaches the knife's border.
+    #[derive(Default)]
+    struct Votes {
+        inside: bool,
+        outside: bool,
+        open: bool,
+        border: bool,
+        inward: bool,
+    }
+    let mut region: HashMap<u32, Votes> = HashMap::new();
+    for (u, (kt, f)) in knife_faces.iter().enumerate() {
         let r = region.entry(uf.find(u as u32)).or_default();
-        if f.behind {
-            r.0 = true;
-        } else {
-            r.1 = true;
-        }
+        r.inward |= knife_inward[*kt as usize];
+        r.open |= f.open;
+        r.inside |= f.behind && !f.open;
+        r.outside |= !f.behind && !f.open;
     }
     for (&_key, &(unit, count)) in &first_user {
         if count == 1
             && let Some(r) = region.get_mut(&uf.find(unit))
         {
-            r.2 = true;
+            r.border = true;
         }
     }
-    let mut capped: Vec<u32> = Vec::new();
-    for (&root, &(inside, outside, border)) in &region {
-        if inside && !outside && !border {
-            capped.push(root);
-        } else if inside {
+    // Regions at an open curve are counted with it; an inside region
+    // bounded by the knife's border as well is counted here.
+    let mut capped: Vec<(u32, bool)> = Vec::new();
+    for (&root, r) in &region {
+        if r.inside && !r.outside && !r.border && !r.open {
+            capped.push((root, r.inward));
+        } else if r.inside && !r.open {
             out.curves_open += 1;
         }
     }
     capped.sort_unstable();
     out.regions_capped = capped.len();
-    let mut is_cap = |u: u32| capped.binary_search(&uf.find(u)).is_ok();
+    // Whether unit `u` is in a cap, and whether that cap faces inward.
+    let mut cap_of = |u: u32| {
+        let root = uf.find(u);
+        capped
+            .binary_search_by_key(&root, |c| c.0)
+            .ok()
+            .map(|i| capped[i].1)
+    };
+    let oriented = |t: [u32; 3], inward: bool| if inward { [t[0], t[2], t[1]] } else { t };
     let mut knife_id: HashMap<u32, u32> = HashMap::new();
     let mut remap = |v: u32, extra: &mut Vec<Vec3>| -> u32 {
         if v < kbase {
@@ -841,16 +987,16 @@ pub(crate) fn split(
     };
     let mut caps = Vec::new();
     for (u, (kt, f)) in knife_faces.iter().enumerate() {
-        if is_cap(u as u32) {
+        if let Some(inward) = cap_of(u as u32) {
             for t in triangulate_face(f, &pos, normal(knife, *kt)) {
-                caps.push(t.map(|v| remap(v, &mut out.extra_points)));
+                caps.push(oriented(t, inward).map(|v| remap(v, &mut out.extra_points)));
             }
         }
     }
     for (j, &t) in whole.iter().enumerate() {
-        if is_cap((knife_faces.len() + j) as u32) {
+        if let Some(inward) = cap_of((knife_faces.len() + j) as u32) {
             let cyc = knife.triangles[t as usize].map(|v| kbase + v);
-            caps.push(cyc.map(|v| remap(v, &mut out.extra_points)));
+            caps.push(oriented(cyc, inward).map(|v| remap(v, &mut out.extra_points)));
         }
     }
     out.caps = caps;

@@ -106,47 +106,6 @@ impl TriMesh {
             t.swap(1, 2);
         }
     }
-
-    /// Merges vertices at bit-identical positions (−0 = +0; the first keeps
-    /// its place, scalars of the first are kept) and drops the triangles
-    /// that collapse (a repeated vertex). Marching cubes makes such
-    /// vertices where a sample equals the iso-level: every edge at that
-    /// sample gets a vertex on it. Returns the welded mesh and the number of
-    /// vertices merged away.
-    pub fn weld_coincident(&self) -> (TriMesh, usize) {
-        let mut first: std::collections::HashMap<[u32; 3], u32> =
-            std::collections::HashMap::with_capacity(self.positions.len());
-        let mut map = Vec::with_capacity(self.positions.len());
-        let mut keep = Vec::with_capacity(self.positions.len());
-        for (i, p) in self.positions.iter().enumerate() {
-            let key = p.to_array().map(|c| (c + 0.0).to_bits());
-            let id = *first.entry(key).or_insert_with(|| {
-                keep.push(i);
-                (keep.len() - 1) as u32
-            });
-            map.push(id);
-        }
-        let merged = self.positions.len() - keep.len();
-        let triangles = self
-            .triangles
-            .iter()
-            .map(|t| t.map(|v| map[v as usize]))
-            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[2] != t[0])
-            .collect();
-        let mesh = TriMesh {
-            positions: keep.iter().map(|&i| self.positions[i]).collect(),
-            triangles,
-            scalars: self
-                .scalars
-                .iter()
-                .map(|s| ScalarField {
-                    name: s.name.clone(),
-                    values: keep.iter().map(|&i| s.values[i]).collect(),
-                })
-                .collect(),
-        };
-        (mesh, merged)
-    }
 }
 
 /// Splits `mesh` by a per-triangle label (`labels.len() == #F`, labels

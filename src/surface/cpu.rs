@@ -23,12 +23,26 @@
 //! the groups of the vertices on the layer two chunks share; the output does
 //! not depend on the number of threads or chunks.
 //! Interpolation (the one expression both backends use, in f32):
-//! `t = (level − a) / (b − a)`, `u[axis] = f32(p[axis]) + t`, with `a` the
-//! sample at the edge's lower end `p` and `b` at `p + e_axis`
-//! ([`NativeSamples::sample`], the volume read in its own type, only where
-//! an edge crosses).
+//! `t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN)`,
+//! `u[axis] = f32(p[axis]) + t`, with `a` the sample at the edge's lower
+//! end `p` and `b` at `p + e_axis` ([`NativeSamples::sample`], the volume
+//! read in its own type, only where an edge crosses). The clamp
+//! ([`T_MIN`]) keeps every vertex strictly inside its edge, so no triangle
+//! has zero area (see there).
 
 use rayon::prelude::*;
+
+/// Least interpolation parameter, in grid steps: `2⁻¹⁰`. A sample equal to
+/// the level would otherwise put the vertices of all its crossing edges on
+/// the sample itself — coincident vertices and zero-area triangles, which
+/// exact predicates (the mesh knife) cannot place. Kept inside the open
+/// edges, a cell's triangle has its three vertices on three different cube
+/// edges, and no line meets the boundary of a convex cube in three points
+/// interior to different edges: every triangle has positive area. The
+/// shift is at most `2⁻¹⁰` of a sample step, only at samples within that
+/// fraction of the level; f32 keeps `i + T_MIN ≠ i` for grid coordinates
+/// below 2¹⁴ ([`super::field::MAX_AXIS_SAMPLES`]).
+pub const T_MIN: f32 = 1.0 / 1024.0;
 
 use super::field::{Field, NativeSamples, SampleVisitor, Scalar};
 use super::tables::{self, EDGE_OWNER, corner_offset, edge_axis};
@@ -526,7 +540,7 @@ fn number_points<T: Scalar>(
                 let point = (x + nx * (y + ny * z)) as u64;
                 let a = samples.sample(x, y, z);
                 let mut vertex = |axis: usize, b: f32| {
-                    let t = (level - a) / (b - a);
+                    let t = ((level - a) / (b - a)).clamp(T_MIN, 1.0 - T_MIN);
                     let mut u = [x as f32, y as f32, zf];
                     u[axis] += t;
                     emit.out.positions[emit.n_positions] = u;

@@ -12,6 +12,10 @@ use super::IsoSpec;
 use crate::volume::VolumeData;
 use crate::{Error, Result, Volume};
 
+/// Most samples per axis of the (padded) grid: `2¹⁴`, below which f32
+/// grid coordinates resolve [`super::cpu::T_MIN`].
+pub const MAX_AXIS_SAMPLES: usize = 1 << 14;
+
 /// A volume prepared for marching cubes.
 #[derive(Debug)]
 pub struct Field<'a> {
@@ -53,6 +57,13 @@ impl<'a> Field<'a> {
         }
         let pad = usize::from(close_border);
         let dims = volume.dims.map(|d| d + 2 * pad);
+        if dims.iter().any(|&d| d > MAX_AXIS_SAMPLES) {
+            return Err(Error::InvalidInput(format!(
+                "volume {:?}: marching cubes takes at most {MAX_AXIS_SAMPLES} samples per axis \
+                 (border padding included), so that f32 grid positions keep vertices apart",
+                volume.dims
+            )));
+        }
         let n_points = dims.iter().product::<usize>();
         if n_points
             .checked_mul(3)

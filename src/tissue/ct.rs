@@ -12,8 +12,8 @@
 //! the most triangles (reported, with what was left out). The bone keeps
 //! all its groups: every one is bone the tissue may hang on. Surfaces end
 //! open where the body leaves the volume (the neck of a head scan), which
-//! the network handles like any open mesh. Vertices at identical
-//! positions are welded. The subcutis is then placed
+//! the network handles like any open mesh. Marching cubes keeps vertices
+//! apart (no springs of rest length 0). The subcutis is then placed
 //! between the two ([`CT_SUBCUTIS_DEPTH`]).
 
 use serde::Serialize;
@@ -43,10 +43,6 @@ pub struct CtFigures {
     pub bone_groups: usize,
     pub bone_vertices: usize,
     pub bone_triangles: usize,
-    /// Vertices merged into a coincident one (skin, bone): marching cubes
-    /// puts several at a sample that equals the level, and coincident
-    /// nodes would be joined by springs of rest length 0.
-    pub welded_vertices: [usize; 2],
 }
 
 /// Epidermis and bone of a CT.
@@ -106,13 +102,11 @@ impl CtLayers {
             )));
         }
         let skin_triangles_dropped = skin_surface.mesh.n_triangles() - skin.n_triangles();
-        let (skin, skin_welded) = skin.weld_coincident();
-        let (bone, bone_welded) = TriMesh {
+        let bone = TriMesh {
             positions: bone_surface.mesh.positions.clone(),
             triangles: bone_surface.mesh.triangles.clone(),
             scalars: Vec::new(),
-        }
-        .weld_coincident();
+        };
         let figures = CtFigures {
             skin_level,
             bone_level,
@@ -124,7 +118,6 @@ impl CtLayers {
             bone_groups: bone_surface.groups.len(),
             bone_vertices: bone.n_vertices(),
             bone_triangles: bone.n_triangles(),
-            welded_vertices: [skin_welded, bone_welded],
         };
         Ok(CtLayers {
             skin,

@@ -1,9 +1,10 @@
 //! Parity of marching cubes (`mc_classify`, `mc_vertices`, `mc_triangles`)
 //! against the CPU mirror `surface::cpu`.
 //!
-//! Exact comparison: both sides compute `t = (level − a) / (b − a)` and
-//! `u[axis] = f32(p[axis]) + t` with the same f32 operations (one IEEE
-//! division, one addition — nothing to contract into an FMA), and the world
+//! Exact comparison: both sides compute `t = clamp((level − a) / (b − a),
+//! T_MIN, 1 − T_MIN)` and `u[axis] = f32(p[axis]) + t` with the same f32
+//! operations (one IEEE division, an exact clamp, one addition — nothing to
+//! contract into an FMA), and the world
 //! transform runs on the host for both. Vertex positions are therefore
 //! compared bit for bit, keyed by grid edge id; the triangle set is
 //! compared as sorted triples of grid edge ids (rotated to start at the
@@ -111,12 +112,13 @@ fn mc_random_volumes() {
     let Some(gpu) = common::gpu() else { return };
     for seed in 1..=4u64 {
         let vol = random_volume(seed, [23, 17, 11]);
-        for close in [false, true] {
+        // 1000: samples exactly at the level (clamped interpolation).
+        for (close, level) in [(false, 1000.5), (true, 1000.5), (true, 1000.0)] {
             check(
                 &gpu,
-                &format!("random {seed} close {close}"),
+                &format!("random {seed} close {close} level {level}"),
                 &vol,
-                IsoSpec::Level(1000.5),
+                IsoSpec::Level(level),
                 close,
             );
         }

@@ -246,6 +246,32 @@ fn plan_errors_name_the_file_and_increments_are_bounded() {
         e.contains("big.toml") && e.contains("plan step 1") && e.contains("100000"),
         "{e}"
     );
+    // Errors speak the plan's language, not Rust's.
+    for (text, want) in [
+        (
+            "iterations = -3",
+            "integer `-3`, expected a count of iterations or \"converge\"",
+        ),
+        (
+            "iterations = \"forever\"",
+            "string \"forever\", expected a count",
+        ),
+        (
+            "rotate = { axis = [0, 0, 0], degrees = 5, center = [0, 0, 0] }",
+            "got axis [0.0, 0.0, 0.0], degrees 5, center [0.0, 0.0, 0.0]",
+        ),
+    ] {
+        let e = Plan::from_toml_str(
+            &format!("[[step]]\nselect = {{ vertices = [0] }}\n{text}\n"),
+            "p.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(want) && !e.contains("Repr") && !e.contains('{'),
+            "{e}"
+        );
+    }
 }
 
 #[test]

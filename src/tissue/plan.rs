@@ -142,8 +142,8 @@ pub struct Rotation {
 }
 
 /// Iterations per increment: a fixed count, or until a stop criterion.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(try_from = "IterationsRepr", into = "IterationsRepr")]
+/// Written as a number or the word `"converge"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Iterations {
     /// Exactly this many iterations (the seed's Table 2 uses 1).
     Fixed(u32),
@@ -151,32 +151,43 @@ pub enum Iterations {
     Converge,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(untagged)]
-enum IterationsRepr {
-    Count(u32),
-    Word(String),
-}
-
-impl TryFrom<IterationsRepr> for Iterations {
-    type Error = String;
-    fn try_from(r: IterationsRepr) -> Result<Self, String> {
-        match r {
-            IterationsRepr::Count(n) => Ok(Iterations::Fixed(n)),
-            IterationsRepr::Word(w) if w == "converge" => Ok(Iterations::Converge),
-            IterationsRepr::Word(w) => Err(format!(
-                "`iterations` must be a count or \"converge\", found \"{w}\""
-            )),
+impl Serialize for Iterations {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match self {
+            Iterations::Fixed(n) => s.serialize_u32(*n),
+            Iterations::Converge => s.serialize_str("converge"),
         }
     }
 }
 
-impl From<Iterations> for IterationsRepr {
-    fn from(i: Iterations) -> Self {
-        match i {
-            Iterations::Fixed(n) => IterationsRepr::Count(n),
-            Iterations::Converge => IterationsRepr::Word("converge".into()),
+impl<'de> Deserialize<'de> for Iterations {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Unexpected;
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Iterations;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a count of iterations or \"converge\"")
+            }
+            fn visit_u64<E: serde::de::Error>(self, n: u64) -> std::result::Result<Iterations, E> {
+                u32::try_from(n)
+                    .map(Iterations::Fixed)
+                    .map_err(|_| E::invalid_value(Unexpected::Unsigned(n), &self))
+            }
+            fn visit_i64<E: serde::de::Error>(self, n: i64) -> std::result::Result<Iterations, E> {
+                u64::try_from(n)
+                    .map_err(|_| E::invalid_value(Unexpected::Signed(n), &self))
+                    .and_then(|n| self.visit_u64(n))
+            }
+            fn visit_str<E: serde::de::Error>(self, w: &str) -> std::result::Result<Iterations, E> {
+                if w == "converge" {
+                    Ok(Iterations::Converge)
+                } else {
+                    Err(E::invalid_value(Unexpected::Str(w), &self))
+                }
+            }
         }
+        d.deserialize_any(Visitor)
     }
 }
 
@@ -351,7 +362,8 @@ impl Plan {
                     || Vec3::from_array(r.axis).length() == 0.0)
             {
                 return bad(format!(
-                    "rotate needs a finite non-zero axis, finite centre and angle, got {r:?}"
+                    "rotate needs a finite non-zero axis, finite centre and angle, got axis {:?}, degrees {}, center {:?}",
+                    r.axis, r.degrees, r.center
                 ));
             }
         }

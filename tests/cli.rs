@@ -619,6 +619,19 @@ fn mc_and_capped_cut_of_the_ct_bone() {
         path_str(&pieces),
     ]);
     assert_eq!(out.status.code(), Some(1), "a plane needs 6 numbers");
+    assert_clean_error(
+        &[
+            "cut",
+            path_str(&closed),
+            "--plane",
+            "100,100,60,0,0.3,1",
+            "--explode",
+            "-1",
+            "-o",
+            path_str(&pieces),
+        ],
+        "--explode must be finite and ≥ 0",
+    );
 
     // A sphere whose summed loop area points at a pole inside a cap: the
     // caps must still be the sphere's part inside the bone (no piece with a

@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use serde_json::json;
 
 use super::{Global, ViewAxes};
@@ -42,6 +42,11 @@ pub struct Args {
     /// Preview PNG with the pieces coloured by index.
     #[arg(long)]
     preview: Option<PathBuf>,
+    /// In the preview, each piece moves away from the mesh's centre by
+    /// this fraction of its own centre's offset, so pieces inside others
+    /// show (0: in place). Bounding-box centres; the written pieces never move.
+    #[arg(long, default_value_t = 0.3)]
+    explode: f32,
     #[command(flatten)]
     view: ViewAxes,
     /// JSON report.
@@ -96,13 +101,20 @@ fn knives(args: &Args) -> anyhow::Result<Vec<Knife>> {
     Ok(out)
 }
 
-/// All pieces in one mesh with a `piece` scalar (for the preview).
-fn merged(pieces: &[TriMesh]) -> TriMesh {
+/// All pieces in one mesh with a `piece` scalar (for the preview), each
+/// moved by `explode` × (its box centre − the centre of all boxes).
+fn merged(pieces: &[TriMesh], explode: f32) -> TriMesh {
+    let centre = |b: Option<(Vec3, Vec3)>| b.map_or(Vec3::ZERO, |(lo, hi)| (lo + hi) * 0.5);
+    let all = pieces
+        .iter()
+        .filter_map(TriMesh::bounds)
+        .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)));
     let mut m = TriMesh::default();
     let mut ids = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let base = m.positions.len() as u32;
-        m.positions.extend_from_slice(&p.positions);
+        let shift = explode * (centre(p.bounds()) - centre(all));
+        m.positions.extend(p.positions.iter().map(|&q| q + shift));
         m.triangles
             .extend(p.triangles.iter().map(|t| t.map(|v| v + base)));
         ids.extend(std::iter::repeat_n(k as f32, p.n_vertices()));
@@ -115,6 +127,9 @@ fn merged(pieces: &[TriMesh]) -> TriMesh {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    if !(args.explode.is_finite() && args.explode >= 0.0) {
+        anyhow::bail!("--explode must be finite and ≥ 0, got {}", args.explode);
+    }
     super::check_output_dir(&args.output)?;
     for path in [&args.preview, &args.report].into_iter().flatten() {
         crate::io::check_output_path(path)?;
@@ -144,11 +159,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             width: 384,
             height: 384,
             scalars: Some("piece".into()),
-            title: Some(format!("chisel cut: {} pieces", result.pieces.len())),
+            title: Some(if args.explode == 0.0 {
+                format!("chisel cut: {} pieces", result.pieces.len())
+            } else {
+                format!(
+                    "chisel cut: {} pieces, exploded {}",
+                    result.pieces.len(),
+                    args.explode
+                )
+            }),
             facing: args.view.facing()?,
             ..Default::default()
         };
-        crate::render::render_png(&gpu, &merged(&result.pieces), &opts, path)?;
+        crate::render::render_png(&gpu, &merged(&result.pieces, args.explode), &opts, path)?;
     }
     let value = json!({
         "command": "cut",

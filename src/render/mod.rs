@@ -63,7 +63,7 @@ use crate::{Error, Gpu, Result};
 use camera::{Frame, bounding_sphere, view_camera};
 use legend::{INK, Legend};
 use pipeline::{BACKGROUND, CellDraw, PanelGeometry, render_grid};
-use text::{draw_text, fill_rect, text_height};
+use text::{draw_text, fill_rect, text_height, text_width};
 
 /// Height in pixels of the title band (only when a title is given).
 pub const TITLE_HEIGHT: u32 = 32;
@@ -397,8 +397,9 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         draw_text(&mut img, x.into(), y.into(), caption, TEXT_SCALE, INK);
     }
     if let Some(title) = &opts.title {
-        let y = (TITLE_HEIGHT - text_height(TEXT_SCALE)) / 2;
-        draw_text(&mut img, 8, y.into(), title, TEXT_SCALE, INK);
+        let (title, scale) = fit_title(title, img.width.saturating_sub(16));
+        let y = (TITLE_HEIGHT - text_height(scale)) / 2;
+        draw_text(&mut img, 8, y.into(), &title, scale, INK);
         let width = img.width;
         fill_rect(
             &mut img,
@@ -413,6 +414,22 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
         l.draw(&mut img, grid_w, title_h, grid_h);
     }
     Ok(img)
+}
+
+/// The title and its text scale for `room` pixels: the usual scale when it
+/// fits, else half that, else cut short with `...` at half scale.
+fn fit_title(title: &str, room: u32) -> (String, u32) {
+    for scale in [TEXT_SCALE, 1] {
+        if text_width(title, scale) <= room {
+            return (title.to_string(), scale);
+        }
+    }
+    let glyph = text_width("x", 1).max(1);
+    let keep = (room / glyph).saturating_sub(3) as usize;
+    (
+        format!("{}...", title.chars().take(keep).collect::<String>()),
+        1,
+    )
 }
 
 /// `n` cells of `px` pixels, as a texture dimension.
@@ -521,4 +538,17 @@ pub(crate) fn undirected_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
         .collect();
     edges.sort_unstable();
     edges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fit_title;
+
+    #[test]
+    fn titles_shrink_then_shorten_to_fit() {
+        assert_eq!(fit_title("abc", 48), ("abc".to_string(), 2));
+        assert_eq!(fit_title("abcdef", 48), ("abcdef".to_string(), 1));
+        // 48 px hold 6 glyphs at scale 1: 3 kept and the ellipsis.
+        assert_eq!(fit_title("abcdefg", 48), ("abc...".to_string(), 1));
+    }
 }

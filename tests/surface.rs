@@ -556,6 +556,31 @@ fn open_border_surfaces_report_their_boundary() {
 }
 
 #[test]
+fn border_closing_holds_for_levels_beyond_f32_integers() {
+    // At |level| ≥ 2²⁴, level − 1 rounds back to the level: the padding
+    // must still be outside, or the corners would join the solid.
+    for level in [1.0e9f32, -3.0e8] {
+        let inside = if level > 0.0 {
+            2.0 * level
+        } else {
+            0.5 * level
+        };
+        let vol = Volume::new(
+            [3; 3],
+            [1.0; 3],
+            [0.0; 3],
+            VolumeData::F32(vec![inside; 27]),
+        )
+        .unwrap();
+        let iso = IsoSpec::Level(level);
+        let s = marching_cubes(&vol, iso, &CLOSE, Backend::Cpu).unwrap();
+        check_topology(&vol, iso, &s);
+        assert_eq!(s.groups.len(), 1);
+        assert_eq!(s.groups[0].euler, 2);
+    }
+}
+
+#[test]
 fn labels_and_non_finite_samples() {
     let data = vec![0u8, 3, 3, 0, 7, 3, 3, 3];
     let vol = Volume::new([2, 2, 2], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();

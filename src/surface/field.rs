@@ -97,13 +97,14 @@ impl<'a> Field<'a> {
     /// grid. Level mode: samples as `f32`. Label mode: 1 where the sample
     /// equals the label, else 0. Padding samples are outside, placed so that
     /// the closing vertex lies half a sample beyond the border: `2·level − v`
-    /// next to an inside sample `v > level`, `level − 1` elsewhere.
+    /// next to an inside sample `v > level`, `outside()` (`level − 1`)
+    /// elsewhere.
     pub fn layer(&self, z: usize, out: &mut [f32]) {
         let [nx, ny, _] = self.dims;
         let p = self.pad;
         let [vx, vy, vz] = self.volume.dims;
         let inner_z = z.checked_sub(p).filter(|&k| k < vz);
-        let outside = self.level - 1.0;
+        let outside = self.outside();
         match inner_z {
             None => {
                 // A padding layer: mirror the adjacent inner layer.
@@ -148,10 +149,16 @@ impl<'a> Field<'a> {
     /// The padding sample next to an inner sample of value `v`.
     fn pad_value(&self, v: f32) -> f32 {
         if v > self.level {
-            2.0 * self.level - v
+            (2.0 * self.level - v).min(self.outside())
         } else {
-            self.level - 1.0
+            self.outside()
         }
+    }
+
+    /// A value below the level: `level − 1`, or the next float down where
+    /// the level is too large for `− 1` to change it (|level| ≥ 2²⁴).
+    fn outside(&self) -> f32 {
+        (self.level - 1.0).min(self.level.next_down())
     }
 
     /// Row `y` of inner layer `z` as f32 (labels mapped to 0/1).
@@ -206,8 +213,8 @@ impl<'a> Field<'a> {
         let [vx, vy, vz] = self.volume.dims;
         if pad_y || pad_z {
             // The padding values of `layer`: `pad_value` of the inner row
-            // next to it, `level − 1` where two coordinates are padding.
-            let mut row = vec![self.level - 1.0; nx];
+            // next to it, `outside()` where two coordinates are padding.
+            let mut row = vec![self.outside(); nx];
             if !(pad_y && pad_z) {
                 let inner = |c: usize, d: usize| c.saturating_sub(1).min(d - 1);
                 let mut inner_row = vec![0.0f32; vx];
@@ -290,7 +297,7 @@ impl<'a> Field<'a> {
     /// Sample `(x, y, z)` of the padded grid as `f32`: exactly
     /// `layer(z)[x + nx·y]`. A padding sample next to one inner sample `v`
     /// (one coordinate outside) is `pad_value(v)`; padding edges and
-    /// corners are `level − 1`.
+    /// corners are `outside()`.
     #[inline]
     pub fn sample(&self, x: usize, y: usize, z: usize) -> f32 {
         let p = self.pad;
@@ -315,7 +322,7 @@ impl<'a> Field<'a> {
         match n_pad {
             0 => v(),
             1 => self.pad_value(v()),
-            _ => self.level - 1.0,
+            _ => self.outside(),
         }
     }
 

@@ -136,6 +136,82 @@ fn plane_cut_of_a_ball_gives_two_closed_halves() {
     assert!(r.stats.classes.clear > 0 && r.stats.classes.intersected > 0);
 }
 
+/// No zero-area triangle and no two vertices at one position.
+fn assert_clean(m: &TriMesh, what: &str) {
+    let mut seen = std::collections::HashSet::new();
+    for p in &m.positions {
+        assert!(
+            seen.insert(p.to_array().map(f32::to_bits)),
+            "{what}: two vertices at {p}"
+        );
+    }
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|v| m.positions[v as usize].as_dvec3());
+        assert_ne!((b - a).cross(c - a), DVec3::ZERO, "{what}: zero-area {t:?}");
+    }
+}
+
+#[test]
+fn knives_through_mesh_vertices_reuse_them() {
+    // Marching-cubes vertices on x and y grid edges lie exactly in the
+    // plane z = 14: their crossings land on them, and each becomes one cut
+    // vertex — no coincident copies, no zero-area slivers, closed pieces.
+    let s = mc(&ball_volume(30, 10.0));
+    let on_plane = s.mesh.positions.iter().filter(|p| p.z == 14.0).count();
+    assert!(on_plane > 20, "{on_plane}");
+    let knives = [
+        plane([0.0, 0.0, 14.0], [0.0, 0.0, 1.0]),
+        Knife::Rect {
+            centre: DVec3::new(14.5, 14.5, 14.0),
+            normal: DVec3::Z,
+            u_axis: DVec3::X,
+            half_extents: [30.0, 30.0],
+        },
+        // Through grid points diagonally: crossings on and off vertices.
+        plane([14.0, 14.0, 14.0], [1.0, 1.0, 0.0]),
+    ];
+    for (i, k) in knives.iter().enumerate() {
+        let r = cut(&s.mesh, &s.forest, k, &CAP).unwrap();
+        assert_eq!(r.pieces.len(), 2, "knife {i}");
+        assert_eq!(
+            (r.stats.loops_capped, r.stats.curves_open),
+            (1, 0),
+            "knife {i}"
+        );
+        for (j, p) in r.pieces.iter().enumerate() {
+            assert_clean(p, &format!("knife {i} piece {j}"));
+        }
+        assert_conserved(&s.mesh, &r, 1e-9, &format!("knife {i}"));
+        same_result(&r, &cut_full_scan(&s.mesh, k, &CAP).unwrap());
+    }
+    // A mesh knife after such a cut finds no degenerate triangle to refuse.
+    let mut ball = common::icosphere(3);
+    for p in &mut ball.positions {
+        *p = (p.as_dvec3() * 6.0 + DVec3::new(14.37, 14.61, 21.13)).as_vec3();
+    }
+    let seq = cut_sequence(&s.mesh, &[knives[0].clone(), Knife::Mesh(ball)], &CAP).unwrap();
+    assert_conserved(&s.mesh, &seq, 1e-9, "plane then icosphere");
+}
+
+#[test]
+fn sphere_caps_of_an_inward_wound_surface_are_its_outward_caps_turned() {
+    let s = mc(&ball_volume(30, 10.0));
+    let mut inward = s.mesh.clone();
+    inward.flip_winding();
+    let k = Knife::Sphere {
+        centre: DVec3::new(14.3, 14.6, 22.1),
+        radius: 6.2,
+    };
+    let out = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+    let r = cut_mesh(&inward, &k, &CAP).unwrap();
+    assert_eq!(r.sides, out.sides);
+    assert_conserved(&inward, &r, 1e-9, "inward ball/sphere");
+    let c = DVec3::splat(14.5);
+    let (a, b) = (side_volumes(&r, c), side_volumes(&out, c));
+    assert!(a.0 < 0.0 && a.1 < 0.0, "{a:?}");
+    assert!((a.0 + b.0).abs() < 1e-3 * b.0, "{a:?} vs {b:?}");
+}
+
 #[test]
 fn uncapped_cut_leaves_open_pieces_with_the_cut_as_boundary() {
     let s = mc(&ball_volume(30, 10.0));

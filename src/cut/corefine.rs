@@ -706,7 +706,7 @@ pub(crate) struct MeshSplit {
 /// is wound inward; cavities count against their outer surface, as they
 /// should). Open components enclose nothing and keep the convention that
 /// triangles face outward.
-fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
+pub(crate) fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
     let (comp, n) = vertex_components(surface.n_vertices(), &surface.triangles);
     let mut volume6 = vec![0.0f64; n];
     for (t, &c) in surface.triangles.iter().zip(&comp) {

@@ -119,7 +119,9 @@ pub struct Located {
     /// Per cut vertex, whether its edge's lower-id end is on the negative side.
     pub lower_negative: Vec<bool>,
     /// Per cut vertex, its edge `(lower id, higher id)` (for a triangulated
-    /// knife: of the surface or of the knife, see `origins`).
+    /// knife: of the surface or of the knife, see `origins`); `(v, v)` for a
+    /// cut at mesh vertex `v` (analytic knives: a vertex on the knife), at
+    /// v's position, with `lower_negative` v's side.
     pub edges: Vec<(u32, u32)>,
     /// Triangulated knife only: per cut vertex, which edge crosses which
     /// triangle (`edge_cuts` is then empty: an edge may be crossed more
@@ -609,7 +611,8 @@ struct EdgeTable {
 }
 
 impl EdgeTable {
-    /// Never a key: the lower id of an edge is below its higher id.
+    /// Never a key: the lower id of an edge is below its higher id, and a
+    /// vertex key `v << 32 | v` has `v < u32::MAX`.
     const EMPTY: u64 = u64::MAX;
 
     /// A table for up to `n` edges (load factor at most 2/3).
@@ -675,17 +678,34 @@ fn finish_locate(
                 continue;
             }
             let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
-            let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
-            let made = ids.get_or_insert(key, || {
-                let c = k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j])?;
-                out.points.push(c.point.as_vec3());
-                out.lower_negative.push(c.first_negative);
-                out.edges.push((tri[i], tri[j]));
-                Some(out.points.len() as u32 - 1)
-            });
-            if let Some(id) = made {
-                *cut = id;
-            }
+            let (a, b) = (p[tri[i] as usize], p[tri[j] as usize]);
+            let Some(c) = k.crossing_from(a, b, f[i], f[j]) else {
+                continue;
+            };
+            let q = c.point.as_vec3();
+            // A crossing that lands on an end (a vertex on the knife, or
+            // rounded onto it) is that vertex's cut, shared by all its
+            // crossed edges: no two cut vertices coincide, no piece gets a
+            // zero-area triangle. Recorded as the edge (v, v) with v's side.
+            let (key, edge, lower_negative) = match [q == a, q == b] {
+                [false, false] => (
+                    (u64::from(tri[i]) << 32) | u64::from(tri[j]),
+                    (tri[i], tri[j]),
+                    c.first_negative,
+                ),
+                [at_a, _] => {
+                    let (v, fv) = if at_a { (tri[i], f[i]) } else { (tri[j], f[j]) };
+                    ((u64::from(v) << 32) | u64::from(v), (v, v), fv < 0.0)
+                }
+            };
+            *cut = ids
+                .get_or_insert(key, || {
+                    out.points.push(q);
+                    out.lower_negative.push(lower_negative);
+                    out.edges.push(edge);
+                    Some(out.points.len() as u32 - 1)
+                })
+                .unwrap_or(u32::MAX);
         }
         if cuts != [u32::MAX; 3] {
             out.triangles.push(t);
@@ -765,15 +785,24 @@ fn assemble(
     glued.resize(points.len(), false);
     let n_c = points.len() as u32;
     // Vertex nodes: originals, then two copies per cut vertex (negative,
-    // positive); a glued cut vertex uses its negative copy on both sides.
+    // positive); a glued cut vertex uses its negative copy on both sides. A
+    // cut at mesh vertex `a` is `a` itself on a's side (and when glued), so
+    // the sub-triangles it flattens repeat a node and are dropped below.
     let node = |v: u32, side: Option<bool>| -> u32 {
         if v < n_v {
             return v;
         }
         let c = v - n_v;
+        if let Some(&(a, b)) = located.edges.get(c as usize)
+            && a == b
+            && (glued[c as usize] || side == Some(located.lower_negative[c as usize]))
+        {
+            return a;
+        }
         let positive = !glued[c as usize] && side == Some(false);
         n_v + 2 * c + u32::from(positive)
     };
+    let flat = |k3: &[u32; 3]| k3[0] == k3[1] || k3[1] == k3[2] || k3[2] == k3[0];
     // Union-find over vertex nodes; every sub-triangle joins its vertices.
     let n_nodes = (n_v + 2 * n_c) as usize;
     let mut uf = UnionFind::with_len(n_nodes);
@@ -805,7 +834,7 @@ fn assemble(
         .collect();
     // Cut vertices separate because each side uses its own copy; glued cut
     // vertices have one copy and join both sides.
-    for k3 in &keyed {
+    for k3 in keyed.iter().filter(|k3| !flat(k3)) {
         uf.union(k3[0], k3[1]);
         uf.union(k3[0], k3[2]);
     }
@@ -833,7 +862,7 @@ fn assemble(
                 .map(|f| f < 0.0),
         })
     };
-    for (i, k3) in keyed.iter().enumerate() {
+    for (i, k3) in keyed.iter().enumerate().filter(|(_, k3)| !flat(k3)) {
         let root = uf.find(k3[0]) as usize;
         if piece_of_root[root] == u32::MAX {
             piece_of_root[root] = pieces.len() as u32;
@@ -914,10 +943,12 @@ fn split_analytic(
                     .unwrap_or(0);
                 let (l, b, c) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
                 let (pp, qq) = (cv(r), cv((r + 2) % 3));
-                // Side of L from the first crossed edge's verdict.
+                // Side of L from the first crossed edge's verdict (from its
+                // vertex's for a cut at a vertex, L or B).
                 let ce = cuts[r] as usize;
-                let l_is_lower = l < b;
-                let l_neg = located.lower_negative[ce] == l_is_lower;
+                let e = located.edges[ce];
+                let l_first = if e.0 == e.1 { e.0 == l } else { l < b };
+                let l_neg = located.lower_negative[ce] == l_first;
                 s.push(Sub {
                     v: [l, pp, qq],
                     side: Some(l_neg),
@@ -930,7 +961,10 @@ fn split_analytic(
                     v: [pp, c, qq],
                     side: Some(!l_neg),
                 });
-                segments.push(if l_neg { (pp, qq) } else { (qq, pp) });
+                // Both crossings at one vertex: the curve only touches it.
+                if pp != qq {
+                    segments.push(if l_neg { (pp, qq) } else { (qq, pp) });
+                }
             }
             1 => {
                 stats.triangles_partial += 1;
@@ -969,11 +1003,24 @@ fn split_analytic(
     let mut points = located.points.clone();
     let mut cap_tris: Vec<[u32; 3]> = Vec::new();
     if opts.cap {
-        let (loops, open) = cap::loops(&segments);
+        let (mut loops, open) = cap::loops(&segments);
         stats.curves_open = open;
         stats.loops_capped = loops.len();
+        // A sphere cap is placed by which side of its loops it lies on, so a
+        // surface wound inward is capped as its outward twin, then turned
+        // back (planes need no such care: their caps fill the loops).
+        let inward = matches!(k.kind, Kind::Sphere { .. }) && !loops.is_empty() && {
+            let front = corefine::inward_triangles(mesh);
+            located.triangles.iter().any(|&t| front[t as usize])
+        };
+        if inward {
+            loops.iter_mut().for_each(|lp| lp.reverse());
+        }
         if !loops.is_empty() {
             cap_tris = make_caps(&loops, &mut points, n_v, k)?;
+        }
+        if inward {
+            cap_tris.iter_mut().for_each(|t| t.swap(1, 2));
         }
     }
     Ok(Split {

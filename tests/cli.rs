@@ -630,7 +630,7 @@ fn mc_and_capped_cut_of_the_ct_bone() {
             "-o",
             path_str(&pieces),
         ],
-        "--explode must be finite and ≥ 0",
+        "--explode must be between 0 and 10",
     );
 
     // A sphere whose summed loop area points at a pole inside a cap: the

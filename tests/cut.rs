@@ -755,6 +755,16 @@ fn bad_knives_are_errors() {
     ] {
         assert!(cut(&s.mesh, &s.forest, &k, &CAP).is_err(), "{k:?}");
     }
+    let along = Knife::Rect {
+        centre: DVec3::splat(7.5),
+        normal: DVec3::Z,
+        u_axis: DVec3::new(0.0, 0.0, 2.0),
+        half_extents: [3.0, 3.0],
+    };
+    let e = cut(&s.mesh, &s.forest, &along, &CAP)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("is parallel to its normal"), "{e}");
 }
 
 #[test]

@@ -44,7 +44,8 @@ pub struct Args {
     preview: Option<PathBuf>,
     /// In the preview, each piece moves away from the mesh's centre by
     /// this fraction of its own centre's offset, so pieces inside others
-    /// show (0: in place). Bounding-box centres; the written pieces never move.
+    /// show (0: in place, at most 10). Bounding-box centres; the written
+    /// pieces never move.
     #[arg(long, default_value_t = 0.3)]
     explode: f32,
     #[command(flatten)]
@@ -127,8 +128,8 @@ fn merged(pieces: &[TriMesh], explode: f32) -> TriMesh {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    if !(args.explode.is_finite() && args.explode >= 0.0) {
-        anyhow::bail!("--explode must be finite and ≥ 0, got {}", args.explode);
+    if !(0.0..=10.0).contains(&args.explode) {
+        anyhow::bail!("--explode must be between 0 and 10, got {}", args.explode);
     }
     super::check_output_dir(&args.output)?;
     for path in [&args.preview, &args.report].into_iter().flatten() {

@@ -125,7 +125,12 @@ impl Knife {
             } => {
                 check_finite("centre", *centre)?;
                 let n = unit("normal", *normal)?;
-                let u = unit("u axis", *u_axis - n * u_axis.dot(n))?;
+                unit("u axis", *u_axis)?;
+                let u = unit("u axis", *u_axis - n * u_axis.dot(n)).map_err(|_| {
+                    crate::Error::InvalidInput(format!(
+                        "knife rectangle u axis {u_axis} is parallel to its normal {normal}"
+                    ))
+                })?;
                 if half_extents.iter().any(|h| !h.is_finite() || *h <= 0.0) {
                     return Err(crate::Error::InvalidInput(format!(
                         "knife rectangle half extents {half_extents:?} must be positive"

@@ -769,7 +769,12 @@ fn mesh_knives_cut_the_ct_bone() {
             let pieces = cut["pieces"].as_array().unwrap();
             if close {
                 assert_eq!(stats["curves_open"], 0, "{what}");
-                assert!(pieces.iter().all(|p| p["closed"] == true), "{what}");
+                assert!(
+                    pieces
+                        .iter()
+                        .all(|p| p["closed"] == true && p["manifold"] == true),
+                    "{what}"
+                );
                 let total: f64 = pieces
                     .iter()
                     .map(|p| p["signed_volume"].as_f64().unwrap())

@@ -150,6 +150,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "vertices": piece.n_vertices(),
             "triangles": piece.n_triangles(),
             "closed": topo.closed,
+            "manifold": topo.nonmanifold_edges == 0 && topo.nonmanifold_vertices == 0,
             "signed_volume": topo.signed_volume,
         }));
     }

@@ -767,6 +767,10 @@ fn mesh_knives_cut_the_ct_bone() {
                 "{what}: {stats}"
             );
             let pieces = cut["pieces"].as_array().unwrap();
+            if knife == &ball_ply {
+                // A closed knife tells every piece's side, reached or not.
+                assert!(pieces.iter().all(|p| p["side"] != "both"), "{what}");
+            }
             if close {
                 assert_eq!(stats["curves_open"], 0, "{what}");
                 assert!(

@@ -739,6 +739,34 @@ fn a_knife_missing_the_mesh_changes_nothing() {
     assert_eq!(r.pieces[0].triangles.len(), s.mesh.triangles.len());
     assert_eq!(r.stats.triangles_tested, 0);
     assert_eq!(r.stats.nodes_visited, s.forest.groups.len());
+    // A closed mesh knife that misses the ball, or swallows it whole: the
+    // piece's side is told by its winding number, for either knife winding.
+    let icosphere = |centre: DVec3, r: f64, inward: bool| {
+        let mut b = common::icosphere(2);
+        for p in &mut b.positions {
+            *p = (p.as_dvec3() * r + centre).as_vec3();
+        }
+        if inward {
+            b.flip_winding();
+        }
+        Knife::Mesh(b)
+    };
+    for inward in [false, true] {
+        for (centre, r, inside) in [
+            (DVec3::splat(100.0), 5.0, false),
+            (DVec3::splat(11.5), 40.0, true),
+        ] {
+            let k = icosphere(centre, r, inward);
+            let got = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+            assert_eq!(got.pieces.len(), 1);
+            let want = if inside != inward {
+                Side::Negative
+            } else {
+                Side::Positive
+            };
+            assert_eq!(got.sides, vec![want], "inside {inside} inward {inward}");
+        }
+    }
 }
 
 #[test]

@@ -890,11 +890,38 @@ fn assemble(
         });
         piece.triangles.push(tri);
     }
+    // A piece a closed mesh knife never reaches lies wholly inside or
+    // outside it: its winding number says which.
+    let untouched_side = match &k.kind {
+        Kind::Mesh { mesh: knife, .. } if closed(knife) => {
+            let outward = knife
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|v| knife.positions[v as usize].as_dvec3());
+                    a.dot(b.cross(c))
+                })
+                .sum::<f64>()
+                >= 0.0;
+            Some(move |piece: &TriMesh| {
+                let q = piece.positions[0].as_dvec3();
+                let inside = winding_number(knife, q).abs() > 0.5;
+                if inside == outward {
+                    Side::Negative
+                } else {
+                    Side::Positive
+                }
+            })
+        }
+        _ => None,
+    };
     let sides = piece_side
         .iter()
-        .map(|&(n, p)| match (n, p) {
+        .zip(&pieces)
+        .map(|(&(n, p), piece)| match (n, p) {
             (true, false) => Side::Negative,
             (false, true) => Side::Positive,
+            (false, false) => untouched_side.as_ref().map_or(Side::Both, |f| f(piece)),
             _ => Side::Both,
         })
         .collect();
@@ -904,6 +931,36 @@ fn assemble(
         sides,
         stats,
     })
+}
+
+/// Whether every edge of `m` has exactly two triangles.
+fn closed(m: &TriMesh) -> bool {
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * m.triangles.len());
+    for t in &m.triangles {
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    !uses.is_empty() && uses.values().all(|&n| n == 2)
+}
+
+/// Generalised winding number of `m` about `q` (Van Oosterom–Strackee solid
+/// angles summed over the triangles, / 4π): ±1 inside a closed surface
+/// (+ when wound outward), 0 outside.
+fn winding_number(m: &TriMesh, q: DVec3) -> f64 {
+    let omega: f64 = m
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| m.positions[v as usize].as_dvec3() - q);
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let det = a.dot(b.cross(c));
+            let div = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            2.0 * det.atan2(div)
+        })
+        .sum();
+    omega / (4.0 * std::f64::consts::PI)
 }
 
 /// A split before regrouping: sub-triangles per crossed triangle, glued

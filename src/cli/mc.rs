@@ -23,7 +23,9 @@ pub struct Args {
     /// Extract the boundary of the voxels equal to this label.
     #[arg(long)]
     label: Option<f64>,
-    /// Close surfaces at the volume border (half a voxel outside it).
+    /// Close surfaces at the volume border: half a voxel outside it next to
+    /// samples above the level; at a border sample equal to the level the
+    /// closing surface touches the sample (2⁻¹⁰ of a voxel beyond it).
     #[arg(long)]
     close_border: bool,
     /// Where marching cubes runs (the GPU finishes grouping on the host).

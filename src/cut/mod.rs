@@ -893,17 +893,10 @@ fn assemble(
     // A piece a closed mesh knife never reaches lies wholly inside or
     // outside it: its winding number says which.
     let untouched_side = match &k.kind {
-        Kind::Mesh { mesh: knife, .. } if closed(knife) => {
-            let outward = knife
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|v| knife.positions[v as usize].as_dvec3());
-                    a.dot(b.cross(c))
-                })
-                .sum::<f64>()
-                >= 0.0;
-            Some(move |piece: &TriMesh| {
+        Kind::Mesh { mesh: knife, .. } => {
+            let topo = crate::mesh::Topology::of(knife);
+            let outward = topo.signed_volume >= 0.0;
+            topo.closed.then_some(move |piece: &TriMesh| {
                 let q = piece.positions[0].as_dvec3();
                 let inside = winding_number(knife, q).abs() > 0.5;
                 if inside == outward {
@@ -931,18 +924,6 @@ fn assemble(
         sides,
         stats,
     })
-}
-
-/// Whether every edge of `m` has exactly two triangles.
-fn closed(m: &TriMesh) -> bool {
-    let mut uses: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * m.triangles.len());
-    for t in &m.triangles {
-        for i in 0..3 {
-            let (a, b) = (t[i], t[(i + 1) % 3]);
-            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    !uses.is_empty() && uses.values().all(|&n| n == 2)
 }
 
 /// Generalised winding number of `m` about `q` (Van Oosterom–Strackee solid

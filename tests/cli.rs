@@ -632,6 +632,17 @@ fn mc_and_capped_cut_of_the_ct_bone() {
         ],
         "--explode must be between 0 and 10",
     );
+    assert_clean_error(
+        &[
+            "cut",
+            path_str(&closed),
+            "--plane",
+            "100,100,60,0,0.3,1",
+            "-o",
+            path_str(&closed.join("sub")),
+        ],
+        "is a file, not a folder",
+    );
 
     // A sphere whose summed loop area points at a pole inside a cap: the
     // caps must still be the sphere's part inside the bone (no piece with a

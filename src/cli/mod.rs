@@ -103,18 +103,7 @@ pub(super) fn check_output_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
         anyhow::bail!("{}: is a file; expected an output folder", dir.display());
     }
-    let parent = dir
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(std::path::Path::new("."));
-    if !parent.is_dir() {
-        anyhow::bail!(
-            "{}: folder {} does not exist",
-            dir.display(),
-            parent.display()
-        );
-    }
-    Ok(())
+    Ok(crate::io::check_parent_folder(dir)?)
 }
 
 /// Creates `dir` and removes the `{prefix}NNN.ply` files an earlier run

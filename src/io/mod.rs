@@ -116,20 +116,27 @@ fn not_a_directory(path: &Path, expected: &str) -> Result<()> {
 /// up front, so a long job does not fail at its end.
 pub fn check_output_path(path: &Path) -> Result<()> {
     not_a_directory(path, "an output file path")?;
+    check_parent_folder(path)
+}
+
+/// Checks that the folder `path` would be written into exists.
+pub fn check_parent_folder(path: &Path) -> Result<()> {
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    if !dir.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("folder {} does not exist", dir.display()),
-            ),
-        ));
+    if dir.is_dir() {
+        return Ok(());
     }
-    Ok(())
+    let why = if dir.exists() {
+        format!("{} is a file, not a folder", dir.display())
+    } else {
+        format!("folder {} does not exist", dir.display())
+    };
+    Err(Error::io(
+        path,
+        std::io::Error::new(std::io::ErrorKind::NotFound, why),
+    ))
 }
 
 /// Checks an output mesh path: [`check_output_path`] and a known extension.

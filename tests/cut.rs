@@ -67,35 +67,32 @@ fn same_result(a: &CutResult, b: &CutResult) {
     assert_eq!(a.stats.cut_vertices, b.stats.cut_vertices);
 }
 
-fn ball_volume(n: usize, r: f64) -> Volume {
+/// An n³ f32 volume of `f(p − centre)` at the grid points (unit spacing).
+fn sampled(n: usize, f: impl Fn(DVec3) -> f64) -> Volume {
     let c = (n as f64 - 1.0) / 2.0;
     let mut data = Vec::with_capacity(n * n * n);
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                let d = ((x as f64 - c).powi(2) + (y as f64 - c).powi(2) + (z as f64 - c).powi(2))
-                    .sqrt();
-                data.push((r - d) as f32);
+                data.push(f(DVec3::new(x as f64 - c, y as f64 - c, z as f64 - c)) as f32);
             }
         }
     }
     Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
 }
 
+fn ball_volume(n: usize, r: f64) -> Volume {
+    sampled(n, |d| r - d.length())
+}
+
 /// A hollow ball (shell between radii r0 < r1): cuts give annular caps.
 fn shell_volume(n: usize, r0: f64, r1: f64) -> Volume {
-    let c = (n as f64 - 1.0) / 2.0;
-    let mut data = Vec::with_capacity(n * n * n);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let d = ((x as f64 - c).powi(2) + (y as f64 - c).powi(2) + (z as f64 - c).powi(2))
-                    .sqrt();
-                data.push(((d - r0).min(r1 - d)) as f32);
-            }
-        }
-    }
-    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
+    sampled(n, |d| (d.length() - r0).min(r1 - d.length()))
+}
+
+/// The plane z = `z`, normal +z.
+fn z_plane(z: f32) -> Knife {
+    plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0])
 }
 
 fn mc(vol: &Volume) -> Surface {
@@ -364,7 +361,7 @@ fn triangulated_knife_cuts_like_the_plane_it_samples() {
     let s = mc(&ball_volume(30, 10.0));
     let z = 14.3f32;
     let knife = Knife::Mesh(sheet(z));
-    let flat = plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]);
+    let flat = z_plane(z);
     let c = DVec3::splat(14.5);
     for opts in [CutOptions::default(), CAP] {
         let r = cut(&s.mesh, &s.forest, &knife, &opts).unwrap();
@@ -401,13 +398,7 @@ fn a_cut_loop_inside_one_knife_triangle_is_capped() {
     )
     .unwrap();
     let r = cut(&s.mesh, &s.forest, &Knife::Mesh(knife), &CAP).unwrap();
-    let p = cut(
-        &s.mesh,
-        &s.forest,
-        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
-        &CAP,
-    )
-    .unwrap();
+    let p = cut(&s.mesh, &s.forest, &z_plane(z), &CAP).unwrap();
     assert_eq!(r.sides, p.sides);
     assert_eq!(r.stats.loops_capped, 1);
     assert_conserved(&s.mesh, &r, 1e-6, "ball/one-triangle knife");
@@ -420,33 +411,16 @@ fn a_cut_loop_inside_one_knife_triangle_is_capped() {
 fn triangulated_knife_caps_a_hollow_ball_with_a_ring() {
     // Outer sphere and cavity are two closed components; the cavity's
     // triangles face into the void, and the cap is the ring between them.
-    let n = 30;
-    let c = 14.5;
-    let mut data = Vec::with_capacity(n * n * n);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let d = DVec3::new(x as f64 - c, y as f64 - c, z as f64 - c).length();
-                data.push((11.0 - d).min(d - 5.0) as f32);
-            }
-        }
-    }
-    let s = mc(&Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap());
+    let s = mc(&shell_volume(30, 5.0, 11.0));
     assert_eq!(s.groups.len(), 2);
     let z = 14.3f32;
     let r = cut(&s.mesh, &s.forest, &Knife::Mesh(sheet(z)), &CAP).unwrap();
-    let p = cut(
-        &s.mesh,
-        &s.forest,
-        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
-        &CAP,
-    )
-    .unwrap();
+    let p = cut(&s.mesh, &s.forest, &z_plane(z), &CAP).unwrap();
     assert_eq!(r.pieces.len(), 2);
     assert_eq!(r.sides, p.sides);
     assert_eq!(r.stats.curves_open, 0);
     assert_conserved(&s.mesh, &r, 1e-6, "hollow ball/sheet");
-    let ctr = DVec3::splat(c);
+    let ctr = DVec3::splat(14.5);
     let (a, b) = (side_volumes(&r, ctr), side_volumes(&p, ctr));
     assert!((a.0 - b.0).abs() < 1e-4 * b.0, "{a:?} vs {b:?}");
 }
@@ -456,18 +430,8 @@ fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open(
     // A ball (a closed loop under the knife) and a slab at x ≥ 25.5 whose
     // surface ends at the volume border (an open cut curve, ending inside
     // knife triangles where the surface's border crosses them).
-    let n = 30;
     let c = 14.5;
-    let mut data = Vec::with_capacity(n * n * n);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let d = DVec3::new(x as f64 - c, y as f64 - c, z as f64 - c).length();
-                data.push((8.0 - d).max(x as f64 - 25.5) as f32);
-            }
-        }
-    }
-    let vol = Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap();
+    let vol = sampled(30, |d| (8.0 - d.length()).max(d.x + c - 25.5));
     let s = marching_cubes(
         &vol,
         IsoSpec::Level(0.0),
@@ -479,13 +443,7 @@ fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open(
     .unwrap();
     let z = 14.3f32;
     let r = cut(&s.mesh, &s.forest, &Knife::Mesh(sheet(z)), &CAP).unwrap();
-    let p = cut(
-        &s.mesh,
-        &s.forest,
-        &plane([0.0, 0.0, f64::from(z)], [0.0, 0.0, 1.0]),
-        &CAP,
-    )
-    .unwrap();
+    let p = cut(&s.mesh, &s.forest, &z_plane(z), &CAP).unwrap();
     assert_eq!((r.stats.loops_capped, p.stats.loops_capped), (1, 1));
     assert!(
         r.stats.curves_open == 1 && p.stats.curves_open == 1,

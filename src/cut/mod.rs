@@ -679,33 +679,39 @@ fn finish_locate(
             }
             let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
             let (a, b) = (p[tri[i] as usize], p[tri[j] as usize]);
-            let Some(c) = k.crossing_from(a, b, f[i], f[j]) else {
-                continue;
-            };
-            let q = c.point.as_vec3();
             // A crossing that lands on an end (a vertex on the knife, or
             // rounded onto it) is that vertex's cut, shared by all its
             // crossed edges: no two cut vertices coincide, no piece gets a
-            // zero-area triangle. Recorded as the edge (v, v) with v's side.
-            let (key, edge, lower_negative) = match [q == a, q == b] {
-                [false, false] => (
-                    (u64::from(tri[i]) << 32) | u64::from(tri[j]),
-                    (tri[i], tri[j]),
-                    c.first_negative,
-                ),
-                [at_a, _] => {
-                    let (v, fv) = if at_a { (tri[i], f[i]) } else { (tri[j], f[j]) };
-                    ((u64::from(v) << 32) | u64::from(v), (v, v), fv < 0.0)
-                }
+            // zero-area triangle. Recorded as the edge (v, v) with v's side
+            // under the vertex key `v << 32 | v` (not under the edge's).
+            let mut at_vertex = None;
+            let mut add = |q: Vec3, edge: (u32, u32), lower_negative: bool| {
+                out.points.push(q);
+                out.lower_negative.push(lower_negative);
+                out.edges.push(edge);
+                Some(out.points.len() as u32 - 1)
             };
-            *cut = ids
-                .get_or_insert(key, || {
-                    out.points.push(q);
-                    out.lower_negative.push(lower_negative);
-                    out.edges.push(edge);
-                    Some(out.points.len() as u32 - 1)
-                })
-                .unwrap_or(u32::MAX);
+            let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
+            let mut made = ids.get_or_insert(key, || {
+                let c = k.crossing_from(a, b, f[i], f[j])?;
+                let q = c.point.as_vec3();
+                if q == a || q == b {
+                    at_vertex = Some(if q == a {
+                        (tri[i], f[i])
+                    } else {
+                        (tri[j], f[j])
+                    });
+                    return None;
+                }
+                add(q, (tri[i], tri[j]), c.first_negative)
+            });
+            if let Some((v, fv)) = at_vertex {
+                let q = p[v as usize];
+                made = ids.get_or_insert((u64::from(v) << 32) | u64::from(v), || {
+                    add(q, (v, v), fv < 0.0)
+                });
+            }
+            *cut = made.unwrap_or(u32::MAX);
         }
         if cuts != [u32::MAX; 3] {
             out.triangles.push(t);

@@ -315,6 +315,70 @@ property float64 y\nproperty float64 z\nelement face 1\nproperty list uint8 uint
     assert_eq!(a, read_text("b.ply", &bin));
 }
 
+/// A binary payload may start with a byte that is whitespace in text
+/// (0x09–0x0d, 0x20): it is data, not padding after the header. (A 1 in 43
+/// little-endian PLY files has one, e.g. a first x of 59.96, 0x426fd70a.)
+#[test]
+fn binary_payloads_starting_with_whitespace_bytes() {
+    for byte in [0x09u32, 0x0a, 0x0b, 0x0c, 0x0d, 0x20] {
+        // First payload byte = `byte`: the low byte in little-endian files,
+        // the high byte in big-endian ones.
+        let le = f32::from_bits(0x426f_d700 | byte);
+        let be = f32::from_bits(byte << 24 | 0x6f_d70a);
+        for (first, name) in [(le, "le.ply"), (be, "be.ply"), (be, "be.vtk")] {
+            let mut pts = unit_quad_points();
+            pts[0].x = first;
+            let mesh = TriMesh::new(pts.clone(), vec![[0, 1, 2], [0, 2, 3]]).unwrap();
+            let mut f = Vec::new();
+            if name.ends_with(".vtk") {
+                f.extend(
+                    b"# vtk DataFile Version 3.0\nws\nBINARY\nDATASET POLYDATA\nPOINTS 5 float\n",
+                );
+                f.extend(
+                    pts.iter()
+                        .flat_map(|p| p.to_array())
+                        .flat_map(f32::to_be_bytes),
+                );
+                f.extend(b"\nPOLYGONS 2 8\n");
+                f.extend(
+                    [3i32, 0, 1, 2, 3, 0, 2, 3]
+                        .iter()
+                        .flat_map(|v| v.to_be_bytes()),
+                );
+                f.extend(b"\n");
+            } else {
+                let endian = if name == "le.ply" { "little" } else { "big" };
+                f.extend(format!(
+                    "ply\nformat binary_{endian}_endian 1.0\nelement vertex 5\nproperty float x\n\
+property float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+                ).bytes());
+                let le = name == "le.ply";
+                let word = |v: [u8; 4]| if le { v } else { [v[3], v[2], v[1], v[0]] };
+                f.extend(
+                    pts.iter()
+                        .flat_map(|p| p.to_array())
+                        .flat_map(|c| word(c.to_le_bytes())),
+                );
+                for t in &mesh.triangles {
+                    f.push(3);
+                    f.extend(t.iter().flat_map(|&v| word(v.to_le_bytes())));
+                }
+            }
+            let m = read_text(name, &f);
+            assert_eq!(m.positions, pts, "{name} first byte {byte:#04x}");
+            assert_eq!(m.triangles, mesh.triangles, "{name} first byte {byte:#04x}");
+        }
+    }
+    // chisel's own writer and reader round-trip such a mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("w.ply");
+    let mut pts = unit_quad_points();
+    pts[0].x = 59.96;
+    let mesh = TriMesh::new(pts, vec![[0, 1, 2], [0, 2, 3], [1, 4, 2]]).unwrap();
+    chisel::io::write_mesh(&path, &mesh).unwrap();
+    assert_eq!(read_mesh(&path).unwrap(), mesh);
+}
+
 #[test]
 fn obj_corner_forms_negative_indices_and_polygons() {
     let f = b"# test\nmtllib x.mtl\no quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\n\

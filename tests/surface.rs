@@ -298,6 +298,30 @@ fn check_closed_oriented(s: &Surface) -> Vec<i64> {
     (0..n).map(|g| v[g] - e[g] + f[g]).collect()
 }
 
+/// No two triangles meet beyond their shared vertices and edges (exact).
+fn check_embedded(s: &Surface) {
+    let hits = chisel::mesh::self_intersections(&s.mesh);
+    assert!(
+        hits.degenerate.is_empty(),
+        "zero-area triangles {:?}",
+        hits.degenerate
+    );
+    let show: Vec<_> = hits
+        .pairs
+        .iter()
+        .take(4)
+        .map(|&[i, j]| {
+            let t = |k: u32| s.mesh.triangles[k as usize].map(|v| s.mesh.positions[v as usize]);
+            (t(i), t(j))
+        })
+        .collect();
+    assert!(
+        hits.pairs.is_empty(),
+        "{} crossing triangle pairs, e.g. {show:?}",
+        hits.pairs.len()
+    );
+}
+
 /// Vertices are welded: one vertex per grid edge.
 fn check_welded(s: &Surface) {
     let mut seen = std::collections::HashSet::new();
@@ -330,6 +354,7 @@ fn padded_mask(vol: &Volume, iso: IsoSpec) -> (Vec<bool>, [usize; 3]) {
 fn check_topology(vol: &Volume, iso: IsoSpec, s: &Surface) {
     check_welded(s);
     let chi = check_closed_oriented(s);
+    check_embedded(s);
     let (mask, dims) = padded_mask(vol, iso);
     assert_eq!(s.grid.dims, dims);
     let topo = VoxelTopology::new(&mask, dims);

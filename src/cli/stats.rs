@@ -1,13 +1,15 @@
-//! `chisel stats FILE`: figures of a mesh (topology, orientation, bounds) or
-//! of a volume (range, mean, labels, thresholded 6-connected components).
+//! `chisel stats FILE`: figures of a mesh (topology, orientation, bounds,
+//! exact self-intersections) or of a volume (range, mean, labels,
+//! thresholded 6-connected components).
 
 use std::path::PathBuf;
 
 use serde_json::{Value, json};
 
 use super::{BackendArg, Global};
-use crate::mesh::Topology;
+use crate::mesh::{Topology, self_intersections};
 use crate::parity::Backend;
+use crate::surface::tree::vertex_components;
 use crate::volume::analysis::{VolumeStats, label_components, threshold_components};
 
 /// Arguments of `chisel stats`.
@@ -62,11 +64,24 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<Value> {
     let mesh = crate::io::read_mesh(&args.file)?;
     let topology = Topology::of(&mesh);
+    let crossings = self_intersections(&mesh);
+    let (component, _) = vertex_components(mesh.n_vertices(), &mesh.triangles);
+    let within = crossings
+        .pairs
+        .iter()
+        .filter(|&&[i, j]| component[i as usize] == component[j as usize])
+        .count();
     let mut value = json!({
         "file": args.file,
         "kind": "mesh",
         "scalars": mesh.scalars.iter().map(|s| s.name.clone()).collect::<Vec<_>>(),
         "topology": topology,
+        "self_intersections": {
+            "pairs": crossings.pairs.len(),
+            "within_components": within,
+            "first_pairs": &crossings.pairs[..crossings.pairs.len().min(10)],
+            "zero_area_triangles": crossings.degenerate.len(),
+        },
     });
     if args.backend == BackendArg::Gpu {
         let gpu = global.gpu()?;

@@ -239,7 +239,7 @@ impl Pair<'_> {
             max: b.max + Vec3::splat(m),
         };
         let mut cand = Vec::new();
-        super::knife::knife_candidates(self.forest, &grown, &mut cand);
+        self.forest.overlapping(&grown, &mut cand);
         cand.sort_unstable();
         let mut out = Vec::new();
         for kt in cand {

@@ -440,27 +440,3 @@ fn forest_touches(forest: &Forest, b: &Aabb) -> bool {
             })
     })
 }
-
-/// Knife triangles whose boxes overlap `b`, via the knife's forest.
-pub(crate) fn knife_candidates(forest: &Forest, b: &Aabb, out: &mut Vec<u32>) {
-    for g in &forest.groups {
-        if !g.bbox.overlaps(b) {
-            continue;
-        }
-        for l in &forest.layers[g.layers.range()] {
-            if !l.bbox.overlaps(b) {
-                continue;
-            }
-            for r in &forest.rows[l.rows.range()] {
-                if !r.bbox.overlaps(b) {
-                    continue;
-                }
-                for c in &forest.cells[r.cells.range()] {
-                    if c.bbox.overlaps(b) {
-                        out.extend_from_slice(&forest.triangles[c.triangles.range()]);
-                    }
-                }
-            }
-        }
-    }
-}

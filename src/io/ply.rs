@@ -140,8 +140,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
             }
         }
     }
-    let header_end = sc.mark();
-    let binary = format.ok_or_else(|| sc.error(header_end, "a `format` line", "none"))?;
+    let Some(binary) = format else {
+        let header_end = sc.mark();
+        return Err(sc.error(header_end, "a `format` line", "none"));
+    };
+    // Before any `mark`: a text mark skips whitespace, which in a binary
+    // payload would eat data bytes (0x09–0x0d, 0x20).
     if binary.is_some() {
         sc.set_binary();
     }

@@ -111,10 +111,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
 }
 
 impl Reader<'_> {
-    /// After a header line: in binary mode the payload starts after its `\n`.
+    /// After a header line: in binary mode the payload starts after its `\n`
+    /// (and from there on no whitespace may be skipped).
     fn end_header_line(&mut self) {
         if self.binary.is_some() {
             self.sc.skip_line();
+            self.sc.set_binary();
         }
     }
 

@@ -7,11 +7,13 @@
 
 pub mod csr;
 pub mod disjoint_sets;
+pub mod intersect;
 pub mod orient;
 pub mod topology;
 
 pub use csr::Csr;
 pub use disjoint_sets::DisjointSets;
+pub use intersect::{SelfIntersections, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Bounds, Component, Orientation, Topology};
 

@@ -377,6 +377,29 @@ impl Forest {
         (forest, groups, n_groups)
     }
 
+    /// Appends the triangles of every leaf whose box meets `b` (closed
+    /// boxes): a superset of the triangles whose own boxes meet it.
+    pub fn overlapping(&self, b: &Aabb, out: &mut Vec<u32>) {
+        for g in self.groups.iter().filter(|g| g.bbox.overlaps(b)) {
+            for l in self.layers[g.layers.range()]
+                .iter()
+                .filter(|l| l.bbox.overlaps(b))
+            {
+                for r in self.rows[l.rows.range()]
+                    .iter()
+                    .filter(|r| r.bbox.overlaps(b))
+                {
+                    for c in self.cells[r.cells.range()]
+                        .iter()
+                        .filter(|c| c.bbox.overlaps(b))
+                    {
+                        out.extend_from_slice(&self.triangles[c.triangles.range()]);
+                    }
+                }
+            }
+        }
+    }
+
     /// Total number of nodes (groups + layers + rows + cells).
     pub fn n_nodes(&self) -> usize {
         self.groups.len() + self.layers.len() + self.rows.len() + self.cells.len()

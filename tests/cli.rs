@@ -803,9 +803,9 @@ fn mesh_knives_cut_the_ct_bone() {
             if close {
                 assert_eq!(stats["curves_open"], 0, "{what}");
                 assert!(
-                    pieces
-                        .iter()
-                        .all(|p| p["closed"] == true && p["manifold"] == true),
+                    pieces.iter().all(|p| p["closed"] == true
+                        && p["manifold"] == true
+                        && p["self_intersecting_pairs"] == 0),
                     "{what}"
                 );
                 let total: f64 = pieces

@@ -795,6 +795,19 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     assert_conserved(&s.mesh, &r, 1e-6, "headsq/sphere");
     same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
     eprintln!("headsq sphere cut: {:?}", r.stats);
+    // This sphere crosses two edges of a sliver (ends 0.0015 apart) near
+    // their shared corner; both crossings round to one f32 point, which is
+    // one cut vertex, not two vertices and zero-area triangles.
+    let sph = Knife::Sphere {
+        centre: DVec3::new(100.0, 100.0, 60.0),
+        radius: 35.0,
+    };
+    let r = cut(&s.mesh, &s.forest, &sph, &CAP).unwrap();
+    assert_conserved(&s.mesh, &r, 1e-6, "headsq/sphere 35");
+    same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
+    for (i, piece) in r.pieces.iter().enumerate() {
+        assert_clean(piece, &format!("headsq/sphere 35 piece {i}"));
+    }
 }
 
 /// Everything but the counts: crossed triangles, cut vertex numbering,

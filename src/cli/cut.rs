@@ -144,6 +144,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         let path = args.output.join(format!("piece_{k:03}.ply"));
         crate::io::write_mesh(&path, piece)?;
         let topo = crate::mesh::Topology::of(piece);
+        // Caps are new geometry: check them (uncapped pieces are parts of
+        // the input and keep its crossings, if any).
+        let crossings = args
+            .cap
+            .then(|| crate::mesh::self_intersections(piece).pairs.len());
         pieces.push(json!({
             "file": path,
             "side": format!("{side:?}").to_lowercase(),
@@ -152,6 +157,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "closed": topo.closed,
             "manifold": topo.nonmanifold_edges == 0 && topo.nonmanifold_vertices == 0,
             "signed_volume": topo.signed_volume,
+            "self_intersecting_pairs": crossings,
         }));
     }
     if let Some(path) = &args.preview {

@@ -661,6 +661,7 @@ fn finish_locate(
     let n = crossed.len();
     // A mixed triangle has exactly two edges whose ends change side.
     let mut ids = EdgeTable::with_capacity(2 * n);
+    let mut coincident: Vec<(u32, u32)> = Vec::new();
     let mut out = Located {
         triangles: Vec::with_capacity(n),
         edge_cuts: Vec::with_capacity(n),
@@ -714,14 +715,84 @@ fn finish_locate(
             *cut = made.unwrap_or(u32::MAX);
         }
         if cuts != [u32::MAX; 3] {
+            // Two crossings of one triangle that round to one f32 point (on
+            // a sliver, or near a corner) are one cut vertex.
+            for e in 0..3 {
+                let (x, y) = (cuts[e], cuts[(e + 1) % 3]);
+                if x != u32::MAX
+                    && y != u32::MAX
+                    && x != y
+                    && out.points[x as usize] == out.points[y as usize]
+                {
+                    coincident.push((x, y));
+                }
+            }
             out.triangles.push(t);
             out.edge_cuts.push(cuts);
         }
+    }
+    if !coincident.is_empty() {
+        merge_cut_vertices(&mut out, &coincident);
     }
     stats.triangles_split = out.triangles.len();
     stats.cut_vertices = out.points.len();
     out.stats = stats;
     out
+}
+
+/// Joins the cut vertices of each pair in `pairs` (equal positions) into
+/// one and renumbers all by first use, keeping the tree's and the scan's
+/// numbering equal. A cut at a mesh vertex (edge `(v, v)`) survives a join;
+/// two such at different vertices (coincident mesh vertices) stay apart.
+fn merge_cut_vertices(out: &mut Located, pairs: &[(u32, u32)]) {
+    let n = out.points.len();
+    let at_vertex = |c: u32, out: &Located| {
+        let (a, b) = out.edges[c as usize];
+        a == b
+    };
+    let mut uf = UnionFind::with_len(n);
+    let mut has_vertex: Vec<bool> = (0..n as u32).map(|c| at_vertex(c, out)).collect();
+    for &(x, y) in pairs {
+        let (rx, ry) = (uf.find(x), uf.find(y));
+        if rx == ry || (has_vertex[rx as usize] && has_vertex[ry as usize]) {
+            continue;
+        }
+        let either = has_vertex[rx as usize] || has_vertex[ry as usize];
+        let r = uf.union(rx, ry);
+        has_vertex[r as usize] = either;
+    }
+    // Per class its survivor: a vertex cut if there is one, else the first.
+    let mut survivor = vec![u32::MAX; n];
+    for c in 0..n as u32 {
+        let r = uf.find(c) as usize;
+        if survivor[r] == u32::MAX || (at_vertex(c, out) && !at_vertex(survivor[r], out)) {
+            survivor[r] = c;
+        }
+    }
+    let mut new_id = vec![u32::MAX; n];
+    let mut next = 0u32;
+    let mut located = Located {
+        triangles: std::mem::take(&mut out.triangles),
+        edge_cuts: Vec::with_capacity(out.edge_cuts.len()),
+        ..Located::default()
+    };
+    for cuts in &out.edge_cuts {
+        located.edge_cuts.push(cuts.map(|c| {
+            if c == u32::MAX {
+                return c;
+            }
+            let s = survivor[uf.find(c) as usize] as usize;
+            if new_id[s] == u32::MAX {
+                new_id[s] = next;
+                next += 1;
+                located.points.push(out.points[s]);
+                located.lower_negative.push(out.lower_negative[s]);
+                located.edges.push(out.edges[s]);
+            }
+            new_id[s]
+        }));
+    }
+    *out = located;
 }
 
 /// A sub-triangle of the split, before regrouping.
@@ -970,6 +1041,7 @@ fn split_analytic(
 ) -> Result<Split> {
     let n_v = mesh.positions.len() as u32;
     let n_c = located.points.len() as u32;
+    let side = k.side_fn().expect("an analytic knife");
     // Sub-triangles of each crossed triangle.
     let mut subs: Vec<Vec<Sub>> = Vec::with_capacity(located.triangles.len());
     let mut glued = vec![false; n_c as usize];
@@ -987,12 +1059,9 @@ fn split_analytic(
                     .unwrap_or(0);
                 let (l, b, c) = (tri[r], tri[(r + 1) % 3], tri[(r + 2) % 3]);
                 let (pp, qq) = (cv(r), cv((r + 2) % 3));
-                // Side of L from the first crossed edge's verdict (from its
-                // vertex's for a cut at a vertex, L or B).
-                let ce = cuts[r] as usize;
-                let e = located.edges[ce];
-                let l_first = if e.0 == e.1 { e.0 == l } else { l < b };
-                let l_neg = located.lower_negative[ce] == l_first;
+                // L's side, as `finish_locate` evaluated it (a cut vertex
+                // may stand for several edges once coincident ones join).
+                let l_neg = side.eval(mesh.positions[l as usize].as_dvec3()) < 0.0;
                 s.push(Sub {
                     v: [l, pp, qq],
                     side: Some(l_neg),

@@ -19,6 +19,9 @@ pub(crate) struct Scanner<'a> {
     bytes: &'a [u8],
     pos: usize,
     binary: bool,
+    /// A binary payload starts at `pos` (or has started): whitespace bytes
+    /// there are data, never skipped.
+    payload: bool,
     /// `(offset, line at offset)` of the last position asked for, so that
     /// positions requested in file order cost O(file) in total.
     line_cache: Cell<(usize, usize)>,
@@ -32,6 +35,7 @@ impl<'a> Scanner<'a> {
             bytes,
             pos: 0,
             binary: false,
+            payload: false,
             line_cache: Cell::new((0, 1)),
         }
     }
@@ -44,7 +48,7 @@ impl<'a> Scanner<'a> {
     /// Offset of the next token: skips whitespace first while the file is
     /// text (never inside binary payloads), so errors point at the token.
     pub fn mark(&mut self) -> usize {
-        if !self.binary {
+        if !self.binary && !self.payload {
             self.skip_ws();
         }
         self.pos
@@ -58,6 +62,14 @@ impl<'a> Scanner<'a> {
     /// From now on report positions as byte offsets (binary payload follows).
     pub fn set_binary(&mut self) {
         self.binary = true;
+        self.payload = true;
+    }
+
+    /// A binary payload starts here: from now on [`Scanner::mark`] skips
+    /// nothing, while positions stay lines until the payload is read (so a
+    /// size error still names the header line).
+    pub fn payload_follows(&mut self) {
+        self.payload = true;
     }
 
     /// Position of byte offset `at`: a line number for text, a byte offset

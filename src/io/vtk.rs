@@ -116,7 +116,7 @@ impl Reader<'_> {
     fn end_header_line(&mut self) {
         if self.binary.is_some() {
             self.sc.skip_line();
-            self.sc.set_binary();
+            self.sc.payload_follows();
         }
     }
 

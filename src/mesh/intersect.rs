@@ -2,9 +2,10 @@
 //!
 //! Two triangles *intersect* when their closed point sets meet anywhere
 //! beyond what their shared vertex indices imply: nothing for disjoint index
-//! sets, the vertex for one shared index, the edge for two. Touching counts
-//! (a vertex on another triangle, coplanar overlap, a fold over a shared
-//! edge); vertices at equal positions under different indices touch.
+//! sets, the vertex for one shared index, the edge for two; a triangle
+//! repeating another's three indices (either winding) always does. Touching
+//! counts (a vertex on another triangle, coplanar overlap, a fold over a
+//! shared edge); vertices at equal positions under different indices touch.
 //!
 //! Every decision is a sign of Shewchuk's adaptive exact `orient3d` /
 //! `orient2d` (crate `robust`) on the f32 coordinates widened to f64, so
@@ -178,8 +179,8 @@ fn in_corner(v: [f64; 3], a: [f64; 3], b: [f64; 3], x: [f64; 3], drop: usize) ->
 /// before any (possibly adaptive) `orient3d`:
 /// - no shared corner: unless a line through an edge of either separates
 ///   them (separating axis theorem for closed convex polygons);
-/// - one shared corner `v`: both lie in their corners at `v`, and near `v`
-///   they fill them, so they meet beyond `v` exactly when the corners do;
+/// - one shared corner `v`: each lies in its corner at `v` (and fills it
+///   near `v`), so they cannot meet beyond `v` unless the corners do;
 /// - a shared edge: they meet beyond it only folded flat, far corners on
 ///   one side.
 fn projections_meet(a: [[f64; 3]; 3], b: [[f64; 3]; 3], shared: usize, drop: usize) -> bool {
@@ -217,7 +218,7 @@ fn intersect(ti: [u32; 3], tj: [u32; 3], p: &[[f64; 3]], pi: Plane, pj: Plane) -
     let lead = |t: [u32; 3], other: [u32; 3]| -> [u32; 3] {
         let r = (0..3)
             .find(|&k| (0..shared).all(|s| other.contains(&t[(k + s) % 3])))
-            .unwrap_or(0);
+            .expect("the shared indices are consecutive in a triangle");
         [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
     };
     let (ti, tj) = (lead(ti, tj), lead(tj, ti));
@@ -437,6 +438,91 @@ mod tests {
                 }
             }
             proptest::prop_assert_eq!(got.pairs, want);
+        }
+    }
+
+    type P = [i64; 3];
+
+    fn sub(p: P, q: P) -> P {
+        [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
+    }
+
+    fn cross(u: P, v: P) -> P {
+        [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ]
+    }
+
+    fn dot(u: P, v: P) -> i64 {
+        u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    }
+
+    /// Whether the origin lies in the convex hull of `pts` (nonzero
+    /// points): in a segment, triangle or tetrahedron of them (Carathéodory).
+    fn origin_in_hull(pts: &[P]) -> bool {
+        let n = pts.len();
+        let in_segment = |p: P, q: P| cross(p, q) == [0; 3] && dot(p, q) < 0;
+        let in_triangle = |p: P, q: P, r: P| {
+            let nrm = cross(sub(q, p), sub(r, p));
+            nrm != [0; 3]
+                && dot(nrm, p) == 0
+                && [(p, q), (q, r), (r, p)]
+                    .iter()
+                    .all(|&(x, y)| dot(nrm, cross(sub(y, x), sub([0; 3], x))) >= 0)
+        };
+        let in_tetra = |t: [P; 4]| {
+            let vol = |a: P, b: P, c: P, d: P| dot(cross(sub(b, a), sub(c, a)), sub(d, a));
+            let whole = vol(t[0], t[1], t[2], t[3]);
+            let o = [0; 3];
+            let parts = [
+                vol(o, t[1], t[2], t[3]),
+                vol(t[0], o, t[2], t[3]),
+                vol(t[0], t[1], o, t[3]),
+                vol(t[0], t[1], t[2], o),
+            ];
+            whole != 0 && parts.iter().all(|&v| v * whole.signum() >= 0)
+        };
+        (0..n).any(|i| (i + 1..n).any(|j| in_segment(pts[i], pts[j])))
+            || (0..n).any(|i| {
+                (i + 1..n).any(|j| (j + 1..n).any(|k| in_triangle(pts[i], pts[j], pts[k])))
+            })
+            || (n == 4 && in_tetra([pts[0], pts[1], pts[2], pts[3]]))
+    }
+
+    fn is_flat(a: P, b: P, c: P) -> bool {
+        cross(sub(b, a), sub(c, a)) == [0; 3]
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2048))]
+        /// Triangles sharing a vertex `v` meet beyond it iff their corners at
+        /// `v` share a ray: iff the origin is in the hull of a − v and v − b
+        /// over the other corners (Gordan). Sharing an edge, they meet beyond
+        /// it iff folded flat onto one side.
+        #[test]
+        fn shared_vertex_and_edge_pairs_equal_cone_oracles(
+            raw in proptest::collection::vec((-2i64..3, -2i64..3, -2i64..3), 5)
+        ) {
+            let q: Vec<P> = raw.iter().map(|&(x, y, z)| [x, y, z]).collect();
+            let f32s: Vec<[f32; 3]> = q.iter().map(|p| p.map(|c| c as f32)).collect();
+            // One shared vertex: (0, 1, 2) and (0, 3, 4).
+            if !is_flat(q[0], q[1], q[2]) && !is_flat(q[0], q[3], q[4]) {
+                let m = mesh(&f32s, &[[0, 1, 2], [0, 3, 4]]);
+                let d = |i: usize| sub(q[i], q[0]);
+                let neg = |p: P| p.map(|c| -c);
+                let want = origin_in_hull(&[d(1), d(2), neg(d(3)), neg(d(4))]);
+                proptest::prop_assert_eq!(self_intersections(&m).pairs.len() == 1, want);
+            }
+            // One shared edge: (0, 1, 2) and (1, 0, 3).
+            if !is_flat(q[0], q[1], q[2]) && !is_flat(q[0], q[1], q[3]) {
+                let m = mesh(&f32s, &[[0, 1, 2], [1, 0, 3]]);
+                let e = sub(q[1], q[0]);
+                let (n2, n3) = (cross(e, sub(q[2], q[0])), cross(e, sub(q[3], q[0])));
+                let want = cross(n2, n3) == [0; 3] && dot(n2, n3) > 0;
+                proptest::prop_assert_eq!(self_intersections(&m).pairs.len() == 1, want);
+            }
         }
     }
 }

@@ -324,6 +324,14 @@ fn demo_runs_and_writes_its_outputs() {
         max > 3.0 && max < 12.0,
         "a 6 mm jaw advance moved the skin by {max} mm"
     );
+    // The marching-cubes skin is embedded; the report counts the folds the
+    // relaxation makes (springs carry no bending), as the library does.
+    let crossings = &report["skin_self_intersecting_pairs"];
+    assert_eq!(crossings["before"], 0);
+    assert_eq!(
+        crossings["after"],
+        chisel::mesh::self_intersections(&mesh).pairs.len()
+    );
 }
 
 #[cfg(unix)]
@@ -391,6 +399,11 @@ fn relax_fran_chin_advance_agrees_between_backends() {
         // The plan moves the chin by 4 mm; the skin follows by millimetres.
         assert!(max > 0.002 && max < 0.008, "max displacement {max} m");
         let v: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        assert_eq!(
+            v["skin_self_intersecting_pairs"],
+            serde_json::json!({ "before": 0, "after": 0 }),
+            "{backend}"
+        );
         assert_eq!(v["relax"]["status"], "converged", "{backend}");
         reports.push((mesh, v));
     }

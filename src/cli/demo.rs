@@ -121,6 +121,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let relaxed = gpu_report.skin_mesh(&job.network);
     let out = |name: &str| args.out.join(name);
     crate::io::write_mesh(&out("relaxed_skin.ply"), &relaxed)?;
+    let crossings = super::relax::skin_crossings(&job.skin, &relaxed);
     let (bone_before, bone_after) = bone_before_after(&job, &gpu_report)
         .ok_or_else(|| anyhow::anyhow!("the demo network has no bone mesh"))?;
     crate::io::write_mesh(&out("bone_moved.ply"), &bone_after)?;
@@ -162,6 +163,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "cut": job.cut,
         "network": super::relax::network_json(&job.network, params.subcutis_depth),
         "relax_gpu": gpu_report,
+        "skin_self_intersecting_pairs": crossings,
         "parity": {
             "cpu_status": cpu_report.status,
             "cpu_iterations": cpu_report.iterations,

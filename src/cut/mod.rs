@@ -121,7 +121,9 @@ pub struct Located {
     /// Per cut vertex, its edge `(lower id, higher id)` (for a triangulated
     /// knife: of the surface or of the knife, see `origins`); `(v, v)` for a
     /// cut at mesh vertex `v` (analytic knives: a vertex on the knife), at
-    /// v's position, with `lower_negative` v's side.
+    /// v's position, with `lower_negative` v's side. A cut vertex joined
+    /// from crossings of one triangle that round to one point keeps the
+    /// edge of the one that survives (a vertex cut if any).
     pub edges: Vec<(u32, u32)>,
     /// Triangulated knife only: per cut vertex, which edge crosses which
     /// triangle (`edge_cuts` is then empty: an edge may be crossed more

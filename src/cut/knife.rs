@@ -427,16 +427,5 @@ fn sphere_crossing(a: DVec3, b: DVec3, c: DVec3, fa: f64) -> Crossing {
 
 /// Whether any knife triangle box of `forest` overlaps `b`.
 fn forest_touches(forest: &Forest, b: &Aabb) -> bool {
-    forest.groups.iter().any(|g| {
-        g.bbox.overlaps(b)
-            && forest.layers[g.layers.range()].iter().any(|l| {
-                l.bbox.overlaps(b)
-                    && forest.rows[l.rows.range()].iter().any(|r| {
-                        r.bbox.overlaps(b)
-                            && forest.cells[r.cells.range()]
-                                .iter()
-                                .any(|c| c.bbox.overlaps(b))
-                    })
-            })
-    })
+    forest.leaves_overlapping(b).next().is_some()
 }

@@ -377,26 +377,37 @@ impl Forest {
         (forest, groups, n_groups)
     }
 
-    /// Appends the triangles of every leaf whose box meets `b` (closed
-    /// boxes): a superset of the triangles whose own boxes meet it.
-    pub fn overlapping(&self, b: &Aabb, out: &mut Vec<u32>) {
-        for g in self.groups.iter().filter(|g| g.bbox.overlaps(b)) {
-            for l in self.layers[g.layers.range()]
-                .iter()
-                .filter(|l| l.bbox.overlaps(b))
-            {
-                for r in self.rows[l.rows.range()]
+    /// The leaves whose boxes meet `b` (closed boxes), walking down only
+    /// through nodes whose boxes meet it.
+    pub fn leaves_overlapping<'a>(
+        &'a self,
+        b: &'a Aabb,
+    ) -> impl Iterator<Item = &'a CellNode> + 'a {
+        self.groups
+            .iter()
+            .filter(move |g| g.bbox.overlaps(b))
+            .flat_map(move |g| {
+                self.layers[g.layers.range()]
                     .iter()
-                    .filter(|r| r.bbox.overlaps(b))
-                {
-                    for c in self.cells[r.cells.range()]
-                        .iter()
-                        .filter(|c| c.bbox.overlaps(b))
-                    {
-                        out.extend_from_slice(&self.triangles[c.triangles.range()]);
-                    }
-                }
-            }
+                    .filter(move |l| l.bbox.overlaps(b))
+            })
+            .flat_map(move |l| {
+                self.rows[l.rows.range()]
+                    .iter()
+                    .filter(move |r| r.bbox.overlaps(b))
+            })
+            .flat_map(move |r| {
+                self.cells[r.cells.range()]
+                    .iter()
+                    .filter(move |c| c.bbox.overlaps(b))
+            })
+    }
+
+    /// Appends the triangles of every leaf whose box meets `b`: a superset
+    /// of the triangles whose own boxes meet it.
+    pub fn overlapping(&self, b: &Aabb, out: &mut Vec<u32>) {
+        for c in self.leaves_overlapping(b) {
+            out.extend_from_slice(&self.triangles[c.triangles.range()]);
         }
     }
 

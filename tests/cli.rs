@@ -324,14 +324,19 @@ fn demo_runs_and_writes_its_outputs() {
         max > 3.0 && max < 12.0,
         "a 6 mm jaw advance moved the skin by {max} mm"
     );
-    // The marching-cubes skin is embedded; the report counts the folds the
-    // relaxation makes (springs carry no bending), as the library does.
+    // The marching-cubes skin, its short edges collapsed, is embedded, and
+    // with bend springs it stays so; the report counts as the library does.
     let crossings = &report["skin_self_intersecting_pairs"];
     assert_eq!(crossings["before"], 0);
-    assert_eq!(
-        crossings["after"],
-        chisel::mesh::self_intersections(&mesh).pairs.len()
+    assert_eq!(crossings["after"], 0);
+    assert_eq!(chisel::mesh::self_intersections(&mesh).pairs.len(), 0);
+    assert!(
+        report["ct"]["skin_collapse"]["collapsed_edges"]
+            .as_u64()
+            .unwrap()
+            > 1000
     );
+    assert!(report["network"]["springs_per_class"][5].as_u64().unwrap() > 10_000);
 }
 
 #[cfg(unix)]
@@ -498,6 +503,15 @@ fn relax_ct_headsq_chin_advance_end_to_end() {
     assert_eq!(v["ct"]["figures"]["skin_groups"], 26);
     assert_eq!(v["ct"]["figures"]["bone_groups"], 76);
     assert_eq!(v["network"]["subcutis_depth"], 0.5);
+    // The CT defaults: skin edges below 0.6 × 3.2 mm collapsed, bend
+    // springs; the chin advance then leaves the skin embedded (without
+    // either, 162 triangle pairs cross; README).
+    let collapse = &v["ct"]["figures"]["skin_collapse"];
+    assert!((collapse["min_edge"].as_f64().unwrap() - 1.92).abs() < 1e-6);
+    assert_eq!(collapse["crossing_pairs"], 0);
+    assert!(v["network"]["springs_per_class"][5].as_u64().unwrap() > 30_000);
+    assert_eq!(v["skin_self_intersecting_pairs"]["before"], 0);
+    assert_eq!(v["skin_self_intersecting_pairs"]["after"], 0);
     let chin = v["cut"]["fragments"]["chin"].as_u64().unwrap();
     assert!(chin > 1000, "{chin} chin vertices");
     assert_eq!(v["cut"]["knives"][0]["curves_open"], 0);
@@ -555,6 +569,10 @@ fn relax_ct_arguments_are_checked() {
         "--bone is the bone iso-level",
     );
     fails(&ct_args("1150", "500"), 1, "skin < bone");
+    let mut negative = ct_args("500", "1150");
+    negative.extend(["--skin-min-edge", "-1"]);
+    fails(&negative, 1, "shortest skin edge");
+    fails(&[path_str(&fran), "--skin-min-edge", "1"], 2, "--ct");
     // A plan that cuts the bone needs one.
     fails(&[path_str(&fran)], 1, "needs a bone mesh");
     // Usage errors: --skin without --ct, a mesh and --ct together.

@@ -8,6 +8,7 @@ mod common;
 use std::collections::HashMap;
 
 use chisel::parity::Backend;
+use chisel::tissue::CtParams;
 use chisel::tissue::ct::CT_SUBCUTIS_DEPTH;
 use chisel::tissue::phantom::{self, HEADSQ_CHIN_ADVANCE_TOML, ct_demo_plan, ct_head_phantom};
 use chisel::tissue::{
@@ -19,7 +20,8 @@ use glam::Vec3;
 
 fn phantom_layers(voxel: f32) -> (Volume, CtLayers) {
     let volume = ct_head_phantom(voxel).unwrap();
-    let layers = layers_from_ct(&volume, 500.0, 1150.0, Backend::Cpu).unwrap();
+    let params = CtParams::for_volume(&volume, 500.0, 1150.0);
+    let layers = layers_from_ct(&volume, &params, Backend::Cpu).unwrap();
     (volume, layers)
 }
 
@@ -106,9 +108,16 @@ fn ct_phantom_layers_by_marching_cubes() {
     assert!(volume_of(&layers.skin) > 0.0 && volume_of(&layers.bone) > 0.0);
     assert!(volume_of(&layers.skin) > 2.0 * volume_of(&layers.bone));
     // Bad levels are refused.
-    let e = layers_from_ct(&volume, 1150.0, 500.0, Backend::Cpu).unwrap_err();
+    let levels = |skin, bone| CtParams::for_volume(&volume, skin, bone);
+    let e = layers_from_ct(&volume, &levels(1150.0, 500.0), Backend::Cpu).unwrap_err();
     assert!(e.to_string().contains("skin < bone"), "{e}");
-    let e = layers_from_ct(&volume, 500.0, 9000.0, Backend::Cpu).unwrap_err();
+    let negative = CtParams {
+        skin_min_edge: -1.0,
+        ..levels(500.0, 1150.0)
+    };
+    let e = layers_from_ct(&volume, &negative, Backend::Cpu).unwrap_err();
+    assert!(e.to_string().contains("shortest skin edge"), "{e}");
+    let e = layers_from_ct(&volume, &levels(500.0, 9000.0), Backend::Cpu).unwrap_err();
     assert!(
         e.to_string().contains("no surface at the bone level"),
         "{e}"
@@ -264,13 +273,21 @@ fn headsq_layers_and_chin_fragment() {
     let Some(volume) = common::real_volume("headsq/quarter.nhdr") else {
         return;
     };
-    let layers = layers_from_ct(&volume, 500.0, 1150.0, Backend::Cpu).unwrap();
+    let params = CtParams::for_volume(&volume, 500.0, 1150.0);
+    assert_eq!(params.skin_min_edge, 0.6 * 3.2);
+    let layers = layers_from_ct(&volume, &params, Backend::Cpu).unwrap();
     let f = &layers.figures;
     // The skin at 500: 26 groups, the outer skin the largest (open where
-    // the head leaves the volume at the top and the neck).
+    // the head leaves the volume at the top and the neck); its edges below
+    // 1.92 mm collapsed, the few refused ones counted.
     assert_eq!(f.skin_groups, 26);
     assert!(f.skin_boundary_edges > 0);
-    assert_eq!(f.skin_vertices, 27_752);
+    let c = &f.skin_collapse;
+    assert_eq!(c.vertices_before, 27_752);
+    assert_eq!(f.skin_vertices, c.vertices_before - c.collapsed_edges);
+    assert!(f.skin_vertices < 12_000, "{}", f.skin_vertices);
+    assert!(c.short_edges_left < 400 && c.crossing_pairs == 0, "{c:?}");
+    assert!(c.shortest_before < 0.01 && c.shortest_after > 0.01, "{c:?}");
     assert_eq!(f.bone_groups, 76);
     let plan = Plan::from_toml_str(HEADSQ_CHIN_ADVANCE_TOML, "headsq").unwrap();
     let cut = cut_bone(&layers.bone, &plan.cuts).unwrap();

@@ -11,7 +11,7 @@ use chisel::tissue::oracle::{self, OracleState};
 use chisel::tissue::phantom::{self, FRAN_GRID};
 use chisel::tissue::{
     Fragments, Iterations, Material, NetworkParams, Plan, RelaxOptions, Selector, Solver,
-    SpringClass, SpringNetwork, Status, Step, explicit, relax,
+    SpringClass, SpringNetwork, Status, Step, Stiffness, explicit, relax,
 };
 use glam::{DVec3, Vec3};
 
@@ -53,7 +53,7 @@ fn check_counts(mesh: &TriMesh) -> SpringNetwork {
     let e = unique_edges(&mesh.triangles).len();
     assert_eq!(net.n_nodes(), 3 * n);
     assert_eq!(net.n_free, 2 * n);
-    assert_eq!(net.class_counts(), [e, n + 2 * e, e, n + 2 * e, e]);
+    assert_eq!(net.class_counts(), [e, n + 2 * e, e, n + 2 * e, e, 0]);
     // Rest length = initial length; springs unique and ordered.
     for w in net.springs.windows(2) {
         assert!((w[0].a, w[0].b) < (w[1].a, w[1].b));
@@ -186,16 +186,70 @@ fn stiffness_regions_override_springs_in_the_region() {
         ..NetworkParams::default()
     };
     let net = SpringNetwork::build(&m, None, &params).unwrap();
-    assert_eq!(net.materials.len(), 6);
-    assert_eq!(net.materials[5].c1, 4.0);
-    let overridden = net.springs.iter().filter(|s| s.material == 5).count();
+    assert_eq!(net.materials.len(), 7);
+    assert_eq!(net.materials[6].c1, 4.0);
+    let overridden = net.springs.iter().filter(|s| s.material == 6).count();
     assert!(overridden > 0);
     assert!(
         net.springs
             .iter()
-            .filter(|s| s.material == 5)
+            .filter(|s| s.material == 6)
             .all(|s| s.class == SpringClass::Epidermis)
     );
+}
+
+fn with_bending(c: f32) -> NetworkParams {
+    NetworkParams {
+        stiffness: Stiffness {
+            bending: Material::linear(c),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Bend springs join the two apexes of every interior epidermis edge
+/// (rest = their distance); where the apexes already share an edge (a
+/// tetrahedron) the epidermis spring is kept.
+#[test]
+fn bend_springs_span_each_interior_edge() {
+    let sphere = common::icosphere(2);
+    let net = SpringNetwork::build(&sphere, None, &with_bending(0.5)).unwrap();
+    let (n, e) = (sphere.n_vertices(), unique_edges(&sphere.triangles).len());
+    assert_eq!(net.class_counts(), [e, n + 2 * e, e, n + 2 * e, e, e]);
+    assert_eq!(net.materials[SpringClass::Bending as usize].c1, 0.5);
+    let mut apexes = std::collections::HashMap::<(u32, u32), Vec<u32>>::new();
+    for t in &sphere.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+            apexes.entry((a, b)).or_default().push(t[(k + 2) % 3]);
+        }
+    }
+    let mut want: Vec<(u32, u32)> = apexes
+        .values()
+        .map(|c| (c[0].min(c[1]), c[0].max(c[1])))
+        .collect();
+    want.sort_unstable();
+    let got: Vec<(u32, u32)> = net
+        .springs
+        .iter()
+        .filter(|s| s.class == SpringClass::Bending)
+        .map(|s| (s.a, s.b))
+        .collect();
+    assert_eq!(got, want);
+    // Open grid: one per interior edge; the border edges have one apex.
+    let g = grid(6, 5);
+    let net = SpringNetwork::build(&g, None, &with_bending(1.0)).unwrap();
+    let interior = unique_edges(&g.triangles).len() - 2 * (5 + 4);
+    assert_eq!(net.class_counts()[5], interior);
+    let tetra = SpringNetwork::build(&common::tetra(), None, &with_bending(1.0)).unwrap();
+    assert_eq!(tetra.class_counts()[5], 0);
+    assert_eq!(tetra.class_counts()[0], 6);
+    // Off by default; negative stiffness refused.
+    let plain = SpringNetwork::build(&sphere, None, &NetworkParams::default()).unwrap();
+    assert_eq!(plain.class_counts()[5], 0);
+    let e = SpringNetwork::build(&sphere, None, &with_bending(-1.0)).unwrap_err();
+    assert!(e.to_string().contains("Bending"), "{e}");
 }
 
 // ---------------------------------------------------------------- plans

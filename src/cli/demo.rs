@@ -19,9 +19,10 @@ use super::relax::{Job, before_mesh, bone_before_after, run_job, write_preview};
 use crate::parity::Backend;
 use crate::render::{Facing, View};
 use crate::surface::McOptions;
-use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
+use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
+use crate::tissue::network::{Material, Stiffness};
 use crate::tissue::phantom::{ct_demo_plan, ct_head_phantom};
-use crate::tissue::{CtLayers, Fragments, NetworkParams, RelaxOptions, Solver};
+use crate::tissue::{CtLayers, CtParams, Fragments, NetworkParams, RelaxOptions, Solver};
 
 /// Arguments of `chisel demo`.
 #[derive(Debug, clap::Args)]
@@ -72,7 +73,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         mc(SKIN_LEVEL, Backend::Gpu(&gpu))?,
         mc(BONE_LEVEL, Backend::Gpu(&gpu))?,
     );
-    let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, SKIN_LEVEL, BONE_LEVEL)?;
+    let ct_params = CtParams::for_volume(&volume, SKIN_LEVEL, BONE_LEVEL);
+    let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, &ct_params)?;
     stage("marching_cubes_gpu", t);
     let t = Instant::now();
     let mc_same = skin_gpu.canonical_triangles()
@@ -84,6 +86,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     let params = NetworkParams {
         subcutis_depth: Some(CT_SUBCUTIS_DEPTH),
+        stiffness: Stiffness {
+            bending: Material::linear(CT_BENDING),
+            ..Default::default()
+        },
         ..Default::default()
     };
     let job = Job::build(

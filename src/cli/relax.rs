@@ -16,10 +16,11 @@ use glam::Vec3;
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
 use crate::render::{Facing, Panel, RenderOptions, View};
-use crate::tissue::ct::CT_SUBCUTIS_DEPTH;
+use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
+use crate::tissue::network::{Material, Stiffness};
 use crate::tissue::{
-    Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork, Status,
-    cut_bone, layers_from_ct,
+    CtParams, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork,
+    Status, cut_bone, layers_from_ct,
 };
 
 /// Arguments of `chisel relax`.
@@ -52,6 +53,14 @@ pub struct Args {
     /// the seed's 0.8 scaling about O).
     #[arg(long)]
     subcutis_depth: Option<f32>,
+    /// With `--ct`: collapse epidermis edges shorter than this (mm; 0 keeps
+    /// the marching-cubes skin; default 0.6 × the largest voxel spacing).
+    #[arg(long, requires = "ct")]
+    skin_min_edge: Option<f32>,
+    /// Stiffness of bend springs across the epidermis's edges (beyond the
+    /// seed; 0 = none). Default 1.0 with `--ct`, else 0.
+    #[arg(long)]
+    bending: Option<f32>,
     /// Solver: `explicit` (the seed's damped dynamics) or `chebyshev` (accelerated equilibrium).
     #[arg(long, default_value = "explicit")]
     solver: Solver,
@@ -292,11 +301,20 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 anyhow::anyhow!("with --ct, --bone is the bone iso-level; got `{bone_text}`")
             })?;
             let volume = crate::io::read_volume(ct)?;
-            let layers = layers_from_ct(&volume, skin_level, bone_level, backend)?;
+            let mut ct_params = CtParams::for_volume(&volume, skin_level, bone_level);
+            if let Some(e) = args.skin_min_edge {
+                ct_params.skin_min_edge = e;
+            }
+            let layers = layers_from_ct(&volume, &ct_params, backend)?;
+            let f = &layers.figures;
             global.note(format!(
-                "CT: skin {} vertices (largest of {} groups), bone {} vertices in {} groups",
-                layers.figures.skin_vertices,
-                layers.figures.skin_groups,
+                "CT: skin {} vertices (largest of {} groups; {} short edges collapsed, \
+                 {} left below {} mm), bone {} vertices in {} groups",
+                f.skin_vertices,
+                f.skin_groups,
+                f.skin_collapse.collapsed_edges,
+                f.skin_collapse.short_edges_left,
+                f.skin_collapse.min_edge,
                 layers.figures.bone_vertices,
                 layers.figures.bone_groups
             ));
@@ -318,6 +336,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         subcutis_depth: args
             .subcutis_depth
             .or(ct.as_ref().map(|_| CT_SUBCUTIS_DEPTH)),
+        stiffness: Stiffness {
+            bending: Material::linear(args.bending.unwrap_or(if ct.is_some() {
+                CT_BENDING
+            } else {
+                0.0
+            })),
+            ..Default::default()
+        },
         ..Default::default()
     };
     let plan = Plan::from_path(&args.plan)?;
@@ -462,14 +488,16 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 
 /// Crossing triangle pairs of the skin before and after relaxing (exact,
 /// [`crate::mesh::self_intersections`]), with a warning when the relaxation
-/// added some: springs carry no bending, so thin triangles can fold over.
+/// added some: the seed's springs carry no bending, so thin triangles can
+/// fold over.
 pub fn skin_crossings(before: &TriMesh, after: &TriMesh) -> serde_json::Value {
     let n = |m: &TriMesh| crate::mesh::self_intersections(m).pairs.len();
     let (b, a) = (n(before), n(after));
     if a > b {
         eprintln!(
             "warning: the relaxed skin crosses itself in {a} triangle pairs ({b} before): \
-             thin triangles folded over (springs carry no bending)"
+             triangles folded over; bend springs (--bending) or fewer thin triangles \
+             (--skin-min-edge with --ct) prevent it"
         );
     }
     json!({ "before": b, "after": a })

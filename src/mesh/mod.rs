@@ -5,12 +5,14 @@
 //! right-hand-rule normal, whatever way the file winds them). Per-vertex
 //! scalar fields (e.g. displacement) ride along by name.
 
+pub mod collapse;
 pub mod csr;
 pub mod disjoint_sets;
 pub mod intersect;
 pub mod orient;
 pub mod topology;
 
+pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
 pub use disjoint_sets::DisjointSets;
 pub use intersect::{SelfIntersections, self_intersections};

@@ -13,11 +13,18 @@
 //! all its groups: every one is bone the tissue may hang on. Surfaces end
 //! open where the body leaves the volume (the neck of a head scan), which
 //! the network handles like any open mesh. Marching cubes keeps vertices
-//! apart (no springs of rest length 0). The subcutis is then placed
-//! between the two ([`CT_SUBCUTIS_DEPTH`]).
+//! apart (no springs of rest length 0), but leaves slivers with edges down
+//! to 2⁻¹⁰ of a voxel where the surface passes near a sample; springs
+//! carry no bending, so under shear such a sliver flips over its
+//! neighbours. The epidermis therefore has its edges shorter than
+//! [`CtParams::skin_min_edge`] collapsed ([`collapse_short_edges`]; default
+//! [`SKIN_MIN_EDGE_FACTOR`] × the largest voxel spacing, which leaves the
+//! in-plane resolution of an anisotropic CT). The subcutis is then placed
+//! between skin and bone ([`CT_SUBCUTIS_DEPTH`]).
 
 use serde::Serialize;
 
+use crate::mesh::{Topology, collapse_short_edges};
 use crate::parity::Backend;
 use crate::surface::{IsoSpec, McOptions, Surface, marching_cubes};
 use crate::{Error, Result, TriMesh, Volume};
@@ -25,6 +32,61 @@ use crate::{Error, Result, TriMesh, Volume};
 /// Where the subcutis lies between a CT's skin and bone: q_i = p_i +
 /// d·(b_i − p_i) with d = 0.5 (see [`super::NetworkParams::subcutis_depth`]).
 pub const CT_SUBCUTIS_DEPTH: f32 = 0.5;
+
+/// Stiffness of the bend springs (see [`super::SpringClass::Bending`])
+/// across the epidermis of a CT network: the stiffness of the epidermis's
+/// own edges. Relative to the skin's edges a bone fragment's border moves
+/// abruptly, and without them the skin folds there (headsq's chin
+/// advance: 16 crossing triangle pairs with, 0 without; README).
+pub const CT_BENDING: f32 = 1.0;
+
+/// Default shortest epidermis edge of a CT skin, in units of the largest
+/// voxel spacing. On the demo phantom (5 mm voxels) a 6 mm jaw advance
+/// leaves 35 crossing skin triangle pairs without collapsing, 2 at 0.2 and
+/// 0 from 0.4 on; on headsq (3.2 × 3.2 × 1.5 mm) the chin advance needs
+/// 0.6 and bend springs (README, known limits).
+pub const SKIN_MIN_EDGE_FACTOR: f32 = 0.6;
+
+/// How the layers are taken from a CT.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CtParams {
+    /// Iso level of the skin surface (CT numbers: air < skin ≤ soft tissue).
+    pub skin_level: f32,
+    /// Iso level of the bone surface (`> skin_level`).
+    pub bone_level: f32,
+    /// Epidermis edges shorter than this are collapsed (world units;
+    /// 0 keeps the marching-cubes skin as it is).
+    pub skin_min_edge: f32,
+}
+
+impl CtParams {
+    /// The levels with the default shortest skin edge for `volume`
+    /// ([`SKIN_MIN_EDGE_FACTOR`] × its largest spacing).
+    pub fn for_volume(volume: &Volume, skin_level: f32, bone_level: f32) -> CtParams {
+        let largest = volume.spacing.into_iter().fold(0.0, f64::max);
+        CtParams {
+            skin_level,
+            bone_level,
+            skin_min_edge: SKIN_MIN_EDGE_FACTOR * largest as f32,
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        let (s, b) = (self.skin_level, self.bone_level);
+        if !(s.is_finite() && b.is_finite() && s < b) {
+            return Err(Error::InvalidInput(format!(
+                "CT levels need skin < bone, both finite; got skin {s}, bone {b}"
+            )));
+        }
+        if !(self.skin_min_edge.is_finite() && self.skin_min_edge >= 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "the shortest skin edge must be finite and ≥ 0, got {}",
+                self.skin_min_edge
+            )));
+        }
+        Ok(())
+    }
+}
 
 /// What the extraction found.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -34,8 +96,10 @@ pub struct CtFigures {
     /// Groups of the skin surface, and the triangles of those left out.
     pub skin_groups: usize,
     pub skin_triangles_dropped: usize,
-    /// Epidermis: vertices, triangles, boundary edges (open where the body
-    /// leaves the volume).
+    /// The short-edge collapse of the epidermis.
+    pub skin_collapse: SkinCollapse,
+    /// Epidermis (after the collapse): vertices, triangles, boundary edges
+    /// (open where the body leaves the volume).
     pub skin_vertices: usize,
     pub skin_triangles: usize,
     pub skin_boundary_edges: u32,
@@ -43,6 +107,25 @@ pub struct CtFigures {
     pub bone_groups: usize,
     pub bone_vertices: usize,
     pub bone_triangles: usize,
+}
+
+/// What collapsing the epidermis's short edges did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkinCollapse {
+    /// Threshold (world units; 0 = off).
+    pub min_edge: f32,
+    /// Vertices of the marching-cubes skin group.
+    pub vertices_before: usize,
+    /// Edges collapsed, and those left short (collapse refused).
+    pub collapsed_edges: usize,
+    pub short_edges_left: usize,
+    /// Shortest edge before and after.
+    pub shortest_before: f32,
+    pub shortest_after: f32,
+    /// Runs of the collapse, and the skin's crossing triangle pairs after
+    /// it (0: the guard of [`collapse_short_edges`] kept it embedded).
+    pub rounds: usize,
+    pub crossing_pairs: usize,
 }
 
 /// Epidermis and bone of a CT.
@@ -56,42 +139,30 @@ pub struct CtLayers {
 }
 
 /// Extracts the layers of `volume` (world units: spacing and origin
-/// honoured) with marching cubes on `backend`. `skin_level < bone_level`
-/// (CT numbers: air < skin level ≤ soft tissue < bone level ≤ bone).
+/// honoured) with marching cubes on `backend`.
 pub fn layers_from_ct(
     volume: &Volume,
-    skin_level: f32,
-    bone_level: f32,
+    params: &CtParams,
     backend: Backend<'_>,
 ) -> Result<CtLayers> {
-    check_levels(skin_level, bone_level)?;
+    params.check()?;
     let opts = McOptions::default();
-    let skin = marching_cubes(volume, IsoSpec::Level(skin_level), &opts, backend)?;
-    let bone = marching_cubes(volume, IsoSpec::Level(bone_level), &opts, backend)?;
-    CtLayers::from_surfaces(&skin, &bone, skin_level, bone_level)
-}
-
-fn check_levels(skin_level: f32, bone_level: f32) -> Result<()> {
-    if skin_level.is_finite() && bone_level.is_finite() && skin_level < bone_level {
-        Ok(())
-    } else {
-        Err(Error::InvalidInput(format!(
-            "CT levels need skin < bone, both finite; got skin {skin_level}, bone {bone_level}"
-        )))
-    }
+    let skin = marching_cubes(volume, IsoSpec::Level(params.skin_level), &opts, backend)?;
+    let bone = marching_cubes(volume, IsoSpec::Level(params.bone_level), &opts, backend)?;
+    CtLayers::from_surfaces(&skin, &bone, params)
 }
 
 impl CtLayers {
     /// The layers from the marching-cubes surfaces of one volume at the
-    /// skin and the bone level.
+    /// skin and the bone level of `params`.
     pub fn from_surfaces(
         skin_surface: &Surface,
         bone_surface: &Surface,
-        skin_level: f32,
-        bone_level: f32,
+        params: &CtParams,
     ) -> Result<CtLayers> {
-        check_levels(skin_level, bone_level)?;
-        let (skin, largest) = largest_group(skin_surface).ok_or_else(|| {
+        params.check()?;
+        let (skin_level, bone_level) = (params.skin_level, params.bone_level);
+        let group = largest_group(skin_surface).ok_or_else(|| {
             Error::InvalidInput(format!(
                 "the CT has no surface at the skin level {skin_level} (no sample on both sides)"
             ))
@@ -101,7 +172,9 @@ impl CtLayers {
                 "the CT has no surface at the bone level {bone_level} (no sample on both sides)"
             )));
         }
-        let skin_triangles_dropped = skin_surface.mesh.n_triangles() - skin.n_triangles();
+        let skin_triangles_dropped = skin_surface.mesh.n_triangles() - group.n_triangles();
+        let collapsed = collapse_short_edges(&group, params.skin_min_edge);
+        let skin = collapsed.mesh;
         let bone = TriMesh {
             positions: bone_surface.mesh.positions.clone(),
             triangles: bone_surface.mesh.triangles.clone(),
@@ -112,9 +185,19 @@ impl CtLayers {
             bone_level,
             skin_groups: skin_surface.groups.len(),
             skin_triangles_dropped,
+            skin_collapse: SkinCollapse {
+                min_edge: params.skin_min_edge,
+                vertices_before: group.n_vertices(),
+                collapsed_edges: collapsed.collapsed,
+                short_edges_left: collapsed.short_edges_left,
+                shortest_before: collapsed.min_edge_before,
+                shortest_after: collapsed.min_edge_after,
+                rounds: collapsed.rounds,
+                crossing_pairs: collapsed.crossing_pairs,
+            },
             skin_vertices: skin.n_vertices(),
             skin_triangles: skin.n_triangles(),
-            skin_boundary_edges: skin_surface.groups[largest].boundary_edges,
+            skin_boundary_edges: Topology::of(&skin).boundary_edges as u32,
             bone_groups: bone_surface.groups.len(),
             bone_vertices: bone.n_vertices(),
             bone_triangles: bone.n_triangles(),
@@ -128,8 +211,8 @@ impl CtLayers {
 }
 
 /// The group with the most triangles (ties: the lower group id) as its own
-/// mesh, and its id.
-fn largest_group(s: &Surface) -> Option<(TriMesh, usize)> {
+/// mesh.
+fn largest_group(s: &Surface) -> Option<TriMesh> {
     let g = (0..s.groups.len()).max_by_key(|&g| (s.groups[g].triangles, usize::MAX - g))?;
     let keep: Vec<u32> = s
         .triangle_groups
@@ -140,5 +223,5 @@ fn largest_group(s: &Surface) -> Option<(TriMesh, usize)> {
     if parts.is_empty() {
         return None;
     }
-    Some((parts.swap_remove(0), g))
+    Some(parts.swap_remove(0))
 }

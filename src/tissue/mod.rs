@@ -43,7 +43,7 @@ pub mod phantom;
 pub mod plan;
 pub mod relax;
 
-pub use ct::{CtLayers, layers_from_ct};
+pub use ct::{CtLayers, CtParams, layers_from_ct};
 pub use fragments::{BoneCut, CutBone, KnifeSpec, cut_bone};
 pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,

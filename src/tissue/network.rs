@@ -31,16 +31,21 @@ pub enum SpringClass {
     Muscle,
     /// Edges of the bone T0 (both ends fixed: no force on any free node).
     Bone,
+    /// Beyond the seed: flexion springs across each interior edge of the
+    /// epidermis, between the two apexes of its triangles (Provot 1995's
+    /// bend springs). Folding a triangle over its neighbour shortens them.
+    Bending,
 }
 
 impl SpringClass {
     /// All classes; the index is the default material id.
-    pub const ALL: [SpringClass; 5] = [
+    pub const ALL: [SpringClass; 6] = [
         SpringClass::Epidermis,
         SpringClass::Dermis,
         SpringClass::Subcutis,
         SpringClass::Muscle,
         SpringClass::Bone,
+        SpringClass::Bending,
     ];
 
     fn index(self) -> usize {
@@ -101,6 +106,8 @@ pub struct Stiffness {
     pub subcutis: Material,
     pub muscle: Material,
     pub bone: Material,
+    /// Bend springs (not in the seed): c = 0 builds none.
+    pub bending: Material,
 }
 
 impl Default for Stiffness {
@@ -115,6 +122,7 @@ impl Default for Stiffness {
             subcutis: Material::linear(0.3),
             muscle: Material::linear(3.0),
             bone: Material::linear(1.0),
+            bending: Material::linear(0.0),
         }
     }
 }
@@ -127,6 +135,7 @@ impl Stiffness {
             SpringClass::Subcutis => self.subcutis,
             SpringClass::Muscle => self.muscle,
             SpringClass::Bone => self.bone,
+            SpringClass::Bending => self.bending,
         }
     }
 }
@@ -356,6 +365,23 @@ pub fn unique_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
     e
 }
 
+/// The two apexes of each edge shared by exactly two triangles, as
+/// `(min, max)` pairs in edge order (edges whose apexes coincide skipped).
+fn edge_apexes(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut corners: Vec<(u32, u32, u32)> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3], t[(k + 2) % 3])))
+        .filter(|&(a, b, c)| a != b && b != c && a != c)
+        .map(|(a, b, c)| (a.min(b), a.max(b), c))
+        .collect();
+    corners.par_sort_unstable();
+    corners
+        .chunk_by(|x, y| (x.0, x.1) == (y.0, y.1))
+        .filter(|run| run.len() == 2 && run[0].2 != run[1].2)
+        .map(|run| (run[0].2, run[1].2))
+        .collect()
+}
+
 /// 1-ring neighbours (sorted) of `n` vertices from unique edges.
 fn one_rings(n: usize, edges: &[(u32, u32)]) -> Csr {
     let mut csr = Csr::from_pairs(n, edges.iter().flat_map(|&(a, b)| [(a, b), (b, a)]));
@@ -545,7 +571,12 @@ impl SpringNetwork {
         for &(a, b) in &bone_edges {
             push(bo + a, bo + b, SpringClass::Bone);
         }
-        pairs.par_sort_unstable_by_key(|&(a, b, _)| (a, b));
+        if params.stiffness.bending.c_max() > 0.0 {
+            for (c, d) in edge_apexes(&epidermis.triangles) {
+                push(ep + c, ep + d, SpringClass::Bending);
+            }
+        }
+        pairs.par_sort_unstable_by_key(|&(a, b, c)| (a, b, c.index()));
         pairs.dedup_by_key(|&mut (a, b, _)| (a, b));
 
         let mut materials: Vec<Material> = SpringClass::ALL
@@ -553,7 +584,10 @@ impl SpringNetwork {
             .map(|&c| params.stiffness.of(c))
             .collect();
         for (k, m) in materials.iter().enumerate() {
-            check_material(m, &format!("stiffness of {:?}", SpringClass::ALL[k]))?;
+            let class = SpringClass::ALL[k];
+            if class != SpringClass::Bending || m.c_max() != 0.0 {
+                check_material(m, &format!("stiffness of {class:?}"))?;
+            }
         }
         let mut region_material: Vec<Vec<Option<u8>>> =
             vec![vec![None; SpringClass::ALL.len()]; params.regions.len()];
@@ -757,8 +791,8 @@ impl SpringNetwork {
     }
 
     /// Spring count per class, in [`SpringClass::ALL`] order.
-    pub fn class_counts(&self) -> [usize; 5] {
-        let mut c = [0; 5];
+    pub fn class_counts(&self) -> [usize; 6] {
+        let mut c = [0; 6];
         for s in &self.springs {
             c[s.class.index()] += 1;
         }

@@ -12,8 +12,8 @@ use chisel::parity::{Tolerance, compare_exact, compare_vec, find_sentinel};
 use chisel::tissue::cpu::{self, StepParams};
 use chisel::tissue::phantom::FRAN_CHIN_ADVANCE_TOML;
 use chisel::tissue::{
-    Fragments, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, gpu as tissue_gpu,
-    iterate, relax,
+    Fragments, Material, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Stiffness,
+    gpu as tissue_gpu, iterate, relax,
 };
 use glam::Vec3;
 
@@ -35,6 +35,17 @@ pub fn networks() -> Vec<(&'static str, SpringNetwork)> {
         out.push((
             "fran_cut",
             SpringNetwork::build(&face, None, &NetworkParams::default()).unwrap(),
+        ));
+        let bending = NetworkParams {
+            stiffness: Stiffness {
+                bending: Material::linear(1.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        out.push((
+            "fran_cut with bend springs",
+            SpringNetwork::build(&face, None, &bending).unwrap(),
         ));
     }
     out

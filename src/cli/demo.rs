@@ -2,9 +2,10 @@
 //!
 //! A CT-like head phantom (soft tissue over a skull whose mandible is fused
 //! to the skull base) → skin and bone surfaces by marching cubes on the GPU
-//! (checked against the CPU: the same triangles) → a plane osteotomy
-//! through both rami frees the jaw, capped → layered spring network over
-//! the bone (seed 000 ch. 4) → the jaw advanced 6 mm and the tissue relaxed
+//! (checked against the CPU: the same triangles) → the skin's short edges
+//! collapsed → a plane osteotomy through both rami frees the jaw, capped →
+//! layered spring network over the bone (seed 000 ch. 4) with bend springs
+//! across the skin → the jaw advanced 6 mm and the tissue relaxed
 //! on the GPU → the same plan on the CPU mirror as a parity check → relaxed
 //! skin, moved bone, the phantom CT, before/after previews and a JSON
 //! report in the output folder.

@@ -17,7 +17,8 @@ use super::plan::Selector;
 use crate::mesh::{Csr, TriMesh};
 use crate::{Error, Result};
 
-/// The five spring classes (three layers + two intermediate layers).
+/// The seed's five spring classes (three layers + two intermediate layers)
+/// and, beyond the seed, bend springs across the epidermis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SpringClass {

@@ -185,6 +185,20 @@ fn border_pinches_are_refused() {
     assert_eq!(c.short_edges_left, 4);
 }
 
+/// An edge whose two triangles wind the same way (both ends on the
+/// border, so it stays) is counted once.
+#[test]
+fn short_edges_are_counted_once_whatever_the_winding() {
+    let mesh = TriMesh::new(
+        vec![Vec3::ZERO, Vec3::new(0.01, 0.0, 0.0), Vec3::Y, -Vec3::Y],
+        vec![[0, 1, 2], [0, 1, 3]],
+    )
+    .unwrap();
+    let c = collapse_short_edges(&mesh, 0.1);
+    assert_eq!(c.collapsed, 0);
+    assert_eq!(c.short_edges_left, 1);
+}
+
 /// Collapsing a short border edge keeps the border (and the vertex on it).
 #[test]
 fn open_grid_keeps_its_border_loop() {

@@ -248,8 +248,10 @@ fn bend_springs_span_each_interior_edge() {
     // Off by default; negative stiffness refused.
     let plain = SpringNetwork::build(&sphere, None, &NetworkParams::default()).unwrap();
     assert_eq!(plain.class_counts()[5], 0);
-    let e = SpringNetwork::build(&sphere, None, &with_bending(-1.0)).unwrap_err();
-    assert!(e.to_string().contains("Bending"), "{e}");
+    for bad in [-1.0, f32::NAN] {
+        let e = SpringNetwork::build(&sphere, None, &with_bending(bad)).unwrap_err();
+        assert!(e.to_string().contains("Bending"), "{e}");
+    }
 }
 
 // ---------------------------------------------------------------- plans

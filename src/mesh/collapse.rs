@@ -316,7 +316,8 @@ impl State {
                     }
                 });
                 let (n0, n1) = (normal(corners(t)), normal(q));
-                let agrees = |n: Vec3| n1.dot(n) >= cos_max * n1.length() * n.length();
+                let agrees =
+                    |n: Vec3| n != Vec3::ZERO && n1.dot(n) >= cos_max * n1.length() * n.length();
                 n1 != Vec3::ZERO && (agrees(n0) || agrees(mean))
             })
         };
@@ -377,15 +378,17 @@ impl State {
             .map(|t| self.tris[t].map(|v| new_id[v as usize]))
             .collect();
         let min_edge_after = self.min_edge();
-        let short_edges_left = (0..self.tris.len())
+        let mut short: Vec<(u32, u32)> = (0..self.tris.len())
             .filter(|&t| self.live_t[t])
             .flat_map(|t| {
                 let tri = self.tris[t];
-                (0..3).map(move |k| (tri[k], tri[(k + 1) % 3]))
+                (0..3).map(move |k| (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3])))
             })
-            .filter(|&(a, b)| a < b || !self.has_edge(b, a))
             .filter(|&(a, b)| self.length(a, b) < min_length)
-            .count();
+            .collect();
+        short.sort_unstable();
+        short.dedup();
+        let short_edges_left = short.len();
         let out = TriMesh {
             positions: kept.iter().map(|&v| self.pos[v]).collect(),
             triangles,
@@ -409,13 +412,5 @@ impl State {
             rounds: 1,
             crossing_pairs: 0,
         }
-    }
-
-    /// Whether some live triangle runs from `a` to `b` in its winding.
-    fn has_edge(&self, a: u32, b: u32) -> bool {
-        self.fan[a as usize].iter().any(|&t| {
-            let tri = self.tris[t as usize];
-            (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
-        })
     }
 }

@@ -586,7 +586,9 @@ impl SpringNetwork {
             .collect();
         for (k, m) in materials.iter().enumerate() {
             let class = SpringClass::ALL[k];
-            if class != SpringClass::Bending || m.c_max() != 0.0 {
+            // Bend springs are off at c1 = c2 = 0; every other law must hold.
+            let off = class == SpringClass::Bending && m.c1 == 0.0 && m.c2 == 0.0;
+            if !(off && m.knee.is_finite() && m.knee >= 0.0) {
                 check_material(m, &format!("stiffness of {class:?}"))?;
             }
         }

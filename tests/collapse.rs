@@ -203,23 +203,11 @@ fn short_edges_are_counted_once_whatever_the_winding() {
 #[test]
 fn open_grid_keeps_its_border_loop() {
     let n = 8;
-    let mut p = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            // Column 3 squeezed against column 2: short edges across the grid.
-            let x = if i >= 3 { i as f32 - 0.9 } else { i as f32 };
-            p.push(Vec3::new(x, j as f32, 0.05 * (i * j % 3) as f32));
-        }
-    }
-    let id = |i: usize, j: usize| (j * n + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    let grid = TriMesh::new(p, t).unwrap();
+    // Column 3 squeezed against column 2: short edges across the grid.
+    let grid = common::grid_mesh(n, n, |i, j| {
+        let x = if i >= 3 { i as f32 - 0.9 } else { i as f32 };
+        Vec3::new(x, j as f32, 0.05 * (i * j % 3) as f32)
+    });
     let c = collapse_short_edges(&grid, 0.3);
     check_collapse(&grid, 0.3, &c);
     assert!(c.collapsed >= n - 2, "{}", c.collapsed);

@@ -17,21 +17,9 @@ use glam::{DVec3, Vec3};
 
 /// A flat `nx × ny` grid patch in the x–y plane (spacing 1), wound +z.
 fn grid(nx: usize, ny: usize) -> TriMesh {
-    let mut p = Vec::new();
-    for j in 0..ny {
-        for i in 0..nx {
-            p.push(Vec3::new(i as f32, j as f32, 0.1 * ((i * j) % 3) as f32));
-        }
-    }
-    let id = |i: usize, j: usize| (j * nx + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..ny - 1 {
-        for i in 0..nx - 1 {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh::new(p, t).unwrap()
+    common::grid_mesh(nx, ny, |i, j| {
+        Vec3::new(i as f32, j as f32, 0.1 * ((i * j) % 3) as f32)
+    })
 }
 
 fn two_spheres() -> TriMesh {

@@ -116,6 +116,24 @@ pub fn cube() -> TriMesh {
     TriMesh::new(p, t).expect("valid cube")
 }
 
+/// An `nx × ny` grid patch with vertex (i, j) at `at(i, j)` (vertex id
+/// `j·nx + i`), each cell split along its (i, j)–(i+1, j+1) diagonal, wound
+/// +z when `at` keeps i along x and j along y.
+pub fn grid_mesh(nx: usize, ny: usize, at: impl Fn(usize, usize) -> Vec3) -> TriMesh {
+    let p = (0..nx * ny).map(|v| at(v % nx, v / nx)).collect();
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let t = (0..ny - 1)
+        .flat_map(|j| (0..nx - 1).map(move |i| (i, j)))
+        .flat_map(|(i, j)| {
+            [
+                [id(i, j), id(i + 1, j), id(i + 1, j + 1)],
+                [id(i, j), id(i + 1, j + 1), id(i, j + 1)],
+            ]
+        })
+        .collect();
+    TriMesh::new(p, t).expect("valid grid")
+}
+
 /// Icosphere of radius 1 with `n` subdivisions, outward winding:
 /// 10·4ⁿ + 2 vertices, 20·4ⁿ triangles.
 pub fn icosphere(n: u32) -> TriMesh {

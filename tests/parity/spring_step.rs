@@ -53,22 +53,10 @@ pub fn networks() -> Vec<(&'static str, SpringNetwork)> {
 
 /// A gently curved `nx × ny` patch (spacing 1).
 pub fn grid_patch(nx: usize, ny: usize) -> chisel::TriMesh {
-    let mut p = Vec::new();
-    for j in 0..ny {
-        for i in 0..nx {
-            let (x, y) = (i as f32, j as f32);
-            p.push(Vec3::new(x, y, 0.02 * (x - nx as f32 / 2.0).powi(2)));
-        }
-    }
-    let id = |i: usize, j: usize| (j * nx + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..ny - 1 {
-        for i in 0..nx - 1 {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    chisel::TriMesh::new(p, t).unwrap()
+    common::grid_mesh(nx, ny, |i, j| {
+        let (x, y) = (i as f32, j as f32);
+        Vec3::new(x, y, 0.02 * (x - nx as f32 / 2.0).powi(2))
+    })
 }
 
 /// The bone layer with its upper third moved by 3 % of the network size

@@ -315,8 +315,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 f.skin_collapse.collapsed_edges,
                 f.skin_collapse.short_edges_left,
                 f.skin_collapse.min_edge,
-                layers.figures.bone_vertices,
-                layers.figures.bone_groups
+                f.bone_vertices,
+                f.bone_groups
             ));
             (layers.skin, Some(layers.bone), Some(layers.figures))
         }

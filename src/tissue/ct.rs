@@ -37,7 +37,8 @@ pub const CT_SUBCUTIS_DEPTH: f32 = 0.5;
 /// across the epidermis of a CT network: the stiffness of the epidermis's
 /// own edges. Relative to the skin's edges a bone fragment's border moves
 /// abruptly, and without them the skin folds there (headsq's chin
-/// advance: 16 crossing triangle pairs with, 0 without; README).
+/// advance after the short-edge collapse: 30 crossing triangle pairs
+/// without, 0 with; README).
 pub const CT_BENDING: f32 = 1.0;
 
 /// Default shortest epidermis edge of a CT skin, in units of the largest

@@ -661,6 +661,35 @@ fn sphere_caps_follow_the_sphere() {
 }
 
 #[test]
+fn grazing_sphere_caps_do_not_cross_the_surface() {
+    let s = mc(&box_volume());
+    // Balls of radius 30 reaching `depth` below the face z = 34.5: the face
+    // meets the sphere at a grazing angle (2.6–5.1°), and a chord of the
+    // first cap sags below the face, through it.
+    let mut rounds = 0;
+    for depth in [0.03, 0.05, 0.08, 0.12] {
+        let k = Knife::Sphere {
+            centre: DVec3::new(20.2, 19.7, 34.5 + 30.0 - depth),
+            radius: 30.0,
+        };
+        let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+        let what = format!("box/grazing sphere {depth}");
+        assert_eq!(r.pieces.len(), 2, "{what}");
+        assert_conserved(&s.mesh, &r, 1e-6, &what);
+        same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+        for (i, piece) in r.pieces.iter().enumerate() {
+            let x = chisel::mesh::self_intersections(piece);
+            assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);
+        }
+        rounds += r.stats.cap_repair_rounds;
+    }
+    assert!(
+        rounds > 0,
+        "no first cap crossed the face: the test shows nothing"
+    );
+}
+
+#[test]
 fn cuts_of_plain_meshes_and_sequences() {
     let ico = common::icosphere(4);
     let r = cut_mesh(&ico, &plane([0.1, 0.0, 0.0], [1.0, 0.2, 0.0]), &CAP).unwrap();
@@ -807,6 +836,21 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
     for (i, piece) in r.pieces.iter().enumerate() {
         assert_clean(piece, &format!("headsq/sphere 35 piece {i}"));
+    }
+    // Both spheres meet the bone at grazing angles of a degree or two:
+    // their first caps crossed it (102 and 27 pairs before the repair).
+    let sph30 = Knife::Sphere {
+        centre: DVec3::new(100.0, 100.0, 40.0),
+        radius: 30.0,
+    };
+    let r30 = cut(&s.mesh, &s.forest, &sph30, &CAP).unwrap();
+    assert_conserved(&s.mesh, &r30, 1e-6, "headsq/sphere 30");
+    for (r, what) in [(&r, "headsq/sphere 35"), (&r30, "headsq/sphere 30")] {
+        assert!(r.stats.cap_repair_rounds > 0, "{what}: {:?}", r.stats);
+        for (i, piece) in r.pieces.iter().enumerate() {
+            let x = chisel::mesh::self_intersections(piece);
+            assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);
+        }
     }
 }
 

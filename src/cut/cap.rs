@@ -15,7 +15,9 @@
 //! planar midpoint until each is shorter than [`sphere_max_edge`] (chord
 //! error below [`SPHERE_CHORD_ERROR`]·r) or than 1.2 times the longest
 //! loop edge, whichever is longer; loop edges are never split, so both sides
-//! still share them.
+//! still share them. Where the surface meets the sphere at a grazing angle,
+//! the cap triangles that cross it (exact test) are bisected further
+//! ([`repair_on_sphere`]).
 
 use std::collections::HashMap;
 
@@ -366,6 +368,30 @@ const LOOP_EDGE_FACTOR: f64 = 1.2;
 /// triangles on loop edges that bisection cannot shorten).
 const MAX_PASSES: usize = 48;
 
+/// Per edge of `tris` (key: sorted vertex pair) its first two triangles and
+/// its use count.
+type EdgeUses = HashMap<(usize, usize), ([usize; 2], u32)>;
+
+fn edge_key(a: usize, b: usize) -> (usize, usize) {
+    (a.min(b), a.max(b))
+}
+
+fn edge_uses(tris: &[[usize; 3]]) -> EdgeUses {
+    let mut uses: EdgeUses = HashMap::with_capacity(3 * tris.len());
+    for (t, tri) in tris.iter().enumerate() {
+        for e in 0..3 {
+            let slot = uses
+                .entry(edge_key(tri[e], tri[(e + 1) % 3]))
+                .or_insert(([usize::MAX; 2], 0));
+            if slot.1 < 2 {
+                slot.0[slot.1 as usize] = t;
+            }
+            slot.1 += 1;
+        }
+    }
+    uses
+}
+
 /// Refines cap triangles `tris` (indices into `pts`, their images in the
 /// stereographic plane of `proj`, and `pos`, the points on the sphere):
 /// every edge used by two triangles and longer than `max_edge` in space
@@ -382,70 +408,141 @@ pub fn refine_on_sphere(
     max_edge: f64,
     max_triangles: usize,
 ) {
-    let key = |a: usize, b: usize| (a.min(b), a.max(b));
     let mut max_edge = max_edge;
-    let mut passes = 0;
-    loop {
-        // Per edge its first two triangles and its use count.
-        let mut uses: HashMap<(usize, usize), ([usize; 2], u32)> =
-            HashMap::with_capacity(3 * tris.len());
-        for (t, tri) in tris.iter().enumerate() {
-            for e in 0..3 {
-                let slot = uses
-                    .entry(key(tri[e], tri[(e + 1) % 3]))
-                    .or_insert(([usize::MAX; 2], 0));
-                if slot.1 < 2 {
-                    slot.0[slot.1 as usize] = t;
-                }
-                slot.1 += 1;
-            }
-        }
+    for _ in 0..MAX_PASSES {
+        let uses = edge_uses(tris);
         let longest_loop_edge = uses
             .iter()
             .filter(|(_, (_, n))| *n == 1)
             .map(|(k, _)| (pos[k.0] - pos[k.1]).length())
             .fold(0.0, f64::max);
         max_edge = max_edge.max(LOOP_EDGE_FACTOR * longest_loop_edge);
-        let mut long: Vec<(f64, (usize, usize), [usize; 2])> = uses
+        let long: Vec<(f64, (usize, usize), [usize; 2])> = uses
             .iter()
             .filter(|(_, (_, n))| *n == 2)
             .map(|(&k, &(ts, _))| ((pos[k.0] - pos[k.1]).length(), k, ts))
             .filter(|(l, _, _)| *l > max_edge)
             .collect();
-        passes += 1;
-        if long.is_empty() || tris.len() >= max_triangles || passes > MAX_PASSES {
+        if long.is_empty() || tris.len() >= max_triangles {
             return;
         }
-        long.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        let mut touched = vec![false; tris.len()];
-        let mut split_any = false;
-        for (_, (a, b), ts) in long {
-            if ts.iter().any(|&t| touched[t]) || tris.len() + 2 > max_triangles {
-                continue;
-            }
-            let mid = (pts[a] + pts[b]) * 0.5;
-            let Some(q) = proj.unapply(mid) else {
-                continue;
-            };
-            let m = pos.len();
-            pts.push(mid);
-            pos.push(q);
-            for t in ts {
-                touched[t] = true;
-                let tri = tris[t];
-                // Rotate so the split edge is (tri[0], tri[1]).
-                let e = (0..3)
-                    .find(|&e| key(tri[e], tri[(e + 1) % 3]) == (a, b))
-                    .unwrap_or(0);
-                let (x, y, z) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
-                tris[t] = [x, m, z];
-                tris.push([m, y, z]);
-                touched.push(true);
-            }
-            split_any = true;
-        }
-        if !split_any {
+        if bisect(tris, pts, pos, proj, long, max_triangles).is_empty() {
             return;
         }
     }
+}
+
+/// Rounds of [`repair_on_sphere`] without fewer crossings before it stops.
+pub const STALLED_ROUNDS: usize = 3;
+
+/// What [`repair_on_sphere`] asks about the cut surface: per cap triangle
+/// `tris[check[k]]` (corners in `pos`), the number of surface and cap
+/// triangles it meets beyond shared vertices.
+pub trait CapCheck {
+    fn crossings(&mut self, tris: &[[usize; 3]], check: &[usize], pos: &[DVec3]) -> Vec<u32>;
+}
+
+/// Repairs a refined sphere cap where it crosses the surface: a surface
+/// meeting the sphere at a grazing angle runs just inside it, closer than
+/// a cap chord sags. Each round bisects, in every cap triangle that
+/// crosses, its longest interior edge as [`refine_on_sphere`] does, and
+/// counts again the triangles it changed. A new point can also land in the
+/// thin band between a loop edge's chord and the sphere where the surface
+/// runs outside the sphere, and cross it there, so the rounds can make
+/// things worse (and a surface lying on the sphere to f32 precision only
+/// touches more cap triangles the finer they get): the cap with the fewest
+/// crossings seen is kept. Stops when nothing crosses, nothing can be
+/// split, after [`STALLED_ROUNDS`] rounds without a new best, or after
+/// `max_rounds`; returns the rounds made.
+pub fn repair_on_sphere(
+    tris: &mut Vec<[usize; 3]>,
+    pts: &mut Vec<DVec2>,
+    pos: &mut Vec<DVec3>,
+    proj: &Projection,
+    max_triangles: usize,
+    max_rounds: usize,
+    surface: &mut impl CapCheck,
+) -> usize {
+    let all: Vec<usize> = (0..tris.len()).collect();
+    let mut count = surface.crossings(tris, &all, pos);
+    let total = |count: &[u32]| count.iter().map(|&c| c as u64).sum::<u64>();
+    // Points are only appended: a cap is its triangles and point count.
+    let mut best = (total(&count), tris.clone(), pts.len());
+    let (mut rounds, mut since_best) = (0, 0);
+    while rounds < max_rounds && best.0 > 0 && since_best < STALLED_ROUNDS {
+        let uses = edge_uses(tris);
+        let chosen: Vec<(f64, (usize, usize), [usize; 2])> = (0..tris.len())
+            .filter(|&t| count[t] > 0)
+            .filter_map(|t| {
+                let tri = tris[t];
+                (0..3)
+                    .map(|e| edge_key(tri[e], tri[(e + 1) % 3]))
+                    .filter_map(|k| {
+                        let &(ts, n) = uses.get(&k)?;
+                        (n == 2).then(|| ((pos[k.0] - pos[k.1]).length(), k, ts))
+                    })
+                    .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)))
+            })
+            .collect();
+        let changed = bisect(tris, pts, pos, proj, chosen, max_triangles);
+        if changed.is_empty() {
+            break;
+        }
+        rounds += 1;
+        count.resize(tris.len(), 0);
+        for (&t, c) in changed.iter().zip(surface.crossings(tris, &changed, pos)) {
+            count[t] = c;
+        }
+        since_best += 1;
+        if total(&count) < best.0 {
+            best = (total(&count), tris.clone(), pts.len());
+            since_best = 0;
+        }
+    }
+    *tris = best.1;
+    pts.truncate(best.2);
+    pos.truncate(best.2);
+    rounds
+}
+
+/// Bisects the interior edges `edges` (length, key, its two triangles),
+/// longest first, each triangle at most once per call (an edge listed twice
+/// is split once). Returns the triangles changed or added.
+fn bisect(
+    tris: &mut Vec<[usize; 3]>,
+    pts: &mut Vec<DVec2>,
+    pos: &mut Vec<DVec3>,
+    proj: &Projection,
+    mut edges: Vec<(f64, (usize, usize), [usize; 2])>,
+    max_triangles: usize,
+) -> Vec<usize> {
+    edges.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut touched = vec![false; tris.len()];
+    let mut changed = Vec::new();
+    for (_, (a, b), ts) in edges {
+        if ts.iter().any(|&t| touched[t]) || tris.len() + 2 > max_triangles {
+            continue;
+        }
+        let mid = (pts[a] + pts[b]) * 0.5;
+        let Some(q) = proj.unapply(mid) else {
+            continue;
+        };
+        let m = pos.len();
+        pts.push(mid);
+        pos.push(q);
+        for t in ts {
+            touched[t] = true;
+            let tri = tris[t];
+            // Rotate so the split edge is (tri[0], tri[1]).
+            let e = (0..3)
+                .find(|&e| edge_key(tri[e], tri[(e + 1) % 3]) == (a, b))
+                .unwrap_or(0);
+            let (x, y, z) = (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]);
+            tris[t] = [x, m, z];
+            tris.push([m, y, z]);
+            touched.push(true);
+            changed.extend([t, tris.len() - 1]);
+        }
+    }
+    changed
 }

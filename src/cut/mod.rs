@@ -41,7 +41,7 @@ pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
 use crate::surface::tree::sorted_overlap;
-use crate::surface::{CellNode, Forest, UnionFind};
+use crate::surface::{Aabb, CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 use knife::{Kind, PreparedKnife, SideFn};
 
@@ -88,6 +88,9 @@ pub struct CutStats {
     pub loops_capped: usize,
     /// Cut curves left open (not capped).
     pub curves_open: usize,
+    /// Rounds of sphere-cap refinement where cap triangles crossed the
+    /// surface (a surface meeting the sphere at a grazing angle).
+    pub cap_repair_rounds: usize,
     /// Wall time of locating crossed triangles and cut points, seconds.
     pub locate_seconds: f64,
     /// Wall time of splitting, regrouping and capping, seconds.
@@ -203,6 +206,7 @@ impl CutStats {
         a.cut_vertices += b.cut_vertices;
         a.loops_capped += b.loops_capped;
         a.curves_open += b.curves_open;
+        a.cap_repair_rounds += b.cap_repair_rounds;
         a.locate_seconds += b.locate_seconds;
         a.assemble_seconds += b.assemble_seconds;
     }
@@ -1132,7 +1136,19 @@ fn split_analytic(
             loops.iter_mut().for_each(|lp| lp.reverse());
         }
         if !loops.is_empty() {
-            cap_tris = make_caps(&loops, &mut points, n_v, k)?;
+            let surface = CutSurface {
+                mesh,
+                located,
+                subs: &subs,
+            };
+            cap_tris = make_caps(
+                &loops,
+                &mut points,
+                n_v,
+                k,
+                Some(&surface),
+                &mut stats.cap_repair_rounds,
+            )?;
         }
         if inward {
             cap_tris.iter_mut().for_each(|t| t.swap(1, 2));
@@ -1146,13 +1162,167 @@ fn split_analytic(
     })
 }
 
+/// Sphere-cap refinement rounds at most (each bisects one interior edge of
+/// every cap triangle that crosses the surface).
+const CAP_REPAIR_ROUNDS: usize = 16;
+
+/// The cut surface (unsplit triangles and sub-triangles) that a sphere
+/// cap must not cross, for [`cap::repair_on_sphere`]. Vertex ids as in
+/// [`Sub`], cut and cap points in `points`; a cut at a mesh vertex is that
+/// vertex, as in the pieces.
+struct CutSurface<'a> {
+    mesh: &'a TriMesh,
+    located: &'a Located,
+    subs: &'a [Vec<Sub>],
+}
+
+impl CutSurface<'_> {
+    fn canon(&self, v: u32) -> u32 {
+        let n_v = self.mesh.positions.len() as u32;
+        if v >= n_v
+            && let Some(&(a, b)) = self.located.edges.get((v - n_v) as usize)
+            && a == b
+        {
+            return a;
+        }
+        v
+    }
+
+    fn at(&self, v: u32, points: &[Vec3]) -> Vec3 {
+        let n_v = self.mesh.positions.len() as u32;
+        if v < n_v {
+            self.mesh.positions[v as usize]
+        } else {
+            points[(v - n_v) as usize]
+        }
+    }
+
+    fn tri_box(&self, t: &[u32; 3], points: &[Vec3]) -> Aabb {
+        let [a, b, c] = t.map(|v| self.at(v, points));
+        Aabb::triangle(a, b, c)
+    }
+
+    /// The surface triangles whose boxes meet `bounds`.
+    fn near(&self, bounds: &Aabb, points: &[Vec3]) -> Vec<[u32; 3]> {
+        let mut tris: Vec<[u32; 3]> = self
+            .mesh
+            .triangles
+            .par_iter()
+            .enumerate()
+            .filter(|(t, tri)| {
+                self.tri_box(tri, points).overlaps(bounds)
+                    && self.located.triangles.binary_search(&(*t as u32)).is_err()
+            })
+            .map(|(_, tri)| *tri)
+            .collect();
+        tris.extend(
+            self.subs
+                .iter()
+                .flatten()
+                .map(|sub| sub.v.map(|v| self.canon(v)))
+                .filter(|v| self.tri_box(v, points).overlaps(bounds)),
+        );
+        tris
+    }
+
+    /// Per cap triangle `cap[check[k]]` the number of surface and cap
+    /// triangles it meets beyond their shared vertices, by the exact test
+    /// of [`crate::mesh::intersections_where`] on one small mesh of the
+    /// checked triangles and the triangles near them.
+    fn crossings(&self, cap: &[[u32; 3]], check: &[usize], points: &[Vec3]) -> Vec<u32> {
+        let bounds = check
+            .iter()
+            .fold(Aabb::EMPTY, |b, &t| b.union(self.tri_box(&cap[t], points)));
+        let mut tris: Vec<[u32; 3]> = check
+            .iter()
+            .map(|&t| cap[t].map(|v| self.canon(v)))
+            .collect();
+        let mut is_checked = vec![false; cap.len()];
+        check.iter().for_each(|&t| is_checked[t] = true);
+        tris.extend(self.near(&bounds, points));
+        tris.extend(
+            cap.iter()
+                .zip(&is_checked)
+                .filter(|(t, c)| !**c && self.tri_box(t, points).overlaps(&bounds))
+                .map(|(t, _)| t.map(|v| self.canon(v))),
+        );
+        let mut local: HashMap<u32, u32> = HashMap::new();
+        let mut positions = Vec::new();
+        for v in tris.iter_mut().flatten() {
+            *v = *local.entry(*v).or_insert_with(|| {
+                positions.push(self.at(*v, points));
+                positions.len() as u32 - 1
+            });
+        }
+        let small = TriMesh {
+            positions,
+            triangles: tris,
+            scalars: Vec::new(),
+        };
+        let n = check.len();
+        let mut count = vec![0u32; n];
+        for [i, j] in crate::mesh::intersections_where(&small, |i, _| i < n).pairs {
+            for t in [i, j] {
+                if (t as usize) < n {
+                    count[t as usize] += 1;
+                }
+            }
+        }
+        count
+    }
+}
+
+/// [`cap::CapCheck`] for a sphere cap under construction: cap corner `i`
+/// is loop point `ids[i]` below `ids.len()`, else a new point appended to
+/// `points` after its first `first_new`.
+struct SphereCapCheck<'a> {
+    surface: &'a CutSurface<'a>,
+    points: &'a mut Vec<Vec3>,
+    ids: &'a [u32],
+    first_new: usize,
+    n_v: u32,
+}
+
+impl SphereCapCheck<'_> {
+    fn global(&self, t: &[usize; 3]) -> [u32; 3] {
+        let n_loop = self.ids.len();
+        t.map(|i| {
+            if i < n_loop {
+                self.ids[i]
+            } else {
+                self.n_v + (self.first_new + i - n_loop) as u32
+            }
+        })
+    }
+
+    /// Stores the new points (f32, as the pieces will hold them).
+    fn place(&mut self, pos: &[DVec3]) {
+        self.points.truncate(self.first_new);
+        self.points
+            .extend(pos[self.ids.len()..].iter().map(|q| q.as_vec3()));
+    }
+}
+
+impl cap::CapCheck for SphereCapCheck<'_> {
+    fn crossings(&mut self, tris: &[[usize; 3]], check: &[usize], pos: &[DVec3]) -> Vec<u32> {
+        self.place(pos);
+        let cap: Vec<[u32; 3]> = tris.iter().map(|t| self.global(t)).collect();
+        self.surface.crossings(&cap, check, self.points)
+    }
+}
+
 /// Cap triangles (vertex ids `n_v + point id`, oriented for the negative
 /// side); a sphere cap's own vertices are appended to `points`.
+///
+/// A sphere cap is repaired against `surface` (required for a sphere) for
+/// at most [`CAP_REPAIR_ROUNDS`] rounds (counted in `rounds`).
 fn make_caps(
     loops: &[Vec<u32>],
     points: &mut Vec<Vec3>,
     n_v: u32,
     k: &PreparedKnife<'_>,
+    surface: Option<&CutSurface<'_>>,
+    rounds: &mut usize,
 ) -> Result<Vec<[u32; 3]>> {
     let pos = |v: u32| points[(v - n_v) as usize].as_dvec3();
     // Loop k's points are `ids[start_k..start_k + len_k]`, in loop order.
@@ -1256,21 +1426,29 @@ fn make_caps(
             cap::sphere_max_edge(*r),
             max_triangles,
         );
-        let first_new = points.len() as u32;
-        points.extend(pos3[ids.len()..].iter().map(|q| q.as_vec3()));
-        let n_loop = ids.len();
-        return Ok(tris
-            .into_iter()
-            .map(|t| {
-                t.map(|i| {
-                    if i < n_loop {
-                        ids[i]
-                    } else {
-                        n_v + first_new + (i - n_loop) as u32
-                    }
-                })
-            })
-            .collect());
+        let Some(surface) = surface else {
+            return Err(Error::InvalidInput(
+                "cap: a sphere cap needs the cut surface".into(),
+            ));
+        };
+        let mut check = SphereCapCheck {
+            surface,
+            first_new: points.len(),
+            points,
+            ids: &ids,
+            n_v,
+        };
+        *rounds += cap::repair_on_sphere(
+            &mut tris,
+            &mut pts,
+            &mut pos3,
+            &projection,
+            max_triangles,
+            CAP_REPAIR_ROUNDS,
+            &mut check,
+        );
+        check.place(&pos3);
+        return Ok(tris.iter().map(|t| check.global(t)).collect());
     }
     Ok(tris.into_iter().map(|t| t.map(|i| ids[i])).collect())
 }

@@ -35,6 +35,16 @@ pub struct SelfIntersections {
 
 /// All intersecting triangle pairs of `mesh`, exactly (see module docs).
 pub fn self_intersections(mesh: &TriMesh) -> SelfIntersections {
+    intersections_where(mesh, |_, _| true)
+}
+
+/// [`self_intersections`] restricted to the pairs `keep(i, j)` (`i < j`)
+/// accepts, decided before any exact test (e.g. one triangle from a part
+/// being checked against the rest).
+pub fn intersections_where(
+    mesh: &TriMesh,
+    keep: impl Fn(usize, usize) -> bool + Sync,
+) -> SelfIntersections {
     let p: Vec<[f64; 3]> = mesh
         .positions
         .iter()
@@ -61,7 +71,9 @@ pub fn self_intersections(mesh: &TriMesh) -> SelfIntersections {
             let (bi, ti, pi) = (tri_box(i), mesh.triangles[i], planes[i].expect("filtered"));
             candidates.clear();
             forest.overlapping(&bi, candidates);
-            let later = candidates.iter().filter(|&&j| j as usize > i);
+            let later = candidates
+                .iter()
+                .filter(|&&j| j as usize > i && keep(i, j as usize));
             later
                 .filter_map(|&j| {
                     let pj = planes[j as usize]?;

@@ -15,7 +15,7 @@ pub mod topology;
 pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
 pub use disjoint_sets::DisjointSets;
-pub use intersect::{SelfIntersections, self_intersections};
+pub use intersect::{SelfIntersections, intersections_where, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Bounds, Component, Orientation, Topology};
 

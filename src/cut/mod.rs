@@ -1146,7 +1146,7 @@ fn split_analytic(
                 &mut points,
                 n_v,
                 k,
-                Some(&surface),
+                &surface,
                 &mut stats.cap_repair_rounds,
             )?;
         }
@@ -1314,14 +1314,13 @@ impl cap::CapCheck for SphereCapCheck<'_> {
 /// Cap triangles (vertex ids `n_v + point id`, oriented for the negative
 /// side); a sphere cap's own vertices are appended to `points`.
 ///
-/// A sphere cap is repaired against `surface` (required for a sphere) for
-/// at most [`CAP_REPAIR_ROUNDS`] rounds (counted in `rounds`).
+/// A sphere cap is repaired against `surface` for at most [`CAP_REPAIR_ROUNDS`] rounds (counted in `rounds`).
 fn make_caps(
     loops: &[Vec<u32>],
     points: &mut Vec<Vec3>,
     n_v: u32,
     k: &PreparedKnife<'_>,
-    surface: Option<&CutSurface<'_>>,
+    surface: &CutSurface<'_>,
     rounds: &mut usize,
 ) -> Result<Vec<[u32; 3]>> {
     let pos = |v: u32| points[(v - n_v) as usize].as_dvec3();
@@ -1426,11 +1425,6 @@ fn make_caps(
             cap::sphere_max_edge(*r),
             max_triangles,
         );
-        let Some(surface) = surface else {
-            return Err(Error::InvalidInput(
-                "cap: a sphere cap needs the cut surface".into(),
-            ));
-        };
         let mut check = SphereCapCheck {
             surface,
             first_new: points.len(),

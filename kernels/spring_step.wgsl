@@ -13,8 +13,9 @@
 // absolute coordinates (0.1 m), so soft sliding modes settle ~10–100× closer
 // to the exact equilibrium.
 // Buffers:
-//   params:    n_free; use_forces (0/1); dt = Δt; damping = γ; gain unused
-//   materials: rows[16] = (c1, c2 − c1, knee strain, 0) per material
+//   params:    n_free; use_forces (0/1); dt = Δt; damping = γ; gain and
+//              isotropy unused
+//   materials: rows[16] = (c1, c2 − c1, knee strain, c_max) per material
 //   offsets:   #free + 1 u32, CSR row starts into entries
 //   entries:   #entries vec2<u32>: x = neighbour id | material << 28,
 //              y = bits of the rest length l_ij (f32); rows sorted by id
@@ -42,6 +43,7 @@ struct Params {
     dt: f32,
     damping: f32,
     gain: f32,
+    isotropy: f32,
 }
 
 const WG_SIZE: u32 = 256u;

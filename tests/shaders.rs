@@ -316,6 +316,7 @@ fn host(kernel: Kernel) -> Host {
                     dt: f32::from_bits(0xD3),
                     damping: f32::from_bits(0xD4),
                     gain: f32::from_bits(0xD5),
+                    isotropy: f32::from_bits(0xD6),
                 }),
                 if kernel == Kernel::SpringStep {
                     vec![
@@ -324,6 +325,7 @@ fn host(kernel: Kernel) -> Host {
                         ("dt", 0xD3),
                         ("damping", 0xD4),
                         ("gain", 0xD5),
+                        ("isotropy", 0xD6),
                     ]
                 } else {
                     vec![
@@ -332,6 +334,7 @@ fn host(kernel: Kernel) -> Host {
                         ("h", 0xD3),
                         ("momentum", 0xD4),
                         ("gain", 0xD5),
+                        ("isotropy", 0xD6),
                     ]
                 },
             ),

@@ -626,17 +626,20 @@ fn mirror_tracks_oracle() {
     assert!(stretched);
 }
 
-/// g_i of eq. 4.4 for node `i`, one spring at a time in CSR order: the
-/// kernels' loop written out plainly (the mirror runs four nodes as SIMD
-/// lanes and must give these bits exactly).
+/// g_i of eq. 4.4 for node `i` and the `spring_chebyshev` block B_i
+/// (`[b00, b11, b22, b01, b02, b12]`, η = `eta`), one spring at a time in
+/// CSR order: the kernels' loop written out plainly (the mirror runs four
+/// nodes as SIMD lanes and must give these bits exactly).
 fn scalar_gather(
     net: &SpringNetwork,
     pos: &[[f32; 4]],
     mats: &[[f32; 4]; 16],
     i: usize,
-) -> [f32; 3] {
+    eta: f32,
+) -> ([f32; 3], [f32; 6]) {
     let (x0, u) = (net.rest[i], pos[i]);
     let mut g = [0.0f32; 3];
+    let (mut b, mut iso) = ([0.0f32; 6], 0.0f32);
     let (s, e) = (net.csr.offsets[i] as usize, net.csr.offsets[i + 1] as usize);
     for &en in &net.csr.entries[s..e] {
         let j = (en[0] & 0x0fff_ffff) as usize;
@@ -650,9 +653,23 @@ fn scalar_gather(
             for c in 0..3 {
                 g[c] += s * r[c];
             }
+            let across = (eta * m[3]).max(s);
+            let q = (m[3] - across) / (len * len);
+            for (c, (x, y)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+                .into_iter()
+                .enumerate()
+            {
+                b[c] += q * r[x] * r[y];
+            }
+            iso += across;
+        } else {
+            iso += m[3];
         }
     }
-    g
+    for bc in &mut b[..3] {
+        *bc += iso;
+    }
+    (g, b)
 }
 
 /// The step mirrors equal the plain per-node loop bit for bit, for free
@@ -723,6 +740,7 @@ fn mirror_lanes_equal_the_scalar_loop() {
                 dt: 0.05,
                 damping: if chebyshev { 0.9 } else { 0.5 },
                 gain: 1.7,
+                isotropy: 0.1,
                 materials: mats,
             };
             let (mut out, mut v_out) = (pos.clone(), vel.clone());
@@ -736,12 +754,14 @@ fn mirror_lanes_equal_the_scalar_loop() {
             );
             let mut loaded = false;
             for i in 0..n_free {
-                let g = scalar_gather(&net, &pos, &mats, i);
+                let (g, b) = scalar_gather(&net, &pos, &mats, i, params.isotropy);
+                let d: [f32; 3] = std::array::from_fn(|c| forces[i][c] - g[c]);
+                let r = cpu::block_solve(b, d);
                 loaded |= g.iter().any(|&c| c != 0.0);
                 for c in 0..3 {
                     let v = vel[i][c];
                     let raw = if chebyshev {
-                        params.damping * v + params.gain * ((forces[i][c] - g[c]) * pos[i][3])
+                        params.damping * v + params.gain * r[c]
                     } else {
                         v + params.dt * ((forces[i][c] - params.damping * v - g[c]) * pos[i][3])
                     };

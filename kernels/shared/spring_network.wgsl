@@ -4,7 +4,7 @@
 // Mirror: tissue::cpu (gather, flush; shared by spring_step and
 // spring_chebyshev there too).
 
-// One row per material: (c1, c2 − c1, knee strain, 0).
+// One row per material: (c1, c2 − c1, knee strain, c_max = max(c1, c2)).
 struct Materials {
     rows: array<vec4<f32>, 16>,
 }
@@ -21,25 +21,37 @@ const VELOCITY_FLUSH: f32 = 1e-30;
 @group(0) @binding(7) var<storage, read_write> pos_out: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> vel: array<vec4<f32>>;
 
+// Spring k of a row: r_ij = (x_rest,i − x_rest,j) + (u_i − u_j) (both
+// differences are small, so no absolute-coordinate rounding), its length,
+// the biphasic force f(e) = c1 e + (c2 − c1) max(e − knee l, 0) of its
+// extension e = |r_ij| − l_ij (eq. 4.4), and c_max of its material.
+struct SpringTerm {
+    r: vec3<f32>,
+    len: f32,
+    f: f32,
+    c_max: f32,
+}
+
+fn spring_term(k: u32, x0: vec3<f32>, u: vec3<f32>) -> SpringTerm {
+    let e = entries[k];
+    let m = materials.rows[e.x >> 28u];
+    let l = bitcast<f32>(e.y);
+    let j = e.x & INDEX_MASK;
+    let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
+    let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
+    let ext = len - l;
+    return SpringTerm(r, len, m.x * ext + m.y * max(ext - m.z * l, 0.0), m.w);
+}
+
 // g_i = Σ_j f(|r_ij| − l_ij) / |r_ij| · r_ij (eq. 4.4) over node ix's CSR
-// row in stored order, with f(e) = c1 e + (c2 − c1) max(e − knee l, 0) and
-// r_ij = (x_rest,i − x_rest,j) + (u_i − u_j): both differences are small, so
-// no absolute-coordinate rounding.
+// row in stored order; zero-length springs add nothing.
 fn spring_force(ix: u32, x0: vec3<f32>, u: vec3<f32>) -> vec3<f32> {
     var g = vec3<f32>(0.0);
     let end = offsets[ix + 1u];
     for (var k = offsets[ix]; k < end; k++) {
-        let e = entries[k];
-        let m = materials.rows[e.x >> 28u];
-        let l = bitcast<f32>(e.y);
-        let j = e.x & INDEX_MASK;
-        let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
-        let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
-        if len > 0.0 {
-            let ext = len - l;
-            let f = m.x * ext + m.y * max(ext - m.z * l, 0.0);
-            let s = f / len;
-            g = g + s * r;
+        let t = spring_term(k, x0, u);
+        if t.len > 0.0 {
+            g = g + (t.f / t.len) * t.r;
         }
     }
     return g;

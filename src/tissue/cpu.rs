@@ -9,7 +9,9 @@
 //! invocations side by side: the per-spring sqrt and division become
 //! vector instructions, each lane still computes its own node's sum in its
 //! own CSR order, and the results stay bit for bit those of the scalar loop
-//! (`tests/parity/spring_step.rs` finds no difference on lavapipe).
+//! (`tests/tissue.rs`). Lavapipe gives `spring_step` bit for bit;
+//! `spring_chebyshev` differs from it by a few ulp per step
+//! (`tests/parity/spring_step.rs`).
 
 use glam::{Mat4, Vec4};
 use rayon::prelude::*;
@@ -48,7 +50,10 @@ pub struct StepParams {
     pub damping: f32,
     /// `spring_chebyshev` only: gain α/h on the preconditioned residual.
     pub gain: f32,
-    /// Material table rows `[c1, c2 − c1, knee, 0]`.
+    /// `spring_chebyshev` only: η, the least stiffness across a spring in
+    /// the preconditioner blocks as a share of c_max.
+    pub isotropy: f32,
+    /// Material table rows `[c1, c2 − c1, knee, c_max]`.
     pub materials: [[f32; 4]; 16],
 }
 
@@ -82,18 +87,21 @@ const LANES: usize = 4;
 /// r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs exactly the
 /// float operations of one kernel invocation (vector sqrt, division and
 /// arithmetic round like scalar ones, and nothing is contracted to FMA).
-/// A lane whose row has ended reads its own node (r = 0, |r| = 0: nothing
-/// added, as the kernel skips zero-length springs). Returns `[gx, gy, gz]`
-/// by lane.
+/// A lane whose row has ended reads its own node with an all-zero material
+/// (r = 0, |r| = 0, c_max = 0: nothing added). Returns `[gx, gy, gz]`
+/// by lane and, with `BLOCKS`, the preconditioner blocks of
+/// `spring_chebyshev.wgsl` as `[b00, b11, b22, b01, b02, b12]` by lane
+/// (η = `isotropy`; zeros without `BLOCKS`).
 #[inline(always)]
-fn gather_group(
+fn gather_group<const BLOCKS: bool>(
     i0: usize,
     lanes: usize,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     materials: &[[f32; 4]; 16],
-) -> [Vec4; 3] {
+    isotropy: f32,
+) -> ([Vec4; 3], [Vec4; 6]) {
     // One length for both node arrays: one bounds check per neighbour.
     let n = rest.len().min(pos_in.len());
     let (rest, pos_in, entries) = (&rest[..n], &pos_in[..n], &csr.entries[..]);
@@ -109,22 +117,26 @@ fn gather_group(
     let u = node.map(|i| Vec4::from_array(pos_in[i]));
     let k_end = count.iter().copied().max().unwrap_or(0);
     let (mut gx, mut gy, mut gz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
+    let (mut blocks, mut iso) = ([Vec4::ZERO; 6], Vec4::ZERO);
+    let eta = Vec4::splat(isotropy);
     for k in 0..k_end {
         let mut r = [Vec4::ZERO; LANES];
         let mut row = [Vec4::ZERO; LANES];
         let mut l = [0.0f32; LANES];
         for t in 0..LANES {
+            // A lane past its row: its own node and an all-zero material.
             let (j, m, lj) = if k < count[t] {
-                SpringCsr::unpack(entries[start[t] + k])
+                let (j, m, lj) = SpringCsr::unpack(entries[start[t] + k]);
+                (j, Vec4::from_array(materials[m]), lj)
             } else {
-                (node[t], 0, 0.0)
+                (node[t], Vec4::ZERO, 0.0)
             };
             r[t] = (x0[t] - Vec4::from_array(rest[j])) + (u[t] - Vec4::from_array(pos_in[j]));
-            row[t] = Vec4::from_array(materials[m]);
+            row[t] = m;
             l[t] = lj;
         }
         // Lanes as vectors: r by component, the material rows as
-        // (c1, c2 − c1, knee) by lane.
+        // (c1, c2 − c1, knee, c_max) by lane.
         let r = Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose();
         let mat = Mat4::from_cols(row[0], row[1], row[2], row[3]).transpose();
         let l = Vec4::from_array(l);
@@ -140,8 +152,25 @@ fn gather_group(
         gx += Vec4::select(on, s * rx, Vec4::ZERO);
         gy += Vec4::select(on, s * ry, Vec4::ZERO);
         gz += Vec4::select(on, s * rz, Vec4::ZERO);
+        if BLOCKS {
+            let c_max = mat.w_axis;
+            let across = (eta * c_max).max(s);
+            // q = 0 where the kernel skips the spring: its terms add ±0,
+            // which leaves sums that start at +0 unchanged.
+            let q = Vec4::select(on, (c_max - across) / (len * len), Vec4::ZERO);
+            let (qx, qy, qz) = (q * rx, q * ry, q * rz);
+            let terms = [qx * rx, qy * ry, qz * rz, qx * ry, qx * rz, qy * rz];
+            for (b, term) in blocks.iter_mut().zip(terms) {
+                *b += term;
+            }
+            // A spring of length 0 adds c_max I (a lane past its row, 0).
+            iso += Vec4::select(on, across, c_max);
+        }
     }
-    [gx, gy, gz]
+    for b in &mut blocks[..3] {
+        *b += iso;
+    }
+    ([gx, gy, gz], blocks)
 }
 
 #[inline(always)]
@@ -149,11 +178,11 @@ fn flush(v: f32) -> f32 {
     if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
 }
 
-/// Runs `update(u, w, g, v, f) -> (u', v')` over the free nodes, in groups
-/// of [`LANES`] nodes.
+/// Runs `update(u, w, g, b, v, f) -> (u', v')` over the free nodes, in
+/// groups of [`LANES`] nodes (b: the node's block from [`gather_group`]).
 #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
 #[inline(always)]
-fn for_free_nodes(
+fn for_free_nodes<const BLOCKS: bool>(
     p: &StepParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
@@ -161,7 +190,8 @@ fn for_free_nodes(
     pos_in: &[[f32; 4]],
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
-    update: impl Fn([f32; 3], f32, [f32; 3], [f32; 3], [f32; 3]) -> ([f32; 3], [f32; 3]) + Sync,
+    update: impl Fn([f32; 3], f32, [f32; 3], [f32; 6], [f32; 3], [f32; 3]) -> ([f32; 3], [f32; 3])
+    + Sync,
 ) {
     let n = p.n_free as usize;
     let chunk = grain(n);
@@ -172,7 +202,15 @@ fn for_free_nodes(
         .for_each(|(c, (po, ve))| {
             for (b, (po, ve)) in po.chunks_mut(LANES).zip(ve.chunks_mut(LANES)).enumerate() {
                 let i0 = c * chunk + b * LANES;
-                let [gx, gy, gz] = gather_group(i0, po.len(), csr, rest, pos_in, &p.materials);
+                let ([gx, gy, gz], blocks) = gather_group::<BLOCKS>(
+                    i0,
+                    po.len(),
+                    csr,
+                    rest,
+                    pos_in,
+                    &p.materials,
+                    p.isotropy,
+                );
                 for (t, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
                     let i = i0 + t;
                     let p_i = pos_in[i];
@@ -186,6 +224,7 @@ fn for_free_nodes(
                         [p_i[0], p_i[1], p_i[2]],
                         p_i[3],
                         [gx[t], gy[t], gz[t]],
+                        blocks.map(|b| b[t]),
                         [v[0], v[1], v[2]],
                         f,
                     );
@@ -213,7 +252,7 @@ pub fn spring_step(
     vel: &mut [[f32; 4]],
 ) {
     let (dt, gamma) = (p.dt, p.damping);
-    for_free_nodes(
+    for_free_nodes::<false>(
         p,
         csr,
         rest,
@@ -221,7 +260,7 @@ pub fn spring_step(
         pos_in,
         pos_out,
         vel,
-        |u, w, g, v, f| {
+        |u, w, g, _, v, f| {
             let mut u2 = [0.0f32; 3];
             let mut v2 = [0.0f32; 3];
             for k in 0..3 {
@@ -236,9 +275,10 @@ pub fn spring_step(
 }
 
 /// Mirror of `spring_chebyshev.wgsl`: one stationary Chebyshev (second-order
-/// Richardson) step on the Jacobi-preconditioned equilibrium equations.
-/// Same buffers as [`spring_step`], but `w = 1 / D_i` (the nodal stiffness)
-/// and `v` holds the last update divided by h.
+/// Richardson) step on the block-Jacobi-preconditioned equilibrium
+/// equations, the 3 × 3 block of each node built at the current state
+/// (η = `p.isotropy`). Same buffers as [`spring_step`] (the w lane is not
+/// read); `v` holds the last update divided by h.
 pub fn spring_chebyshev(
     p: &StepParams,
     csr: &SpringCsr,
@@ -249,7 +289,7 @@ pub fn spring_chebyshev(
     vel: &mut [[f32; 4]],
 ) {
     let (h, beta, gain) = (p.dt, p.damping, p.gain);
-    for_free_nodes(
+    for_free_nodes::<true>(
         p,
         csr,
         rest,
@@ -257,17 +297,41 @@ pub fn spring_chebyshev(
         pos_in,
         pos_out,
         vel,
-        |u, w, g, v, f| {
+        |u, _, g, b, v, f| {
+            let r = block_solve(b, [f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
             let mut u2 = [0.0f32; 3];
             let mut v2 = [0.0f32; 3];
             for k in 0..3 {
-                let r = (f[k] - g[k]) * w;
-                v2[k] = flush(beta * v[k] + gain * r);
+                v2[k] = flush(beta * v[k] + gain * r[k]);
                 u2[k] = u[k] + h * v2[k];
             }
             (u2, v2)
         },
     );
+}
+
+/// B⁻¹ d for the block `b = [b00, b11, b22, b01, b02, b12]` by cofactors of
+/// B / tr B, as in `spring_chebyshev.wgsl`; 0 when tr B = 0 (no springs).
+#[inline(always)]
+pub fn block_solve(b: [f32; 6], d: [f32; 3]) -> [f32; 3] {
+    let tr = b[0] + b[1] + b[2];
+    if !(tr > 0.0) {
+        return [0.0; 3];
+    }
+    let [a0, a1, a2, o0, o1, o2] = b.map(|x| x / tr);
+    let c00 = a1 * a2 - o2 * o2;
+    let c01 = o1 * o2 - o0 * a2;
+    let c02 = o0 * o2 - o1 * a1;
+    let c11 = a0 * a2 - o1 * o1;
+    let c12 = o0 * o1 - a0 * o2;
+    let c22 = a0 * a1 - o0 * o0;
+    let det = a0 * c00 + o0 * c01 + o1 * c02;
+    let w = det * tr;
+    [
+        (c00 * d[0] + c01 * d[1] + c02 * d[2]) / w,
+        (c01 * d[0] + c11 * d[1] + c12 * d[2]) / w,
+        (c02 * d[0] + c12 * d[1] + c22 * d[2]) / w,
+    ]
 }
 
 /// Order-preserving key of a non-negative float: its bits without the sign

@@ -55,6 +55,7 @@ pub struct Params {
     pub dt: f32,
     pub damping: f32,
     pub gain: f32,
+    pub isotropy: f32,
 }
 
 /// `Materials` of the step kernels: one `(c1, c2 − c1, knee, 0)` row per
@@ -72,6 +73,7 @@ impl From<&StepParams> for Params {
             dt: p.dt,
             damping: p.damping,
             gain: p.gain,
+            isotropy: p.isotropy,
         }
     }
 }
@@ -503,6 +505,7 @@ pub fn tissue_reduce_max(
         dt: 0.0,
         damping: 0.0,
         gain: 0.0,
+        isotropy: 0.0,
         materials: [[0.0; 4]; 16],
     };
     let csr = SpringCsr {

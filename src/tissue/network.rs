@@ -83,9 +83,9 @@ impl Material {
         self.c1.max(self.c2)
     }
 
-    /// `[c1, c2 − c1, knee, 0]`: the kernels' material table row.
+    /// `[c1, c2 − c1, knee, c_max]`: the kernels' material table row.
     pub fn table_row(&self) -> [f32; 4] {
-        [self.c1, self.c2 - self.c1, self.knee, 0.0]
+        [self.c1, self.c2 - self.c1, self.knee, self.c_max()]
     }
 
     fn scaled(&self, s: f32) -> Self {
@@ -249,13 +249,13 @@ impl SpringCsr {
     }
 }
 
-/// Spectral bounds of the Jacobi-preconditioned stiffness at rest, for the
-/// Chebyshev solver (see `chebyshev.rs`).
+/// Spectral bounds of the block-Jacobi-preconditioned stiffness B⁻¹K, for
+/// the Chebyshev solver (see `chebyshev.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Spectrum {
-    /// Lower estimate of the smallest eigenvalue of D⁻¹K.
+    /// Lower estimate of the smallest eigenvalue of B⁻¹K at rest.
     pub lambda_min: f64,
-    /// Upper bound of the largest eigenvalue of D⁻¹K (Gershgorin: 2).
+    /// Upper bound of the largest eigenvalue of B⁻¹K in every state: 2.
     pub lambda_max: f64,
 }
 
@@ -803,7 +803,7 @@ impl SpringNetwork {
     }
 
     /// Σ_j c_max,ij over the springs of each free node (the largest nodal
-    /// stiffness; also the Jacobi diagonal of the Chebyshev solver).
+    /// stiffness).
     pub fn nodal_stiffness(&self) -> Vec<f32> {
         let cmax: Vec<f32> = self.materials.iter().map(Material::c_max).collect();
         (0..self.n_free)
@@ -845,7 +845,7 @@ impl SpringNetwork {
             + self.csr.entries.len() as u64 * 8
     }
 
-    /// Spectral bounds of D⁻¹K at rest, computed once (Lanczos, see
+    /// Spectral bounds of B⁻¹K, computed once (Lanczos, see
     /// `chebyshev::estimate_spectrum`) and cached.
     pub fn spectrum(&self) -> Spectrum {
         *self

@@ -25,7 +25,7 @@ use std::time::Instant;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::chebyshev::ChebyshevCoefficients;
+use super::chebyshev::{self, ChebyshevCoefficients};
 use super::cpu::{self, StepParams};
 use super::explicit;
 use super::gpu::GpuStepper;
@@ -46,7 +46,7 @@ pub enum Solver {
     /// The seed's damped semi-implicit Euler (eq. 4.4–4.7): faithful dynamics.
     #[default]
     Explicit,
-    /// Stationary Chebyshev acceleration of Jacobi relaxation: the same
+    /// Stationary Chebyshev acceleration of block-Jacobi relaxation: the same
     /// static equilibrium in far fewer passes (see `chebyshev.rs`).
     Chebyshev,
 }
@@ -320,6 +320,7 @@ impl Setup {
                         dt,
                         damping: net.params.damping,
                         gain: 0.0,
+                        isotropy: 0.0,
                         materials,
                     },
                     None,
@@ -327,9 +328,6 @@ impl Setup {
             }
             Solver::Chebyshev => {
                 let coef = ChebyshevCoefficients::new(net.spectrum());
-                for (p, d) in positions.iter_mut().zip(net.nodal_stiffness()) {
-                    p[3] = if d > 0.0 { 1.0 / d } else { 0.0 };
-                }
                 (
                     StepParams {
                         n_free,
@@ -337,6 +335,7 @@ impl Setup {
                         dt,
                         damping: coef.momentum as f32,
                         gain: (coef.step / dt as f64) as f32,
+                        isotropy: chebyshev::BLOCK_ISOTROPY,
                         materials,
                     },
                     Some(coef),

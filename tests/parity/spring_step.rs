@@ -12,8 +12,8 @@ use chisel::parity::{Tolerance, compare_exact, compare_vec, find_sentinel};
 use chisel::tissue::cpu::{self, StepParams};
 use chisel::tissue::phantom::FRAN_CHIN_ADVANCE_TOML;
 use chisel::tissue::{
-    Fragments, Material, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Stiffness,
-    gpu as tissue_gpu, iterate, relax,
+    Fragments, Material, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status,
+    Stiffness, gpu as tissue_gpu, iterate, relax,
 };
 use glam::Vec3;
 
@@ -59,10 +59,10 @@ pub fn grid_patch(nx: usize, ny: usize) -> chisel::TriMesh {
     })
 }
 
-/// The bone layer with its upper third moved by 3 % of the network size
+/// The bone layer with its upper third moved by `share` of the network size
 /// along +x+z: a surgical increment that sets the whole network moving.
-pub fn moved_bone(net: &SpringNetwork) -> Vec<[f32; 4]> {
-    let d = 0.03 * net.diagonal();
+pub fn moved_bone(net: &SpringNetwork, share: f32) -> Vec<[f32; 4]> {
+    let d = share * net.diagonal();
     let bone = net.bone_rest();
     let ys: Vec<f32> = bone.iter().map(|b| b[1]).collect();
     let cut = ys.iter().copied().fold(f32::NEG_INFINITY, f32::max)
@@ -83,9 +83,25 @@ pub fn moved_bone(net: &SpringNetwork) -> Vec<[f32; 4]> {
 /// Positions after `n` iterations on both backends agree within the
 /// derived bound; a corrupted GPU coordinate is caught (negative control);
 /// the NaN-prefilled second position buffer leaves no sentinel behind.
+///
+/// The bone moves by 3 % of the network size for the explicit scheme (the
+/// kernel is bit-exact with its mirror on lavapipe) and by 1.5 % (about one
+/// fran_cut grid spacing) for Chebyshev. Its kernel differs from the mirror
+/// by a few ulp per step on lavapipe (≤ 1e-6 of |v|; which operation
+/// rounds differently is not identified), and after a 3 % jump springs at
+/// the bone invert: the transient passes through unstable (buckling)
+/// states, where such differences grow ~1.2× per iteration (fran_cut:
+/// 1e-7 after 10 iterations, 6e-4 after 50) and no rounding bound can hold,
+/// although both settle to the same equilibrium (`check_stop_status`). At
+/// 1.5 % it stays below 3e-7 on fran_cut and 3e-5 on the grid (bound
+/// 7e-3) throughout.
 pub fn check_iterations(gpu: &Gpu, solver: Solver, n: u32) {
+    let share = match solver {
+        Solver::Explicit => 0.03,
+        Solver::Chebyshev => 0.015,
+    };
     for (name, net) in networks() {
-        let bone = moved_bone(&net);
+        let bone = moved_bone(&net, share);
         let opts = RelaxOptions {
             solver,
             ..RelaxOptions::default()
@@ -162,6 +178,10 @@ pub fn check_stop_status(gpu: &Gpu, solver: Solver) {
                 .collect()
         };
         let what = format!("{} {name} stop status", solver.name());
+        eprintln!("{what}: {:?}", summary(&a));
+        // Every increment settles (a solver that diverges on either
+        // backend fails here, even if both diverge alike).
+        assert_eq!(a.status, Status::Converged, "{what}");
         compare_exact(&what, &summary(&a), &summary(&b)).unwrap_or_else(|m| panic!("{m}"));
         let tol = cpu::position_tolerance(a.iterations as u32, net.diagonal());
         compare_vec(&what, &a.positions, &b.positions, tol).unwrap_or_else(|m| panic!("{m}"));
@@ -183,7 +203,7 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
         };
         let dt = chisel::tissue::explicit::choose_dt(&net, None, false).unwrap();
         // The kernels' state: displacements from rest.
-        let mut pos: Vec<[f32; 4]> = iterate(&net, &moved_bone(&net), &opts, 3, Backend::Cpu)
+        let mut pos: Vec<[f32; 4]> = iterate(&net, &moved_bone(&net, 0.03), &opts, 3, Backend::Cpu)
             .unwrap()
             .iter()
             .zip(&net.rest)
@@ -217,6 +237,7 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
                 0.95
             },
             gain: 2.0 / dt,
+            isotropy: chisel::tissue::chebyshev::BLOCK_ISOTROPY,
             materials,
         };
         let mut cpu_pos = pos.clone();

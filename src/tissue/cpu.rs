@@ -315,23 +315,24 @@ pub fn spring_chebyshev(
 #[inline(always)]
 pub fn block_solve(b: [f32; 6], d: [f32; 3]) -> [f32; 3] {
     let tr = b[0] + b[1] + b[2];
-    if !(tr > 0.0) {
-        return [0.0; 3];
+    if tr > 0.0 {
+        let [a0, a1, a2, o0, o1, o2] = b.map(|x| x / tr);
+        let c00 = a1 * a2 - o2 * o2;
+        let c01 = o1 * o2 - o0 * a2;
+        let c02 = o0 * o2 - o1 * a1;
+        let c11 = a0 * a2 - o1 * o1;
+        let c12 = o0 * o1 - a0 * o2;
+        let c22 = a0 * a1 - o0 * o0;
+        let det = a0 * c00 + o0 * c01 + o1 * c02;
+        let w = det * tr;
+        [
+            (c00 * d[0] + c01 * d[1] + c02 * d[2]) / w,
+            (c01 * d[0] + c11 * d[1] + c12 * d[2]) / w,
+            (c02 * d[0] + c12 * d[1] + c22 * d[2]) / w,
+        ]
+    } else {
+        [0.0; 3]
     }
-    let [a0, a1, a2, o0, o1, o2] = b.map(|x| x / tr);
-    let c00 = a1 * a2 - o2 * o2;
-    let c01 = o1 * o2 - o0 * a2;
-    let c02 = o0 * o2 - o1 * a1;
-    let c11 = a0 * a2 - o1 * o1;
-    let c12 = o0 * o1 - a0 * o2;
-    let c22 = a0 * a1 - o0 * o0;
-    let det = a0 * c00 + o0 * c01 + o1 * c02;
-    let w = det * tr;
-    [
-        (c00 * d[0] + c01 * d[1] + c02 * d[2]) / w,
-        (c01 * d[0] + c11 * d[1] + c12 * d[2]) / w,
-        (c02 * d[0] + c12 * d[1] + c22 * d[2]) / w,
-    ]
 }
 
 /// Order-preserving key of a non-negative float: its bits without the sign

@@ -678,13 +678,8 @@ fn scalar_gather(
 #[test]
 fn block_solve_inverts_the_preconditioner_block() {
     use chisel::tissue::cpu::block_solve;
-    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 40) as f64 / (1u64 << 24) as f64 - 0.5
-    };
+    let mut bits = common::xorshift(0x9e37_79b9_7f4a_7c15);
+    let mut next = move || (bits() >> 40) as f64 / (1u64 << 24) as f64 - 0.5;
     for case in 0..200 {
         let scale = 10f64.powi(case % 13 - 6);
         // B = Σ_k λ_k e_k e_kᵀ over a random orthonormal frame.
@@ -722,13 +717,8 @@ fn block_solve_inverts_the_preconditioner_block() {
 #[test]
 fn mirror_lanes_equal_the_scalar_loop() {
     use chisel::tissue::cpu::{self, StepParams, VELOCITY_FLUSH};
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut bits = common::xorshift(0x2545_f491_4f6c_dd1d);
+    let mut next = move || (bits() >> 40) as f32 / (1u64 << 24) as f32;
     let materials = [
         Material::linear(1.3),
         Material {

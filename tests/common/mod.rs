@@ -250,19 +250,25 @@ pub fn carved(
     chisel::voxel::DigitalObject::from_mask([d; 3], &mask, chisel::voxel::Frame::default()).unwrap()
 }
 
+/// A fixed xorshift64 sequence from `seed` (non-zero): test inputs that
+/// are the same on every run.
+pub fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    }
+}
+
 /// The 20 random carvings of an 11³ cube (a fixed xorshift sequence; about
 /// one voxel in 7 removed): staircase pits, grooves, cavities, islands.
 pub fn random_carvings() -> Vec<chisel::voxel::DigitalObject> {
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = xorshift(0x2545_f491_4f6c_dd1d);
     (0..20)
         .map(|_| {
             let holes: Vec<bool> = (0..13 * 13 * 13)
-                .map(|_| {
-                    seed ^= seed << 13;
-                    seed ^= seed >> 7;
-                    seed ^= seed << 17;
-                    seed.is_multiple_of(7)
-                })
+                .map(|_| next().is_multiple_of(7))
                 .collect();
             carved(11, |x, y, z| holes[x + 13 * (y + 13 * z)])
         })

@@ -18,9 +18,10 @@
 //! - pinch a border: an interior edge whose ends both lie on the border;
 //! - touch a non-manifold vertex (on an edge of more than two triangles,
 //!   or whose triangles form more than one fan);
-//! - make a surviving triangle degenerate, or turn it by more than
-//!   [`MAX_TURN_DEGREES`] from both its old normal and the area-weighted
-//!   normal of the two fans (the no-flip test of Hoppe et al.; a sliver's
+//! - make a surviving triangle degenerate (flat as `Topology` counts it:
+//!   height below `f32::EPSILON` times its longest edge), or turn it by
+//!   more than [`MAX_TURN_DEGREES`] from both its old normal and the
+//!   area-weighted normal of the two fans (the no-flip test of Hoppe et al.; a sliver's
 //!   own normal is noise, so agreeing with its surroundings suffices).
 //!
 //! Manifold inputs stay manifold with the same Euler characteristic per
@@ -32,6 +33,7 @@ use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
+use super::topology::is_flat;
 use super::{ScalarField, TriMesh, self_intersections};
 
 /// Most runs of the collapse (see [`collapse_short_edges`]).
@@ -318,7 +320,7 @@ impl State {
                 let (n0, n1) = (normal(corners(t)), normal(q));
                 let agrees =
                     |n: Vec3| n != Vec3::ZERO && n1.dot(n) >= cos_max * n1.length() * n.length();
-                n1 != Vec3::ZERO && (agrees(n0) || agrees(mean))
+                !is_flat(q.map(Vec3::as_dvec3)) && (agrees(n0) || agrees(mean))
             })
         };
         candidates.iter().copied().find(|&m| turns_ok(m))

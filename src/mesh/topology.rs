@@ -364,6 +364,17 @@ fn doubled_area_vector(p: [DVec3; 3]) -> DVec3 {
     (p[1] - p[0]).cross(p[2] - p[0])
 }
 
+/// Whether the triangle `p` has zero area in the sense of
+/// [`Topology::degenerate_triangles`]: its height (in f64) is below
+/// `f32::EPSILON` times its longest edge.
+pub(crate) fn is_flat(p: [DVec3; 3]) -> bool {
+    let longest = (p[1] - p[0])
+        .length_squared()
+        .max((p[2] - p[1]).length_squared())
+        .max((p[0] - p[2]).length_squared());
+    doubled_area_vector(p).length() <= f64::from(f32::EPSILON) * longest
+}
+
 fn corners(mesh: &TriMesh, tri: &[u32; 3]) -> [DVec3; 3] {
     tri.map(|v| mesh.positions[v as usize].as_dvec3())
 }
@@ -457,12 +468,7 @@ pub(crate) fn analyse(mesh: &TriMesh) -> Analysis {
             degenerate += 1;
             continue;
         }
-        let p = corners(mesh, tri);
-        let longest = (p[1] - p[0])
-            .length_squared()
-            .max((p[2] - p[1]).length_squared())
-            .max((p[0] - p[2]).length_squared());
-        if doubled_area_vector(p).length() <= f64::from(f32::EPSILON) * longest {
+        if is_flat(corners(mesh, tri)) {
             degenerate += 1;
         }
         for &v in tri {

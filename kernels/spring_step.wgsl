@@ -17,8 +17,8 @@
 //              isotropy unused
 //   materials: rows[16] = (c1, c2 − c1, knee strain, c_max) per material
 //   offsets:   #free + 1 u32, CSR row starts into entries
-//   entries:   #entries vec2<u32>: x = neighbour id | material << 28,
-//              y = bits of the rest length l_ij (f32); rows sorted by id
+//   entries:   #entries u32: neighbour id | material << 28; rows sorted
+//              by id (l_ij = |x_rest,i − x_rest,j|, see spring_network)
 //   rest:      #nodes vec4<f32>, xyz = rest position x_rest,i
 //   forces:    #free vec4<f32>, external force f_i in xyz (read when
 //              use_forces = 1)

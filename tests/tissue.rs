@@ -60,7 +60,7 @@ fn check_counts(mesh: &TriMesh) -> SpringNetwork {
     assert_eq!(net.csr.entries.len(), expect);
     for i in 0..net.n_free {
         let row = &net.csr.entries[net.csr.offsets[i] as usize..net.csr.offsets[i + 1] as usize];
-        let ids: Vec<u32> = row.iter().map(|e| e[0] & 0x0fff_ffff).collect();
+        let ids: Vec<u32> = row.iter().map(|e| e & 0x0fff_ffff).collect();
         assert!(ids.windows(2).all(|w| w[0] < w[1]), "row {i} not sorted");
     }
     net
@@ -642,10 +642,11 @@ fn scalar_gather(
     let (mut b, mut iso) = ([0.0f32; 6], 0.0f32);
     let (s, e) = (net.csr.offsets[i] as usize, net.csr.offsets[i + 1] as usize);
     for &en in &net.csr.entries[s..e] {
-        let j = (en[0] & 0x0fff_ffff) as usize;
-        let m = mats[(en[0] >> 28) as usize];
-        let l = f32::from_bits(en[1]);
-        let r: [f32; 3] = std::array::from_fn(|c| (x0[c] - net.rest[j][c]) + (u[c] - pos[j][c]));
+        let j = (en & 0x0fff_ffff) as usize;
+        let m = mats[(en >> 28) as usize];
+        let d0: [f32; 3] = std::array::from_fn(|c| x0[c] - net.rest[j][c]);
+        let l = (d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]).sqrt();
+        let r: [f32; 3] = std::array::from_fn(|c| d0[c] + (u[c] - pos[j][c]));
         let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
         if len > 0.0 {
             let ext = len - l;

@@ -14,7 +14,7 @@ const VELOCITY_FLUSH: f32 = 1e-30;
 
 @group(0) @binding(1) var<uniform> materials: Materials;
 @group(0) @binding(2) var<storage, read> offsets: array<u32>;
-@group(0) @binding(3) var<storage, read> entries: array<vec2<u32>>;
+@group(0) @binding(3) var<storage, read> entries: array<u32>;
 @group(0) @binding(4) var<storage, read> rest: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> forces: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> pos_in: array<vec4<f32>>;
@@ -24,7 +24,9 @@ const VELOCITY_FLUSH: f32 = 1e-30;
 // Spring k of a row: r_ij = (x_rest,i − x_rest,j) + (u_i − u_j) (both
 // differences are small, so no absolute-coordinate rounding), its length,
 // the biphasic force f(e) = c1 e + (c2 − c1) max(e − knee l, 0) of its
-// extension e = |r_ij| − l_ij (eq. 4.4), and c_max of its material.
+// extension e = |r_ij| − l_ij (eq. 4.4), and c_max of its material. The
+// rest length l_ij = |x_rest,i − x_rest,j| (= initial length) comes from the
+// same difference, so a spring at rest has e = 0 exactly.
 struct SpringTerm {
     r: vec3<f32>,
     len: f32,
@@ -34,10 +36,11 @@ struct SpringTerm {
 
 fn spring_term(k: u32, x0: vec3<f32>, u: vec3<f32>) -> SpringTerm {
     let e = entries[k];
-    let m = materials.rows[e.x >> 28u];
-    let l = bitcast<f32>(e.y);
-    let j = e.x & INDEX_MASK;
-    let r = (x0 - rest[j].xyz) + (u - pos_in[j].xyz);
+    let m = materials.rows[e >> 28u];
+    let j = e & INDEX_MASK;
+    let d0 = x0 - rest[j].xyz;
+    let l = sqrt(d0.x * d0.x + d0.y * d0.y + d0.z * d0.z);
+    let r = d0 + (u - pos_in[j].xyz);
     let len = sqrt(r.x * r.x + r.y * r.y + r.z * r.z);
     let ext = len - l;
     return SpringTerm(r, len, m.x * ext + m.y * max(ext - m.z * l, 0.0), m.w);

@@ -114,7 +114,7 @@ fn rest_blocks(net: &SpringNetwork) -> Vec<[f64; 6]> {
             let row =
                 &net.csr.entries[net.csr.offsets[i] as usize..net.csr.offsets[i + 1] as usize];
             for &e in row {
-                let (j, m, _) = SpringCsr::unpack(e);
+                let (j, m) = SpringCsr::unpack(e);
                 let pj = rest[j];
                 let r = [0, 1, 2].map(|k| (pi[k] - pj[k]) as f64);
                 let len2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -204,7 +204,7 @@ fn apply(net: &SpringNetwork, factors: &[[f64; 6]], x: &[f64], y: &mut [f64]) {
         let mut acc = [0.0f64; 3];
         let row = &net.csr.entries[net.csr.offsets[i] as usize..net.csr.offsets[i + 1] as usize];
         for &e in row {
-            let (j, m, _) = SpringCsr::unpack(e);
+            let (j, m) = SpringCsr::unpack(e);
             let pj = rest[j];
             let r = [0, 1, 2].map(|k| (pi[k] - pj[k]) as f64);
             let len2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];

@@ -87,6 +87,7 @@ const LANES: usize = 4;
 /// r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs exactly the
 /// float operations of one kernel invocation (vector sqrt, division and
 /// arithmetic round like scalar ones, and nothing is contracted to FMA).
+/// The rest length is l_ij = |x0_i − x0_j| from the same f32 difference.
 /// A lane whose row has ended reads its own node with an all-zero material
 /// (r = 0, |r| = 0, c_max = 0: nothing added). Returns `[gx, gy, gz]`
 /// by lane and, with `BLOCKS`, the preconditioner blocks of
@@ -120,26 +121,29 @@ fn gather_group<const BLOCKS: bool>(
     let (mut blocks, mut iso) = ([Vec4::ZERO; 6], Vec4::ZERO);
     let eta = Vec4::splat(isotropy);
     for k in 0..k_end {
+        let mut d0 = [Vec4::ZERO; LANES];
         let mut r = [Vec4::ZERO; LANES];
         let mut row = [Vec4::ZERO; LANES];
-        let mut l = [0.0f32; LANES];
         for t in 0..LANES {
             // A lane past its row: its own node and an all-zero material.
-            let (j, m, lj) = if k < count[t] {
-                let (j, m, lj) = SpringCsr::unpack(entries[start[t] + k]);
-                (j, Vec4::from_array(materials[m]), lj)
+            let (j, m) = if k < count[t] {
+                let (j, m) = SpringCsr::unpack(entries[start[t] + k]);
+                (j, Vec4::from_array(materials[m]))
             } else {
-                (node[t], Vec4::ZERO, 0.0)
+                (node[t], Vec4::ZERO)
             };
-            r[t] = (x0[t] - Vec4::from_array(rest[j])) + (u[t] - Vec4::from_array(pos_in[j]));
+            d0[t] = x0[t] - Vec4::from_array(rest[j]);
+            r[t] = d0[t] + (u[t] - Vec4::from_array(pos_in[j]));
             row[t] = m;
-            l[t] = lj;
         }
-        // Lanes as vectors: r by component, the material rows as
+        // Lanes as vectors: d0 and r by component, the material rows as
         // (c1, c2 − c1, knee, c_max) by lane.
+        let d0 = Mat4::from_cols(d0[0], d0[1], d0[2], d0[3]).transpose();
         let r = Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose();
         let mat = Mat4::from_cols(row[0], row[1], row[2], row[3]).transpose();
-        let l = Vec4::from_array(l);
+        // Rest length l_ij = |x_rest,i − x_rest,j|, from the same difference.
+        let (dx, dy, dz) = (d0.x_axis, d0.y_axis, d0.z_axis);
+        let l = (dx * dx + dy * dy + dz * dz).sqrt();
         let (rx, ry, rz) = (r.x_axis, r.y_axis, r.z_axis);
         let len = (rx * rx + ry * ry + rz * rz).sqrt();
         // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).

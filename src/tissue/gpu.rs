@@ -96,7 +96,7 @@ fn kernel_of(solver: Solver) -> Kernel {
 type KeepAlive = (
     (UniformBuffer<Params>, UniformBuffer<Materials>),
     GpuArray<u32>,
-    GpuArray<[u32; 2]>,
+    GpuArray<u32>,
     [GpuArray<[f32; 4]>; 2],
     GpuArray<[u32; 2]>,
     [UniformBuffer<ReduceParams>; 2],

@@ -216,7 +216,8 @@ pub struct Spring {
     pub class: SpringClass,
     /// Index into [`SpringNetwork::materials`].
     pub material: u8,
-    /// Rest length l_ij = initial length.
+    /// Rest length l_ij = initial length (f64 distance of the f32 rest
+    /// positions; the kernels recompute it in f32 from the same positions).
     pub rest: f32,
 }
 
@@ -227,25 +228,24 @@ pub const MAX_NODES: usize = 1 << 28;
 const INDEX_MASK: u32 = (1 << 28) - 1;
 
 /// The kernels' gather adjacency: row `i` (a free node) lists one entry per
-/// spring at `i`, sorted by neighbour id. An entry is
-/// `[j | material << 28, rest_length.to_bits()]`.
+/// spring at `i`, sorted by neighbour id. An entry is `j | material << 28`;
+/// the rest length is not stored: the kernels take l_ij = |x_rest,i −
+/// x_rest,j| from the rest positions they gather anyway (rest length =
+/// initial length), in f32 with the very difference that starts r_ij, so a
+/// spring at rest has extension exactly 0.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct SpringCsr {
     /// #free + 1 row starts.
     pub offsets: Vec<u32>,
-    /// Packed entries (8 bytes each).
-    pub entries: Vec<[u32; 2]>,
+    /// Packed entries (4 bytes each).
+    pub entries: Vec<u32>,
 }
 
 impl SpringCsr {
-    /// Unpacks an entry into `(neighbour, material, rest length)`.
+    /// Unpacks an entry into `(neighbour, material)`.
     #[inline(always)]
-    pub fn unpack(e: [u32; 2]) -> (usize, usize, f32) {
-        (
-            (e[0] & INDEX_MASK) as usize,
-            (e[0] >> 28) as usize,
-            f32::from_bits(e[1]),
-        )
+    pub fn unpack(e: u32) -> (usize, usize) {
+        ((e & INDEX_MASK) as usize, (e >> 28) as usize)
     }
 }
 
@@ -748,11 +748,11 @@ impl SpringNetwork {
 
     fn gather_csr(&self) -> SpringCsr {
         let nf = self.n_free as u32;
-        let entry = |j: u32, s: &Spring| [j | (u32::from(s.material) << 28), s.rest.to_bits()];
+        let entry = |j: u32, s: &Spring| j | (u32::from(s.material) << 28);
         // Springs are sorted by (a, b): row i receives its (x, i) springs in
         // increasing x before its (i, y) springs in increasing y, so every
         // row comes out sorted by neighbour id.
-        let pairs: Vec<(u32, [u32; 2])> = self
+        let pairs: Vec<(u32, u32)> = self
             .springs
             .iter()
             .flat_map(|s| {
@@ -769,7 +769,7 @@ impl SpringNetwork {
             counts[i + 1] += counts[i];
         }
         let offsets = counts.clone();
-        let mut entries = vec![[0u32; 2]; pairs.len()];
+        let mut entries = vec![0u32; pairs.len()];
         for (r, e) in pairs {
             let slot = &mut counts[r as usize];
             entries[*slot as usize] = e;
@@ -836,13 +836,13 @@ impl SpringNetwork {
     /// The bytes one iteration of the step kernels must move at least:
     /// per free node the row offset (4), own rest position, displacement
     /// and velocity read (48), displacement and velocity written (32); per
-    /// CSR entry 8 bytes; the fixed nodes' rest positions and displacements
+    /// CSR entry 4 bytes; the fixed nodes' rest positions and displacements
     /// (32) read once. Other neighbour reads are assumed cached (compulsory
     /// traffic only).
     pub fn bytes_per_iteration(&self) -> u64 {
         self.n_free as u64 * (4 + 48 + 32)
             + self.n_bone() as u64 * 32
-            + self.csr.entries.len() as u64 * 8
+            + self.csr.entries.len() as u64 * 4
     }
 
     /// Spectral bounds of B⁻¹K, computed once (Lanczos, see

@@ -6,8 +6,8 @@ mod common;
 use std::collections::HashMap;
 
 use chisel::cut::{
-    CutOptions, CutResult, Knife, Located, Side, cut, cut_full_scan, cut_mesh, cut_sequence,
-    locate, locate_full_scan,
+    CutOptions, CutResult, Knife, Located, SPHERE_CHORD_ERROR, Side, cut, cut_full_scan, cut_mesh,
+    cut_sequence, locate, locate_full_scan,
 };
 use chisel::surface::{Forest, IsoSpec, McOptions, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
@@ -847,11 +847,79 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     assert_conserved(&s.mesh, &r30, 1e-6, "headsq/sphere 30");
     for (r, what) in [(&r, "headsq/sphere 35"), (&r30, "headsq/sphere 30")] {
         assert!(r.stats.cap_repair_rounds > 0, "{what}: {:?}", r.stats);
+        assert!(!r.stats.sphere_polyhedral, "{what}: the repair suffices");
         for (i, piece) in r.pieces.iter().enumerate() {
             let x = chisel::mesh::self_intersections(piece);
             assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);
         }
     }
+    // These two pass within f32 rounding of bone vertices, or leave a loop
+    // edge's chord where the bone grazes them: the repaired analytic caps
+    // still cross the bone (40 and 144 crossings), so the cuts run along
+    // the polyhedral sphere, whose caps cannot cross it.
+    for (centre, radius) in [([120.0, 90.0, 70.0], 40.0), ([110.0, 100.0, 90.0], 45.0)] {
+        let k = Knife::Sphere {
+            centre: DVec3::from_array(centre),
+            radius,
+        };
+        let what = format!("headsq/sphere {centre:?} r {radius}");
+        let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
+        assert!(r.stats.sphere_polyhedral, "{what}: {:?}", r.stats);
+        assert!(r.stats.cap_crossings > 0, "{what}: {:?}", r.stats);
+        assert!(r.pieces.len() >= 2, "{what}");
+        assert_conserved(&s.mesh, &r, 1e-6, &what);
+        same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+        for (i, piece) in r.pieces.iter().enumerate() {
+            let x = chisel::mesh::self_intersections(piece);
+            assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);
+        }
+        // The cut follows the polyhedron: every vertex of a piece is a bone
+        // vertex or lies within the chord bound of the sphere.
+        let bone: std::collections::HashSet<[u32; 3]> = s
+            .mesh
+            .positions
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect();
+        for p in r.pieces.iter().flat_map(|m| &m.positions) {
+            let d = (p.as_dvec3() - DVec3::from_array(centre)).length();
+            assert!(
+                bone.contains(&p.to_array().map(f32::to_bits))
+                    || (d - radius).abs() <= (SPHERE_CHORD_ERROR + 1e-6) * radius,
+                "{what}: vertex {p} at {d}"
+            );
+        }
+    }
+}
+
+#[test]
+fn polyhedral_sphere_is_an_outward_closed_sphere_within_the_chord_bound() {
+    let (c, r) = (DVec3::new(3.0, -2.0, 7.5), 12.5);
+    let a = Knife::polyhedral_sphere(c, r, 0);
+    let t = chisel::mesh::Topology::of(&a);
+    assert!(t.closed && t.is_manifold() && t.consistently_oriented);
+    assert_eq!(t.components.len(), 1);
+    assert_eq!(t.components[0].euler, 2);
+    // Outward: a positive volume just below the ball's.
+    let ball = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    assert!(t.signed_volume < ball && t.signed_volume > (1.0 - 3.0 * SPHERE_CHORD_ERROR) * ball);
+    for p in &a.positions {
+        let d = (p.as_dvec3() - c).length();
+        assert!((d - r).abs() < 1e-6 * r, "{p} at {d}");
+    }
+    for tri in &a.triangles {
+        let [p, q, s] = tri.map(|v| a.positions[v as usize].as_dvec3() - c);
+        let plane = (q - p).cross(s - p).normalize().dot(p);
+        assert!(
+            plane > 0.0 && r - plane <= (SPHERE_CHORD_ERROR + 1e-6) * r,
+            "sag {}",
+            r - plane
+        );
+    }
+    // Another attempt turns it.
+    let b = Knife::polyhedral_sphere(c, r, 1);
+    assert_eq!(a.triangles, b.triangles);
+    assert_ne!(a.positions, b.positions);
 }
 
 /// Everything but the counts: crossed triangles, cut vertex numbering,

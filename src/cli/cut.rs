@@ -191,6 +191,15 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "pieces": pieces,
         "stats": result.stats,
     });
+    if result.stats.sphere_polyhedral {
+        global.note(format!(
+            "the sphere cap crossed the surface ({} crossings left after {} repair rounds): \
+             cut along the polyhedral sphere instead (within {} r of the sphere)",
+            result.stats.cap_crossings,
+            result.stats.cap_repair_rounds,
+            crate::cut::SPHERE_CHORD_ERROR
+        ));
+    }
     global.note(format!(
         "{} pieces; tree visited {} of {} nodes, tested {} of {} triangles; wrote {}",
         result.pieces.len(),

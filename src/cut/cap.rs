@@ -453,7 +453,8 @@ pub trait CapCheck {
 /// touches more cap triangles the finer they get): the cap with the fewest
 /// crossings seen is kept. Stops when nothing crosses, nothing can be
 /// split, after [`STALLED_ROUNDS`] rounds without a new best, or after
-/// `max_rounds`; returns the rounds made.
+/// `max_rounds`; returns the rounds made and the crossings left (summed
+/// over the cap triangles: a pair of cap triangles counts twice).
 pub fn repair_on_sphere(
     tris: &mut Vec<[usize; 3]>,
     pts: &mut Vec<DVec2>,
@@ -462,7 +463,7 @@ pub fn repair_on_sphere(
     max_triangles: usize,
     max_rounds: usize,
     surface: &mut impl CapCheck,
-) -> usize {
+) -> (usize, u64) {
     let all: Vec<usize> = (0..tris.len()).collect();
     let mut count = surface.crossings(tris, &all, pos);
     let total = |count: &[u32]| count.iter().map(|&c| c as u64).sum::<u64>();
@@ -502,7 +503,7 @@ pub fn repair_on_sphere(
     *tris = best.1;
     pts.truncate(best.2);
     pos.truncate(best.2);
-    rounds
+    (rounds, best.0)
 }
 
 /// Bisects the interior edges `edges` (length, key, its two triangles),

@@ -37,6 +37,7 @@ use std::time::Instant;
 use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
+pub use cap::SPHERE_CHORD_ERROR;
 pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
@@ -91,6 +92,15 @@ pub struct CutStats {
     /// Rounds of sphere-cap refinement where cap triangles crossed the
     /// surface (a surface meeting the sphere at a grazing angle).
     pub cap_repair_rounds: usize,
+    /// Crossings the repaired analytic sphere cap still had (cap triangles
+    /// meeting surface or cap triangles beyond shared vertices, summed over
+    /// the cap triangles); when nonzero the cut was redone with the
+    /// polyhedral sphere (`sphere_polyhedral`).
+    pub cap_crossings: u64,
+    /// Whether a sphere cut ran with the polyhedral sphere
+    /// ([`Knife::polyhedral_sphere`], exact intersection, caps that cannot
+    /// cross the surface) because the analytic cap crossed it.
+    pub sphere_polyhedral: bool,
     /// Wall time of locating crossed triangles and cut points, seconds.
     pub locate_seconds: f64,
     /// Wall time of splitting, regrouping and capping, seconds.
@@ -146,7 +156,48 @@ pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) ->
     let prepared = knife.prepare(forest_scale(forest))?;
     let mut located = locate_prepared(mesh, forest, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
-    assemble(mesh, located, &prepared, opts)
+    let analytic = assemble(mesh, located, &prepared, opts)?;
+    polyhedral_if_crossed(knife, opts, analytic, |k| cut(mesh, forest, k, opts))
+}
+
+/// Orientations of the polyhedral sphere tried before giving up.
+const POLYHEDRAL_ATTEMPTS: u32 = 4;
+
+/// A capped sphere cut whose repaired cap still crosses the surface
+/// (`cap_crossings > 0`: the sphere passes within f32 rounding of mesh
+/// vertices, or a loop edge's chord lets a cap point land outside a surface
+/// that leaves the sphere at a grazing angle) is redone with
+/// [`Knife::polyhedral_sphere`] by `run`: the surface is then cut along the
+/// polyhedron (within the caps' chord bound of the sphere) by the exact
+/// intersection, and the caps are the polyhedron's part inside the solid,
+/// which cannot cross it. An orientation the exact test refuses (a
+/// degenerate touch) is replaced by the next; when every one is refused the
+/// analytic result is kept, its `cap_crossings` saying what is wrong.
+fn polyhedral_if_crossed(
+    knife: &Knife,
+    opts: &CutOptions,
+    analytic: CutResult,
+    run: impl Fn(&Knife) -> Result<CutResult>,
+) -> Result<CutResult> {
+    let Knife::Sphere { centre, radius } = knife else {
+        return Ok(analytic);
+    };
+    if !opts.cap || analytic.stats.cap_crossings == 0 {
+        return Ok(analytic);
+    }
+    for attempt in 0..POLYHEDRAL_ATTEMPTS {
+        let poly = Knife::Mesh(Knife::polyhedral_sphere(*centre, *radius, attempt));
+        if let Ok(mut r) = run(&poly) {
+            let (a, s) = (&analytic.stats, &mut r.stats);
+            s.cap_repair_rounds = a.cap_repair_rounds;
+            s.cap_crossings = a.cap_crossings;
+            s.sphere_polyhedral = true;
+            s.locate_seconds += a.locate_seconds;
+            s.assemble_seconds += a.assemble_seconds;
+            return Ok(r);
+        }
+    }
+    Ok(analytic)
 }
 
 /// Cuts any mesh: builds its forest first (virtual grid, see [`Forest::from_mesh`]).
@@ -163,7 +214,8 @@ pub fn cut_full_scan(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result
     let prepared = knife.prepare(scene_scale(mesh))?;
     let mut located = locate_scan_prepared(mesh, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
-    assemble(mesh, located, &prepared, opts)
+    let analytic = assemble(mesh, located, &prepared, opts)?;
+    polyhedral_if_crossed(knife, opts, analytic, |k| cut_full_scan(mesh, k, opts))
 }
 
 /// Several knives in sequence: each cuts every piece of the previous one.
@@ -207,6 +259,8 @@ impl CutStats {
         a.loops_capped += b.loops_capped;
         a.curves_open += b.curves_open;
         a.cap_repair_rounds += b.cap_repair_rounds;
+        a.cap_crossings += b.cap_crossings;
+        a.sphere_polyhedral |= b.sphere_polyhedral;
         a.locate_seconds += b.locate_seconds;
         a.assemble_seconds += b.assemble_seconds;
     }
@@ -1141,14 +1195,7 @@ fn split_analytic(
                 located,
                 subs: &subs,
             };
-            cap_tris = make_caps(
-                &loops,
-                &mut points,
-                n_v,
-                k,
-                &surface,
-                &mut stats.cap_repair_rounds,
-            )?;
+            cap_tris = make_caps(&loops, &mut points, n_v, k, &surface, stats)?;
         }
         if inward {
             cap_tris.iter_mut().for_each(|t| t.swap(1, 2));
@@ -1314,14 +1361,15 @@ impl cap::CapCheck for SphereCapCheck<'_> {
 /// Cap triangles (vertex ids `n_v + point id`, oriented for the negative
 /// side); a sphere cap's own vertices are appended to `points`.
 ///
-/// A sphere cap is repaired against `surface` for at most [`CAP_REPAIR_ROUNDS`] rounds (counted in `rounds`).
+/// A sphere cap is repaired against `surface` for at most
+/// [`CAP_REPAIR_ROUNDS`] rounds (counted in `stats`, with the crossings left).
 fn make_caps(
     loops: &[Vec<u32>],
     points: &mut Vec<Vec3>,
     n_v: u32,
     k: &PreparedKnife<'_>,
     surface: &CutSurface<'_>,
-    rounds: &mut usize,
+    stats: &mut CutStats,
 ) -> Result<Vec<[u32; 3]>> {
     let pos = |v: u32| points[(v - n_v) as usize].as_dvec3();
     // Loop k's points are `ids[start_k..start_k + len_k]`, in loop order.
@@ -1432,7 +1480,7 @@ fn make_caps(
             ids: &ids,
             n_v,
         };
-        *rounds += cap::repair_on_sphere(
+        let (rounds, left) = cap::repair_on_sphere(
             &mut tris,
             &mut pts,
             &mut pos3,
@@ -1441,6 +1489,8 @@ fn make_caps(
             CAP_REPAIR_ROUNDS,
             &mut check,
         );
+        stats.cap_repair_rounds += rounds;
+        stats.cap_crossings += left;
         check.place(&pos3);
         return Ok(tris.iter().map(|t| check.global(t)).collect());
     }

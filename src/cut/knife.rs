@@ -196,72 +196,12 @@ impl Knife {
     /// the surface degenerately (refused by the exact intersection) can be
     /// replaced by a turned one.
     pub fn polyhedral_sphere(centre: DVec3, radius: f64, attempt: u32) -> TriMesh {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut v: Vec<DVec3> = [
-            (-1.0, t, 0.0),
-            (1.0, t, 0.0),
-            (-1.0, -t, 0.0),
-            (1.0, -t, 0.0),
-            (0.0, -1.0, t),
-            (0.0, 1.0, t),
-            (0.0, -1.0, -t),
-            (0.0, 1.0, -t),
-            (t, 0.0, -1.0),
-            (t, 0.0, 1.0),
-            (-t, 0.0, -1.0),
-            (-t, 0.0, 1.0),
-        ]
-        .map(|(x, y, z)| DVec3::new(x, y, z).normalize())
-        .to_vec();
-        let mut f: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        // Deepest point of a unit-sphere triangle below the sphere: 1 − the
-        // distance of its plane from the centre.
-        let sag = |v: &[DVec3], t: &[u32; 3]| {
-            let [a, b, c] = t.map(|i| v[i as usize]);
-            1.0 - (b - a).cross(c - a).normalize().dot(a).abs()
-        };
-        while f.iter().map(|t| sag(&v, t)).fold(0.0, f64::max) > super::cap::SPHERE_CHORD_ERROR {
-            let mut mid = std::collections::HashMap::new();
-            let mut split = |a: u32, b: u32, v: &mut Vec<DVec3>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    v.push((v[a as usize] + v[b as usize]).normalize());
-                    v.len() as u32 - 1
-                })
-            };
-            f = f
-                .iter()
-                .flat_map(|&[a, b, c]| {
-                    let (ab, bc, ca) = (
-                        split(a, b, &mut v),
-                        split(b, c, &mut v),
-                        split(c, a, &mut v),
-                    );
-                    [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-                })
-                .collect();
-        }
-        let axis = DVec3::new(1.0, t, std::f64::consts::SQRT_2).normalize();
+        let level = (0..)
+            .find(|&l| crate::mesh::icosphere_sag(l) <= super::cap::SPHERE_CHORD_ERROR)
+            .expect("the sag halves about every level");
+        let (v, triangles) = crate::mesh::unit_icosphere(level);
+        let golden = (1.0 + 5f64.sqrt()) / 2.0;
+        let axis = DVec3::new(1.0, golden, std::f64::consts::SQRT_2).normalize();
         let turn = glam::DQuat::from_axis_angle(
             axis,
             0.25 + std::f64::consts::FRAC_1_SQRT_2 * f64::from(attempt),
@@ -272,7 +212,7 @@ impl Knife {
             .collect();
         TriMesh {
             positions,
-            triangles: f,
+            triangles,
             scalars: Vec::new(),
         }
     }

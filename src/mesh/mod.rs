@@ -8,6 +8,7 @@
 pub mod collapse;
 pub mod csr;
 pub mod disjoint_sets;
+pub mod icosphere;
 pub mod intersect;
 pub mod orient;
 pub mod topology;
@@ -15,6 +16,7 @@ pub mod topology;
 pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
 pub use disjoint_sets::DisjointSets;
+pub use icosphere::{icosphere_sag, unit_icosphere};
 pub use intersect::{SelfIntersections, intersections_where, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Bounds, Component, Orientation, Topology};

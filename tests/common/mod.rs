@@ -137,64 +137,8 @@ pub fn grid_mesh(nx: usize, ny: usize, at: impl Fn(usize, usize) -> Vec3) -> Tri
 /// Icosphere of radius 1 with `n` subdivisions, outward winding:
 /// 10·4ⁿ + 2 vertices, 20·4ⁿ triangles.
 pub fn icosphere(n: u32) -> TriMesh {
-    let g = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut p: Vec<Vec3> = [
-        [-1.0, g, 0.0],
-        [1.0, g, 0.0],
-        [-1.0, -g, 0.0],
-        [1.0, -g, 0.0],
-        [0.0, -1.0, g],
-        [0.0, 1.0, g],
-        [0.0, -1.0, -g],
-        [0.0, 1.0, -g],
-        [g, 0.0, -1.0],
-        [g, 0.0, 1.0],
-        [-g, 0.0, -1.0],
-        [-g, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|a| Vec3::from_array(*a).normalize())
-    .collect();
-    let mut t: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..n {
-        let mut mid = std::collections::HashMap::new();
-        let mut midpoint = |a: u32, b: u32, p: &mut Vec<Vec3>| -> u32 {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
-                (p.len() - 1) as u32
-            })
-        };
-        let mut next = Vec::with_capacity(t.len() * 4);
-        for [a, b, c] in t {
-            let ab = midpoint(a, b, &mut p);
-            let bc = midpoint(b, c, &mut p);
-            let ca = midpoint(c, a, &mut p);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        t = next;
-    }
-    TriMesh::new(p, t).expect("valid icosphere")
+    let (p, t) = chisel::mesh::unit_icosphere(n);
+    TriMesh::new(p.iter().map(|q| q.as_vec3()).collect(), t).expect("valid icosphere")
 }
 
 /// A seeded random soup of `n` triangles over `n_vertices` points in

@@ -184,9 +184,7 @@ impl Knife {
         };
         Ok(PreparedKnife { kind, margin })
     }
-}
 
-impl Knife {
     /// The sphere as an outward triangulated knife: an icosahedron
     /// subdivided until every triangle lies within
     /// [`SPHERE_CHORD_ERROR`](super::cap::SPHERE_CHORD_ERROR)·r of the

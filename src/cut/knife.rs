@@ -194,10 +194,10 @@ impl Knife {
     /// the surface degenerately (refused by the exact intersection) can be
     /// replaced by a turned one.
     pub fn polyhedral_sphere(centre: DVec3, radius: f64, attempt: u32) -> TriMesh {
-        let level = (0..)
-            .find(|&l| crate::mesh::icosphere_sag(l) <= super::cap::SPHERE_CHORD_ERROR)
-            .expect("the sag halves about every level");
-        let (v, triangles) = crate::mesh::unit_icosphere(level);
+        let (v, triangles) = (0..)
+            .map(crate::mesh::unit_icosphere)
+            .find(|(p, t)| crate::mesh::icosphere_sag(p, t) <= super::cap::SPHERE_CHORD_ERROR)
+            .expect("the sag shrinks about 4× per level");
         let golden = (1.0 + 5f64.sqrt()) / 2.0;
         let axis = DVec3::new(1.0, golden, std::f64::consts::SQRT_2).normalize();
         let turn = glam::DQuat::from_axis_angle(

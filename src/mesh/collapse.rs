@@ -21,8 +21,9 @@
 //! - make a surviving triangle degenerate (flat as `Topology` counts it:
 //!   height below `f32::EPSILON` times its longest edge), or turn it by
 //!   more than [`MAX_TURN_DEGREES`] from both its old normal and the
-//!   area-weighted normal of the two fans (the no-flip test of Hoppe et al.; a sliver's
-//!   own normal is noise, so agreeing with its surroundings suffices).
+//!   area-weighted normal of the two fans (the no-flip test of Hoppe et
+//!   al.; a sliver's own normal is noise, so agreeing with its
+//!   surroundings suffices).
 //!
 //! Manifold inputs stay manifold with the same Euler characteristic per
 //! component and the same border loops; orientation is kept. A vertex

@@ -65,13 +65,14 @@ pub fn unit_icosphere(level: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (p, t)
 }
 
-/// Largest depth of a triangle of `unit_icosphere(level)` below the unit
-/// sphere: 1 − the least distance of a triangle's plane from the centre.
-pub fn icosphere_sag(level: u32) -> f64 {
-    let (p, t) = unit_icosphere(level);
-    t.iter()
+/// Largest depth below the unit sphere of a triangle of a unit icosphere
+/// (`points`, `triangles` from [`unit_icosphere`]): 1 − the least distance
+/// of a triangle's plane from the centre.
+pub fn icosphere_sag(points: &[DVec3], triangles: &[[u32; 3]]) -> f64 {
+    triangles
+        .iter()
         .map(|tri| {
-            let [a, b, c] = tri.map(|v| p[v as usize]);
+            let [a, b, c] = tri.map(|v| points[v as usize]);
             1.0 - (b - a).cross(c - a).normalize().dot(a).abs()
         })
         .fold(0.0, f64::max)

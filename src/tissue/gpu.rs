@@ -58,7 +58,7 @@ pub struct Params {
     pub isotropy: f32,
 }
 
-/// `Materials` of the step kernels: one `(c1, c2 − c1, knee, 0)` row per
+/// `Materials` of the step kernels: one `(c1, c2 − c1, knee, c_max)` row per
 /// material.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct Materials {

@@ -971,10 +971,17 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
 }
 
 #[test]
-fn leaf_tables_name_each_triangles_corners_in_winding_order() {
+fn leaf_tables_name_each_triangles_corners_and_positions() {
     let s = mc(&shell_volume(24, 6.0, 9.0));
     let f = &s.forest;
     assert_eq!(f.corners.len(), f.triangles.len());
+    assert_eq!(f.leaf_positions.len(), f.leaf_vertices.len());
+    for (&v, &q) in f.leaf_vertices.iter().zip(&f.leaf_positions) {
+        assert_eq!(
+            q, s.mesh.positions[v as usize],
+            "leaf position of vertex {v}"
+        );
+    }
     for c in &f.cells {
         let vs = &f.leaf_vertices[c.vertices.range()];
         assert!(vs.windows(2).all(|w| w[0] < w[1]), "distinct, ascending");

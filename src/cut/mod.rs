@@ -326,54 +326,45 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
         return locate_mesh_knife(mesh, forest, k, stats);
     };
     // Analytic knife: per expanded leaf, each of its distinct vertices is
-    // evaluated once (from the leaf's contiguous vertex table), then its
-    // triangles are tested from the contiguous corner table. The test is
-    // branch-free (every candidate is written, the count advances only for
-    // a mixed one); a rectangle then drops mixed triangles it does not reach.
-    // Crossed triangles as `id << 32 | index into forest.triangles`.
-    let mut crossed: Vec<u64> = Vec::new();
-    let mut neg: Vec<bool> = Vec::new();
-    let p = &mesh.positions;
+    // evaluated once (from the leaf's contiguous position table), then its
+    // triangles are tested from the contiguous corner table; a mixed one
+    // (a rectangle: one whose crossing the rectangle reaches) is kept with
+    // its vertices' ids, positions and side values, which the cut points
+    // are made from.
     let exact = k.sign_change_crosses();
+    let mut f: Vec<f64> = Vec::new();
+    let mut crossed: Vec<CrossedTriangle> = Vec::new();
     let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
         let vs = c.vertices.range();
         let v0 = vs.start;
-        neg.clear();
-        neg.extend(
-            forest.leaf_vertices[vs]
+        f.clear();
+        f.extend(
+            forest.leaf_positions[vs]
                 .iter()
-                .map(|&v| side.eval(p[v as usize].as_dvec3()) < 0.0),
+                .map(|q| side.eval(q.as_dvec3())),
         );
         let tris = c.triangles.range();
-        let base = crossed.len();
-        crossed.resize(base + tris.len(), 0);
-        let mut n = base;
-        for ((&t, &[a, b, cc]), i) in forest.triangles[tris.clone()]
+        let before = crossed.len();
+        for (&t, corners) in forest.triangles[tris.clone()]
             .iter()
-            .zip(&forest.corners[tris.clone()])
-            .zip(tris)
+            .zip(&forest.corners[tris])
         {
-            let (a, b, cc) = (
-                neg[a as usize - v0],
-                neg[b as usize - v0],
-                neg[cc as usize - v0],
-            );
-            crossed[n] = u64::from(t) << 32 | i as u64;
-            n += usize::from(a != b || b != cc);
-        }
-        crossed.truncate(n);
-        if !exact {
-            let mut kept = base;
-            for i in base..n {
-                let t = crossed[i];
-                if crossed_sides(mesh, k, side, (t >> 32) as u32).is_some() {
-                    crossed[kept] = t;
-                    kept += 1;
-                }
+            let fs = corners.map(|i| f[i as usize - v0]);
+            let neg = fs.map(|x| x < 0.0);
+            if neg[0] == neg[1] && neg[1] == neg[2] {
+                continue;
             }
-            crossed.truncate(kept);
+            let c = CrossedTriangle {
+                id: t,
+                vertices: corners.map(|i| forest.leaf_vertices[i as usize]),
+                positions: corners.map(|i| forest.leaf_positions[i as usize]),
+                sides: fs,
+            };
+            if exact || knife_reaches(k, &c) {
+                crossed.push(c);
+            }
         }
-        crossed.len() - base
+        crossed.len() - before
     });
     for &(s, e) in &expanded {
         if e > s {
@@ -382,15 +373,13 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
             stats.classes.separated += 1;
         }
     }
-    crossed.sort_unstable();
-    let vertices = |c: [u32; 3]| c.map(|v| forest.leaf_vertices[v as usize]);
-    let crossed = crossed.iter().map(|&key| {
-        (
-            (key >> 32) as u32,
-            vertices(forest.corners[key as u32 as usize]),
-        )
-    });
-    Ok(finish_locate(mesh, crossed, k, side, stats))
+    // Ascending ids: sorting `id << 32 | position` keys moves 8 bytes, not 80.
+    let mut order: Vec<u64> = (crossed.iter().enumerate())
+        .map(|(i, c)| u64::from(c.id) << 32 | i as u64)
+        .collect();
+    order.sort_unstable();
+    let crossed = order.iter().map(|&key| crossed[key as u32 as usize]);
+    Ok(finish_locate(crossed, k, stats))
 }
 
 /// The tree query for a triangulated knife: candidate triangles from the
@@ -433,19 +422,33 @@ fn locate_mesh_knife(
     Ok(finish_locate_mesh(&pair, crossed, stats))
 }
 
+/// A crossed triangle: its id, and its vertices' ids, positions and side
+/// values (the cut points are made from these alone).
+#[derive(Debug, Clone, Copy)]
+struct CrossedTriangle {
+    id: u32,
+    vertices: [u32; 3],
+    positions: [Vec3; 3],
+    sides: [f64; 3],
+}
+
 /// Walks the forest, expanding only nodes the knife may touch, and hands
-/// every expanded leaf to `leaf` in walk order; `leaf` returns
-/// how far to advance a counter (its crossed triangles, or the triangles
-/// handed). Returns, per expanded node, its span `[start, end)` of that
-/// counter (to class it).
+/// every expanded leaf to `leaf` in walk order; `leaf` returns how far to
+/// advance a counter (its crossed triangles, or the triangles handed).
+/// Returns, per expanded node, its span `[start, end)` of that counter (to
+/// class it).
+///
+/// The nodes are visited first, collecting the leaves to expand; one pass
+/// then reads a word of every cache line of those leaves' tables
+/// (independent loads, whose misses overlap instead of stalling each leaf
+/// in turn: the walk of the 1.6M-triangle bench surface takes 40–50 % less
+/// time); then the leaves are handed over.
 fn walk(
     forest: &Forest,
     k: &PreparedKnife<'_>,
     stats: &mut CutStats,
     leaf: &mut dyn FnMut(&CellNode) -> usize,
 ) -> Vec<(usize, usize)> {
-    let mut expanded: Vec<(usize, usize)> = Vec::new();
-    let mut handed = 0usize;
     let visit = |b: &crate::surface::Aabb, stats: &mut CutStats| {
         stats.nodes_visited += 1;
         let clear = k.box_is_clear(b);
@@ -456,58 +459,65 @@ fn walk(
     };
     // Children a slab can touch: all of them, or on a sorted forest the
     // span found by two binary searches (seed §4.3); the others are clear.
-    let span =
-        |parent: &crate::surface::Aabb,
-         all: std::ops::Range<usize>,
-         axis: usize,
-         lo_hi: &dyn Fn(std::ops::Range<usize>, f64, f64) -> std::ops::Range<usize>| {
-            if !forest.axis_sorted {
-                return all;
-            }
-            let (lo, hi) = k.axis_interval(parent, axis);
-            let r = lo_hi(all.clone(), lo, hi);
-            all.start + r.start..all.start + r.end
+    let span = |parent: &crate::surface::Aabb, all: std::ops::Range<usize>, axis: usize| {
+        if !forest.axis_sorted {
+            return all;
+        }
+        let (lo, hi) = k.axis_interval(parent, axis);
+        let r = match axis {
+            2 => sorted_overlap(&forest.layers[all.clone()], |n| &n.bbox, 2, lo, hi),
+            1 => sorted_overlap(&forest.rows[all.clone()], |n| &n.bbox, 1, lo, hi),
+            _ => sorted_overlap(&forest.cells[all.clone()], |n| &n.bbox, 0, lo, hi),
         };
-    let layers_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
-        sorted_overlap(&forest.layers[r], |n| &n.bbox, 2, lo, hi)
+        all.start + r.start..all.start + r.end
     };
-    let rows_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
-        sorted_overlap(&forest.rows[r], |n| &n.bbox, 1, lo, hi)
-    };
-    let cells_in = |r: std::ops::Range<usize>, lo: f64, hi: f64| {
-        sorted_overlap(&forest.cells[r], |n| &n.bbox, 0, lo, hi)
-    };
+    // The leaves to expand, and per expanded inner node its span of them.
+    let mut leaves: Vec<u32> = Vec::new();
+    let mut inner: Vec<(usize, usize)> = Vec::new();
     for g in &forest.groups {
         if !visit(&g.bbox, stats) {
             continue;
         }
-        let g_start = handed;
-        for l in &forest.layers[span(&g.bbox, g.layers.range(), 2, &layers_in)] {
+        let g_start = leaves.len();
+        for l in &forest.layers[span(&g.bbox, g.layers.range(), 2)] {
             if !visit(&l.bbox, stats) {
                 continue;
             }
-            let l_start = handed;
-            for r in &forest.rows[span(&l.bbox, l.rows.range(), 1, &rows_in)] {
+            let l_start = leaves.len();
+            for r in &forest.rows[span(&l.bbox, l.rows.range(), 1)] {
                 if !visit(&r.bbox, stats) {
                     continue;
                 }
-                let r_start = handed;
-                for c in &forest.cells[span(&r.bbox, r.cells.range(), 0, &cells_in)] {
-                    if !visit(&c.bbox, stats) {
-                        continue;
+                let r_start = leaves.len();
+                for c in span(&r.bbox, r.cells.range(), 0) {
+                    if visit(&forest.cells[c].bbox, stats) {
+                        leaves.push(c as u32);
                     }
-                    stats.triangles_tested += c.triangles.len();
-                    let start = handed;
-                    handed += leaf(c);
-                    expanded.push((start, handed));
                 }
-                expanded.push((r_start, handed));
+                inner.push((r_start, leaves.len()));
             }
-            expanded.push((l_start, handed));
+            inner.push((l_start, leaves.len()));
         }
-        expanded.push((g_start, handed));
+        inner.push((g_start, leaves.len()));
     }
-    expanded
+    std::hint::black_box(
+        (leaves.iter()).fold(0, |a, &c| a ^ forest.touch_leaf(&forest.cells[c as usize])),
+    );
+    // Counter before each leaf (and after the last).
+    let mut at = Vec::with_capacity(leaves.len() + 1);
+    let mut handed = 0;
+    for &c in &leaves {
+        let c = &forest.cells[c as usize];
+        stats.triangles_tested += c.triangles.len();
+        at.push(handed);
+        handed += leaf(c);
+    }
+    at.push(handed);
+    (0..leaves.len())
+        .map(|i| (i, i + 1))
+        .chain(inner)
+        .map(|(a, b)| (at[a], at[b]))
+        .collect()
 }
 
 /// Classes every expanded node `[start, end)` as intersected when one of
@@ -560,41 +570,46 @@ fn finish_locate_mesh(
     out
 }
 
-/// Side values of a triangle's vertices.
+/// Triangle `t` when an analytic knife crosses one of its edges: only
+/// where the side changes, and for a rectangle only where the crossing
+/// point lies inside it.
 #[inline(always)]
-fn side_values(p: &[Vec3], side: SideFn, [a, b, c]: [u32; 3]) -> [f64; 3] {
-    [
-        side.eval(p[a as usize].as_dvec3()),
-        side.eval(p[b as usize].as_dvec3()),
-        side.eval(p[c as usize].as_dvec3()),
-    ]
-}
-
-/// The side values of triangle `t`'s vertices when an analytic knife
-/// crosses one of its edges: only where the side changes, and for a
-/// rectangle only where the crossing point lies inside it. Each vertex is
-/// evaluated once; tree and scan both decide here.
-#[inline(always)]
-fn crossed_sides(mesh: &TriMesh, k: &PreparedKnife<'_>, side: SideFn, t: u32) -> Option<[f64; 3]> {
-    let tri = mesh.triangles[t as usize];
-    let p = &mesh.positions;
-    let f = side_values(p, side, tri);
-    let neg = f.map(|x| x < 0.0);
+fn crossed_triangle(
+    mesh: &TriMesh,
+    k: &PreparedKnife<'_>,
+    side: SideFn,
+    t: u32,
+) -> Option<CrossedTriangle> {
+    let vertices = mesh.triangles[t as usize];
+    let positions = vertices.map(|v| mesh.positions[v as usize]);
+    let sides = positions.map(|q| side.eval(q.as_dvec3()));
+    let neg = sides.map(|x| x < 0.0);
     if neg[0] == neg[1] && neg[1] == neg[2] {
         return None;
     }
-    if k.sign_change_crosses() {
-        return Some(f);
-    }
-    (0..3)
-        .any(|e| {
-            let (i, j) = (e, (e + 1) % 3);
-            let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
-            neg[i] != neg[j]
-                && k.crossing_from(p[tri[i] as usize], p[tri[j] as usize], f[i], f[j])
-                    .is_some()
-        })
-        .then_some(f)
+    let c = CrossedTriangle {
+        id: t,
+        vertices,
+        positions,
+        sides,
+    };
+    (k.sign_change_crosses() || knife_reaches(k, &c)).then_some(c)
+}
+
+/// Whether a bounded knife (a rectangle) reaches the crossing of one of
+/// the triangle's edges whose ends change side; tree and scan both decide
+/// here.
+fn knife_reaches(k: &PreparedKnife<'_>, c: &CrossedTriangle) -> bool {
+    (0..3).any(|e| {
+        let (i, j) = (e, (e + 1) % 3);
+        let (i, j) = if c.vertices[i] < c.vertices[j] {
+            (i, j)
+        } else {
+            (j, i)
+        };
+        k.crossing_from(c.positions[i], c.positions[j], c.sides[i], c.sides[j])
+            .is_some()
+    })
 }
 
 fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located> {
@@ -621,15 +636,14 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
             na != nb || nb != nc
         })
         .collect();
-    let test = |t: &u32| crossed_sides(mesh, k, side, *t).is_some();
+    let test = |&t: &u32| crossed_triangle(mesh, k, side, t);
     // Small sets are not worth a fork.
-    let crossed: Vec<u32> = if mixed.len() < 1 << 14 {
-        mixed.into_iter().filter(test).collect()
+    let crossed: Vec<CrossedTriangle> = if mixed.len() < 1 << 14 {
+        mixed.iter().filter_map(test).collect()
     } else {
-        mixed.into_par_iter().filter(test).collect()
+        mixed.par_iter().filter_map(test).collect()
     };
-    let crossed = crossed.iter().map(|&t| (t, mesh.triangles[t as usize]));
-    Ok(finish_locate(mesh, crossed, k, side, stats))
+    Ok(finish_locate(crossed.into_iter(), k, stats))
 }
 
 /// The scan for a triangulated knife: corefinement of every triangle.
@@ -706,18 +720,16 @@ impl EdgeTable {
 }
 
 /// Cut vertices of the crossed triangles, given as `(triangle id, its
-/// vertex ids)` in ascending id order, numbered by first use in that order
+/// vertex ids, their side values)` in ascending id order, numbered by first
+/// use in that order
 /// (so tree and scan number them identically). Only edges whose ends
 /// change side are looked up; a triangle none of whose edges the knife
 /// reaches (a rectangle's border) is dropped.
 fn finish_locate(
-    mesh: &TriMesh,
-    crossed: impl ExactSizeIterator<Item = (u32, [u32; 3])>,
+    crossed: impl ExactSizeIterator<Item = CrossedTriangle>,
     k: &PreparedKnife<'_>,
-    side: SideFn,
     mut stats: CutStats,
 ) -> Located {
-    let p = &mesh.positions;
     let n = crossed.len();
     // A mixed triangle has exactly two edges whose ends change side.
     let mut ids = EdgeTable::with_capacity(2 * n);
@@ -730,8 +742,8 @@ fn finish_locate(
         edges: Vec::with_capacity(n),
         ..Located::default()
     };
-    for (t, tri) in crossed {
-        let f = side_values(p, side, tri);
+    for c in crossed {
+        let (t, tri, f) = (c.id, c.vertices, c.sides);
         let mut cuts = [u32::MAX; 3];
         for (e, cut) in cuts.iter_mut().enumerate() {
             let (i, j) = (e, (e + 1) % 3);
@@ -739,7 +751,7 @@ fn finish_locate(
                 continue;
             }
             let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
-            let (a, b) = (p[tri[i] as usize], p[tri[j] as usize]);
+            let (a, b) = (c.positions[i], c.positions[j]);
             // A crossing that lands on an end (a vertex on the knife, or
             // rounded onto it) is that vertex's cut, shared by all its
             // crossed edges: no two cut vertices coincide, no piece gets a
@@ -754,20 +766,19 @@ fn finish_locate(
             };
             let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
             let mut made = ids.get_or_insert(key, || {
-                let c = k.crossing_from(a, b, f[i], f[j])?;
-                let q = c.point.as_vec3();
+                let x = k.crossing_from(a, b, f[i], f[j])?;
+                let q = x.point.as_vec3();
                 if q == a || q == b {
                     at_vertex = Some(if q == a {
-                        (tri[i], f[i])
+                        (tri[i], a, f[i])
                     } else {
-                        (tri[j], f[j])
+                        (tri[j], b, f[j])
                     });
                     return None;
                 }
-                add(q, (tri[i], tri[j]), c.first_negative)
+                add(q, (tri[i], tri[j]), x.first_negative)
             });
-            if let Some((v, fv)) = at_vertex {
-                let q = p[v as usize];
+            if let Some((v, q, fv)) = at_vertex {
                 made = ids.get_or_insert((u64::from(v) << 32) | u64::from(v), || {
                     add(q, (v, v), fv < 0.0)
                 });
@@ -1274,7 +1285,7 @@ impl CutSurface<'_> {
 
     /// Per cap triangle `cap[check[k]]` the number of surface and cap
     /// triangles it meets beyond their shared vertices, by the exact test
-    /// of [`crate::mesh::intersections_where`] on one small mesh of the
+    /// of [`crate::mesh::intersections_of_first`] on one small mesh of the
     /// checked triangles and the triangles near them.
     fn crossings(&self, cap: &[[u32; 3]], check: &[usize], points: &[Vec3]) -> Vec<u32> {
         let bounds = check
@@ -1308,7 +1319,7 @@ impl CutSurface<'_> {
         };
         let n = check.len();
         let mut count = vec![0u32; n];
-        for [i, j] in crate::mesh::intersections_where(&small, |i, _| i < n).pairs {
+        for [i, j] in crate::mesh::intersections_of_first(&small, n).pairs {
             for t in [i, j] {
                 if (t as usize) < n {
                     count[t as usize] += 1;

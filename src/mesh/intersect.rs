@@ -35,16 +35,13 @@ pub struct SelfIntersections {
 
 /// All intersecting triangle pairs of `mesh`, exactly (see module docs).
 pub fn self_intersections(mesh: &TriMesh) -> SelfIntersections {
-    intersections_where(mesh, |_, _| true)
+    intersections_of_first(mesh, mesh.triangles.len())
 }
 
-/// [`self_intersections`] restricted to the pairs `keep(i, j)` (`i < j`)
-/// accepts, decided before any exact test (e.g. one triangle from a part
-/// being checked against the rest).
-pub fn intersections_where(
-    mesh: &TriMesh,
-    keep: impl Fn(usize, usize) -> bool + Sync,
-) -> SelfIntersections {
+/// [`self_intersections`] restricted to the pairs `[i, j]` with `i < n`:
+/// the first `n` triangles (a part being checked) against each other and
+/// against the rest. Only those `n` query the broad phase.
+pub fn intersections_of_first(mesh: &TriMesh, n: usize) -> SelfIntersections {
     let p: Vec<[f64; 3]> = mesh
         .positions
         .iter()
@@ -64,16 +61,14 @@ pub fn intersections_where(
         Aabb::triangle(a, b, c)
     };
     let (p, planes) = (&p, &planes);
-    let mut pairs: Vec<[u32; 2]> = (0..mesh.triangles.len())
+    let mut pairs: Vec<[u32; 2]> = (0..n.min(mesh.triangles.len()))
         .into_par_iter()
         .filter(|&i| planes[i].is_some())
         .map_init(Vec::new, |candidates, i| {
             let (bi, ti, pi) = (tri_box(i), mesh.triangles[i], planes[i].expect("filtered"));
             candidates.clear();
             forest.overlapping(&bi, candidates);
-            let later = candidates
-                .iter()
-                .filter(|&&j| j as usize > i && keep(i, j as usize));
+            let later = candidates.iter().filter(|&&j| j as usize > i);
             later
                 .filter_map(|&j| {
                     let pj = planes[j as usize]?;

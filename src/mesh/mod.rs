@@ -17,7 +17,7 @@ pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
 pub use disjoint_sets::DisjointSets;
 pub use icosphere::{icosphere_sag, unit_icosphere};
-pub use intersect::{SelfIntersections, intersections_where, self_intersections};
+pub use intersect::{SelfIntersections, intersections_of_first, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Bounds, Component, Orientation, Topology};
 

@@ -171,6 +171,9 @@ pub struct Forest {
     pub corners: Vec<[u32; 3]>,
     /// Per leaf, its distinct mesh vertex ids, ascending.
     pub leaf_vertices: Vec<u32>,
+    /// The positions of `leaf_vertices` (a copy, so that a query reads each
+    /// leaf's vertices as one contiguous run instead of gathering them).
+    pub leaf_positions: Vec<Vec3>,
     /// Vertex count of the mesh the forest was built for.
     pub n_vertices: usize,
     /// Whether the boxes are sorted along their keys: in every row the
@@ -251,6 +254,18 @@ impl Forest {
         f
     }
 
+    /// Reads one word of every cache line of leaf `c`'s tables, folded into
+    /// one value: done for many leaves before their tables are used, the
+    /// loads are independent, so their cache misses overlap.
+    pub fn touch_leaf(&self, c: &CellNode) -> u32 {
+        let (t, v) = (c.triangles.range(), c.vertices.range());
+        let line = |size: usize| 64 / size;
+        (self.corners[t.clone()].iter().step_by(line(12))).fold(0, |a, x| a ^ x[0])
+            ^ (self.triangles[t].iter().step_by(line(4))).fold(0, |a, x| a ^ x)
+            ^ (self.leaf_vertices[v.clone()].iter().step_by(line(4))).fold(0, |a, x| a ^ x)
+            ^ (self.leaf_positions[v].iter().step_by(line(12))).fold(0, |a, x| a ^ x.x.to_bits())
+    }
+
     /// Appends the parts' nodes and tables (their spans shifted to the
     /// concatenation) and makes the group nodes over `runs` (one layer
     /// node per run, in order).
@@ -261,6 +276,8 @@ impl Forest {
         self.cells.reserve_exact(total(|p| p.cells.len()));
         self.leaf_vertices
             .reserve_exact(total(|p| p.leaf_vertices.len()));
+        self.leaf_positions
+            .reserve_exact(total(|p| p.leaf_positions.len()));
         self.corners.reserve_exact(total(|p| p.corners.len()));
         for mut p in parts {
             let rows = self.rows.len() as u32;
@@ -288,6 +305,7 @@ impl Forest {
                 ..*c
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
+            self.leaf_positions.extend_from_slice(&p.leaf_positions);
             if vertices > 0 {
                 p.corners
                     .as_flattened_mut()
@@ -477,6 +495,7 @@ struct Part {
     rows: Vec<RowNode>,
     cells: Vec<CellNode>,
     leaf_vertices: Vec<u32>,
+    leaf_positions: Vec<Vec3>,
     corners: Vec<[u32; 3]>,
     /// Per mesh vertex: tag of the last leaf that listed it (its first
     /// triangle position + 1) and its index in `leaf_vertices` there.
@@ -494,6 +513,7 @@ impl Part {
             rows: Vec::new(),
             cells: Vec::new(),
             leaf_vertices: Vec::with_capacity(n_triangles),
+            leaf_positions: Vec::with_capacity(n_triangles),
             corners: Vec::with_capacity(n_triangles),
             seen: vec![[0; 2]; n_vertices],
             buckets: Vec::new(),
@@ -620,9 +640,10 @@ impl Part {
         let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
             self.seen[v as usize][1] = (start + i) as u32;
-            let p = Vec3A::from(mesh.positions[v as usize]);
-            lo = lo.min(p);
-            hi = hi.max(p);
+            let p = mesh.positions[v as usize];
+            self.leaf_positions.push(p);
+            lo = lo.min(p.into());
+            hi = hi.max(p.into());
         }
         self.corners.extend(
             tris.iter()

@@ -257,7 +257,7 @@ impl Forest {
     /// Reads one word of every cache line of leaf `c`'s tables, folded into
     /// one value: done for many leaves before their tables are used, the
     /// loads are independent, so their cache misses overlap.
-    pub fn touch_leaf(&self, c: &CellNode) -> u32 {
+    pub(crate) fn touch_leaf(&self, c: &CellNode) -> u32 {
         let (t, v) = (c.triangles.range(), c.vertices.range());
         let line = |size: usize| 64 / size;
         (self.corners[t.clone()].iter().step_by(line(12))).fold(0, |a, x| a ^ x[0])

@@ -248,7 +248,7 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
         };
         kernel(
             &params,
-            &net.csr,
+            &cpu::LaneCsr::new(&net.csr),
             &net.rest,
             &forces,
             &pos,

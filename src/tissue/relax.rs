@@ -430,9 +430,14 @@ impl Stepper for CpuStepper<'_> {
     }
 
     fn advance(&mut self, n: u32, window: bool) -> Result<Probe> {
-        for _ in 0..n {
-            self.iterate();
-        }
+        // Iterate on a pool thread: each iteration's parallel loop is then
+        // shared by work stealing among awake threads instead of waking the
+        // pool and putting this thread to sleep once per iteration.
+        rayon::scope(|_| {
+            for _ in 0..n {
+                self.iterate();
+            }
+        });
         let nf = self.net.n_free;
         let keys = cpu::tissue_reduce_max(nf, &self.vel, &self.pos[self.cur], &self.snap);
         if window {

@@ -273,11 +273,70 @@ fn in_triangle(a: DVec2, b: DVec2, c: DVec2, p: DVec2) -> bool {
     cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
 }
 
+/// The reflex vertices of a ring in a uniform grid over its bounding box,
+/// about one cell per vertex: an ear test visits only the cells under the
+/// ear's box. A vertex's turn changes only when a clip makes it the
+/// neighbour of another; the clip then inserts it if it has become reflex
+/// (a forced clip, or collinear points and bridges), so every reflex vertex
+/// is listed.
+struct ReflexGrid {
+    min: DVec2,
+    scale: DVec2,
+    side: usize,
+    cells: Vec<Vec<usize>>,
+    listed: Vec<bool>,
+}
+
+impl ReflexGrid {
+    fn new(at: impl Fn(usize) -> DVec2, n: usize) -> Self {
+        let (mut min, mut max) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        for i in 0..n {
+            min = min.min(at(i));
+            max = max.max(at(i));
+        }
+        let side = (n as f64).sqrt().ceil().max(1.0) as usize;
+        let extent = (max - min).max(DVec2::splat(f64::MIN_POSITIVE));
+        ReflexGrid {
+            min,
+            scale: DVec2::splat(side as f64) / extent,
+            side,
+            cells: vec![Vec::new(); side * side],
+            listed: vec![false; n],
+        }
+    }
+
+    /// Cell coordinates of `p`, clamped to the grid.
+    fn cell(&self, p: DVec2) -> (usize, usize) {
+        let c = ((p - self.min) * self.scale).floor();
+        let clamp = |v: f64| (v.max(0.0) as usize).min(self.side - 1);
+        (clamp(c.x), clamp(c.y))
+    }
+
+    fn insert(&mut self, i: usize, p: DVec2) {
+        if !self.listed[i] {
+            self.listed[i] = true;
+            let (x, y) = self.cell(p);
+            self.cells[y * self.side + x].push(i);
+        }
+    }
+
+    /// Whether `blocks(j)` holds for a listed vertex under the box of `tri`.
+    fn any_under(&self, tri: [DVec2; 3], mut blocks: impl FnMut(usize) -> bool) -> bool {
+        let lo = tri[0].min(tri[1]).min(tri[2]);
+        let hi = tri[0].max(tri[1]).max(tri[2]);
+        let ((x0, y0), (x1, y1)) = (self.cell(lo), self.cell(hi));
+        (y0..=y1)
+            .any(|y| (x0..=x1).any(|x| self.cells[y * self.side + x].iter().any(|&j| blocks(j))))
+    }
+}
+
 /// Ear clipping of a counter-clockwise polygon (bridges allowed: repeated
 /// indices) over a linked ring, walking on after each clip (earcut's
-/// scheme, O(n²) typical). When a full turn finds no proper ear
-/// (degenerate input) the most convex vertex is clipped, so it always
-/// terminates with n − 2 triangles.
+/// scheme). An ear test looks only at the reflex vertices under the ear's
+/// box ([`ReflexGrid`]): O(n) per test at worst, far less on cut loops of
+/// thousands of vertices. When a full turn finds no proper ear (degenerate
+/// input) the most convex vertex is clipped, so it always terminates with
+/// n − 2 triangles.
 fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
     let n = poly.len();
     if n < 3 {
@@ -285,7 +344,14 @@ fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
     }
     let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
     let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let mut clipped = vec![false; n];
     let at = |i: usize| pts[poly[i]];
+    let mut grid = ReflexGrid::new(at, n);
+    for j in 0..n {
+        if cross(at(prev[j]), at(j), at(next[j])) <= 0.0 {
+            grid.insert(j, at(j));
+        }
+    }
     let mut remaining = n;
     let mut i = 0;
     let mut since = 0;
@@ -293,18 +359,18 @@ fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
         let (a, c) = (prev[i], next[i]);
         let ear = cross(at(a), at(i), at(c)) > 0.0 && {
             let (pa, pb, pc) = (at(a), at(i), at(c));
-            let mut j = next[c];
-            let mut blocked = false;
-            while j != a {
+            !grid.any_under([pa, pb, pc], |j| {
                 let q = at(j);
-                let reflex = cross(at(prev[j]), q, at(next[j])) <= 0.0;
-                if reflex && q != pa && q != pb && q != pc && in_triangle(pa, pb, pc, q) {
-                    blocked = true;
-                    break;
-                }
-                j = next[j];
-            }
-            !blocked
+                !clipped[j]
+                    && j != a
+                    && j != i
+                    && j != c
+                    && cross(at(prev[j]), q, at(next[j])) <= 0.0
+                    && q != pa
+                    && q != pb
+                    && q != pc
+                    && in_triangle(pa, pb, pc, q)
+            })
         };
         let clip = if ear {
             Some(i)
@@ -331,8 +397,15 @@ fn ear_clip(pts: &[DVec2], poly: Vec<usize>, out: &mut Vec<[usize; 3]>) {
                 out.push([poly[a], poly[v], poly[c]]);
                 next[a] = c;
                 prev[c] = a;
+                clipped[v] = true;
                 remaining -= 1;
                 since = 0;
+                // Only the new neighbours change their turn.
+                for k in [a, c] {
+                    if cross(at(prev[k]), at(k), at(next[k])) <= 0.0 {
+                        grid.insert(k, at(k));
+                    }
+                }
                 i = c;
             }
             None => i = next[i],

@@ -784,13 +784,7 @@ fn mirror_lanes_equal_the_scalar_loop() {
                 cpu::spring_step
             };
             kernel(
-                &params,
-                &cpu::LaneCsr::new(&net.csr),
-                &net.rest,
-                &forces,
-                &pos,
-                &mut out,
-                &mut v_out,
+                &params, &net.csr, &net.rest, &forces, &pos, &mut out, &mut v_out,
             );
             let mut loaded = false;
             for i in 0..n_free {

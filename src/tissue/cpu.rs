@@ -6,16 +6,14 @@
 //! runs the nodes in parallel with rayon (each node writes only its own
 //! outputs, so the result does not depend on scheduling). The step mirrors
 //! gather four nodes at once as the lanes of a `Vec4`, the way a GPU runs
-//! invocations side by side, from a [`LaneCsr`] that stores the k-th
-//! springs of the four side by side: the neighbours' positions are turned
-//! into one vector per coordinate as they are loaded, the per-spring
-//! arithmetic, sqrt and division are vector instructions, each lane still
-//! computes its own node's sum in its own CSR order, and the results stay
-//! bit for bit those of the scalar loop (`tests/tissue.rs`). Lavapipe gives `spring_step` bit for bit;
+//! invocations side by side: the per-spring sqrt and division become
+//! vector instructions, each lane still computes its own node's sum in its
+//! own CSR order, and the results stay bit for bit those of the scalar loop
+//! (`tests/tissue.rs`). Lavapipe gives `spring_step` bit for bit;
 //! `spring_chebyshev` differs from it by a few ulp per step
 //! (`tests/parity/spring_step.rs`).
 
-use glam::{BVec4A, Mat4, Vec4};
+use glam::{Mat4, Vec4};
 use rayon::prelude::*;
 
 use super::network::SpringCsr;
@@ -83,90 +81,23 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
 /// invocations (one `Vec4` lane each; SSE2 on x86-64, scalar elsewhere).
 const LANES: usize = 4;
 
-/// The spring CSR of the free nodes regrouped for the step mirrors: per
-/// group of [`LANES`] consecutive nodes, one `[u32; LANES]` per k holding
-/// the k-th CSR entry of each lane's node (the same packing as
-/// [`SpringCsr::entries`]). A lane whose row has ended, and a lane past the
-/// last free node, holds its own node with material 0 (a spring of length
-/// 0 that the kernels skip); no real spring joins a node to itself. Built
-/// once per simulation; #groups × the longest row of each group entries
-/// (0.1–1.3 % more than the CSR on the bench networks).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct LaneCsr {
-    /// Free nodes (rows of the CSR).
-    n_free: usize,
-    /// #groups + 1 starts into `entries`.
-    starts: Vec<usize>,
-    entries: Vec<[u32; LANES]>,
-}
-
-impl LaneCsr {
-    /// Regroups `csr` (rows of the free nodes `0..csr.offsets.len() − 1`).
-    pub fn new(csr: &SpringCsr) -> LaneCsr {
-        let n_free = csr.offsets.len().saturating_sub(1);
-        let mut starts = Vec::with_capacity(n_free.div_ceil(LANES) + 1);
-        starts.push(0);
-        let rows = |g: usize| g * LANES..((g + 1) * LANES).min(n_free);
-        let row = |i: usize| csr.offsets[i] as usize..csr.offsets[i + 1] as usize;
-        let mut total = 0usize;
-        for g in 0..n_free.div_ceil(LANES) {
-            total += rows(g).map(|i| row(i).len()).max().unwrap_or(0);
-            starts.push(total);
-        }
-        let mut lanes = LaneCsr {
-            n_free,
-            starts,
-            entries: Vec::with_capacity(total),
-        };
-        for g in 0..n_free.div_ceil(LANES) {
-            let node = lanes.nodes(g);
-            for k in 0..lanes.starts[g + 1] - lanes.starts[g] {
-                let entry = std::array::from_fn(|t| {
-                    let r = row(node[t]);
-                    if node[t] == g * LANES + t && k < r.len() {
-                        csr.entries[r.start + k]
-                    } else {
-                        node[t] as u32
-                    }
-                });
-                lanes.entries.push(entry);
-            }
-        }
-        lanes
-    }
-
-    /// The nodes of group `g` by lane (lanes past the last free node repeat
-    /// the group's first).
-    #[inline(always)]
-    fn nodes(&self, g: usize) -> [usize; LANES] {
-        let i0 = g * LANES;
-        std::array::from_fn(|t| if i0 + t < self.n_free { i0 + t } else { i0 })
-    }
-}
-
-/// The rows x, y, z of the 4 × 4 matrix whose columns are `cols`: one
-/// vector per coordinate of four points.
-#[inline(always)]
-fn by_coordinate(cols: [Vec4; LANES]) -> [Vec4; 3] {
-    let m = Mat4::from_cols(cols[0], cols[1], cols[2], cols[3]).transpose();
-    [m.x_axis, m.y_axis, m.z_axis]
-}
-
-/// Spring force sums g_i of eq. 4.4 of the group `g` of [`LaneCsr`] (the
-/// nodes `g·LANES..`), with rest positions `rest` and displacements
-/// `pos_in`: lane t is node `g·LANES + t` and sums its springs in its CSR
-/// order, r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs
-/// exactly the float operations of one kernel invocation (vector sqrt,
-/// division and arithmetic round like scalar ones, and nothing is
-/// contracted to FMA). The rest length is l_ij = |x0_i − x0_j| from the
-/// same f32 difference. A padding entry (a node with itself) has r = 0 and
-/// adds nothing. Returns `[gx, gy, gz]` by lane and, with `BLOCKS`, the
-/// preconditioner blocks of `spring_chebyshev.wgsl` as `[b00, b11, b22,
-/// b01, b02, b12]` by lane (η = `isotropy`; zeros without `BLOCKS`).
+/// Spring force sums g_i of eq. 4.4 of the nodes `i0..i0 + lanes`
+/// (`1 ≤ lanes ≤ LANES`), with rest positions `rest` and displacements
+/// `pos_in`: lane t is node `i0 + t` and sums its springs in its CSR order,
+/// r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs exactly the
+/// float operations of one kernel invocation (vector sqrt, division and
+/// arithmetic round like scalar ones, and nothing is contracted to FMA).
+/// The rest length is l_ij = |x0_i − x0_j| from the same f32 difference.
+/// A lane whose row has ended reads its own node with an all-zero material
+/// (r = 0, |r| = 0, c_max = 0: nothing added). Returns `[gx, gy, gz]`
+/// by lane and, with `BLOCKS`, the preconditioner blocks of
+/// `spring_chebyshev.wgsl` as `[b00, b11, b22, b01, b02, b12]` by lane
+/// (η = `isotropy`; zeros without `BLOCKS`).
 #[inline(always)]
 fn gather_group<const BLOCKS: bool>(
-    g: usize,
-    lanes: &LaneCsr,
+    i0: usize,
+    lanes: usize,
+    csr: &SpringCsr,
     rest: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     materials: &[[f32; 4]; 16],
@@ -174,25 +105,46 @@ fn gather_group<const BLOCKS: bool>(
 ) -> ([Vec4; 3], [Vec4; 6]) {
     // One length for both node arrays: one bounds check per neighbour.
     let n = rest.len().min(pos_in.len());
-    let (rest, pos_in) = (&rest[..n], &pos_in[..n]);
-    let group = &lanes.entries[lanes.starts[g]..lanes.starts[g + 1]];
-    let node = lanes.nodes(g);
-    let [x0x, x0y, x0z] = by_coordinate(node.map(|i| Vec4::from_array(rest[i])));
-    let [ux, uy, uz] = by_coordinate(node.map(|i| Vec4::from_array(pos_in[i])));
+    let (rest, pos_in, entries) = (&rest[..n], &pos_in[..n], &csr.entries[..]);
+    let mut node = [i0; LANES];
+    let mut start = [0usize; LANES];
+    let mut count = [0usize; LANES];
+    for t in 0..lanes {
+        node[t] = i0 + t;
+        start[t] = csr.offsets[i0 + t] as usize;
+        count[t] = csr.offsets[i0 + t + 1] as usize - start[t];
+    }
+    let x0 = node.map(|i| Vec4::from_array(rest[i]));
+    let u = node.map(|i| Vec4::from_array(pos_in[i]));
+    let k_end = count.iter().copied().max().unwrap_or(0);
     let (mut gx, mut gy, mut gz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
     let (mut blocks, mut iso) = ([Vec4::ZERO; 6], Vec4::ZERO);
     let eta = Vec4::splat(isotropy);
-    for e in group {
-        let unpacked = e.map(SpringCsr::unpack);
-        let [x1x, x1y, x1z] = by_coordinate(unpacked.map(|(j, _)| Vec4::from_array(rest[j])));
-        let [u1x, u1y, u1z] = by_coordinate(unpacked.map(|(j, _)| Vec4::from_array(pos_in[j])));
-        // The material rows (c1, c2 − c1, knee, c_max) by lane.
-        let m = unpacked.map(|(_, m)| Vec4::from_array(materials[m]));
-        let mat = Mat4::from_cols(m[0], m[1], m[2], m[3]).transpose();
+    for k in 0..k_end {
+        let mut d0 = [Vec4::ZERO; LANES];
+        let mut r = [Vec4::ZERO; LANES];
+        let mut row = [Vec4::ZERO; LANES];
+        for t in 0..LANES {
+            // A lane past its row: its own node and an all-zero material.
+            let (j, m) = if k < count[t] {
+                let (j, m) = SpringCsr::unpack(entries[start[t] + k]);
+                (j, Vec4::from_array(materials[m]))
+            } else {
+                (node[t], Vec4::ZERO)
+            };
+            d0[t] = x0[t] - Vec4::from_array(rest[j]);
+            r[t] = d0[t] + (u[t] - Vec4::from_array(pos_in[j]));
+            row[t] = m;
+        }
+        // Lanes as vectors: d0 and r by component, the material rows as
+        // (c1, c2 − c1, knee, c_max) by lane.
+        let d0 = Mat4::from_cols(d0[0], d0[1], d0[2], d0[3]).transpose();
+        let r = Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose();
+        let mat = Mat4::from_cols(row[0], row[1], row[2], row[3]).transpose();
         // Rest length l_ij = |x_rest,i − x_rest,j|, from the same difference.
-        let (dx, dy, dz) = (x0x - x1x, x0y - x1y, x0z - x1z);
+        let (dx, dy, dz) = (d0.x_axis, d0.y_axis, d0.z_axis);
         let l = (dx * dx + dy * dy + dz * dz).sqrt();
-        let (rx, ry, rz) = (dx + (ux - u1x), dy + (uy - u1y), dz + (uz - u1z));
+        let (rx, ry, rz) = (r.x_axis, r.y_axis, r.z_axis);
         let len = (rx * rx + ry * ry + rz * rz).sqrt();
         // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
         let ext = len - l;
@@ -215,9 +167,8 @@ fn gather_group<const BLOCKS: bool>(
             for (b, term) in blocks.iter_mut().zip(terms) {
                 *b += term;
             }
-            // A spring of length 0 adds c_max I, a padding entry nothing.
-            let pad = BVec4A::from(std::array::from_fn(|t| unpacked[t].0 == node[t]));
-            iso += Vec4::select(on, across, Vec4::select(pad, Vec4::ZERO, c_max));
+            // A spring of length 0 adds c_max I (a lane past its row, 0).
+            iso += Vec4::select(on, across, c_max);
         }
     }
     for b in &mut blocks[..3] {
@@ -237,7 +188,7 @@ fn flush(v: f32) -> f32 {
 #[inline(always)]
 fn for_free_nodes<const BLOCKS: bool>(
     p: &StepParams,
-    lanes: &LaneCsr,
+    csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
@@ -247,10 +198,6 @@ fn for_free_nodes<const BLOCKS: bool>(
     + Sync,
 ) {
     let n = p.n_free as usize;
-    assert_eq!(
-        n, lanes.n_free,
-        "step parameters and lane CSR disagree on the free nodes"
-    );
     let chunk = grain(n);
     pos_out[..n]
         .par_chunks_mut(chunk)
@@ -260,8 +207,9 @@ fn for_free_nodes<const BLOCKS: bool>(
             for (b, (po, ve)) in po.chunks_mut(LANES).zip(ve.chunks_mut(LANES)).enumerate() {
                 let i0 = c * chunk + b * LANES;
                 let ([gx, gy, gz], blocks) = gather_group::<BLOCKS>(
-                    i0 / LANES,
-                    lanes,
+                    i0,
+                    po.len(),
+                    csr,
                     rest,
                     pos_in,
                     &p.materials,
@@ -292,8 +240,7 @@ fn for_free_nodes<const BLOCKS: bool>(
 }
 
 /// Mirror of `spring_step.wgsl`: one semi-implicit Euler step (eq. 4.4–4.7)
-/// of every free node, on displacements from rest. `lanes`: the network's
-/// CSR ([`LaneCsr::new`] of the kernel's `SpringCsr`). `rest`: #nodes rest
+/// of every free node, on displacements from rest. `rest`: #nodes rest
 /// positions `[x, y, z, _]`. `pos_in`/`pos_out`: #nodes displacements
 /// `[ux, uy, uz, w]` (u = x − x_rest) with `w = B_i / m_i`; only the first
 /// `n_free` of `pos_out` are written (the caller keeps the fixed nodes
@@ -301,7 +248,7 @@ fn for_free_nodes<const BLOCKS: bool>(
 /// place. `forces`: #free external forces (read only when `use_forces`).
 pub fn spring_step(
     p: &StepParams,
-    lanes: &LaneCsr,
+    csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
@@ -311,7 +258,7 @@ pub fn spring_step(
     let (dt, gamma) = (p.dt, p.damping);
     for_free_nodes::<false>(
         p,
-        lanes,
+        csr,
         rest,
         forces,
         pos_in,
@@ -338,7 +285,7 @@ pub fn spring_step(
 /// read); `v` holds the last update divided by h.
 pub fn spring_chebyshev(
     p: &StepParams,
-    lanes: &LaneCsr,
+    csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
@@ -348,7 +295,7 @@ pub fn spring_chebyshev(
     let (h, beta, gain) = (p.dt, p.damping, p.gain);
     for_free_nodes::<true>(
         p,
-        lanes,
+        csr,
         rest,
         forces,
         pos_in,

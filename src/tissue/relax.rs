@@ -361,7 +361,6 @@ impl Setup {
 #[derive(Debug)]
 pub(crate) struct CpuStepper<'a> {
     net: &'a SpringNetwork,
-    lanes: cpu::LaneCsr,
     setup: Setup,
     pos: [Vec<[f32; 4]>; 2],
     cur: usize,
@@ -374,7 +373,6 @@ impl<'a> CpuStepper<'a> {
         let pos = [setup.positions.clone(), setup.positions.clone()];
         CpuStepper {
             net,
-            lanes: cpu::LaneCsr::new(&net.csr),
             vel: vec![[0.0; 4]; net.n_free],
             snap: setup.positions[..net.n_free].to_vec(),
             setup,
@@ -397,7 +395,7 @@ impl<'a> CpuStepper<'a> {
         };
         kernel(
             &self.setup.params,
-            &self.lanes,
+            &self.net.csr,
             &self.net.rest,
             &self.setup.forces,
             src,

@@ -248,7 +248,7 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
         };
         kernel(
             &params,
-            &cpu::LaneCsr::new(&net.csr),
+            &net.csr,
             &net.rest,
             &forces,
             &pos,

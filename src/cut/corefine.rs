@@ -713,25 +713,45 @@ pub(crate) fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
         let [a, b, c3] = t.map(|v| surface.positions[v as usize].as_dvec3());
         volume6[c as usize] += a.dot(b.cross(c3));
     }
-    // Closed: every edge used twice, once in each direction.
-    let mut edges: Vec<(u64, bool, u32)> = surface
-        .triangles
-        .par_iter()
-        .zip(&comp)
-        .flat_map_iter(|(t, &c)| {
-            (0..3).map(move |i| {
-                let (a, b) = (t[i], t[(i + 1) % 3]);
-                let key = (u64::from(a.min(b)) << 32) | u64::from(a.max(b));
-                (key, a < b, c)
-            })
+    // Closed: every edge used twice, once in each direction. The half-edges
+    // are bucketed by their lower vertex (a counting sort, O(F)); each
+    // bucket holds a vertex's few edges to higher vertices.
+    let half_edges = |t: &[u32; 3]| {
+        let t = *t;
+        (0..3).map(move |i| (t[i], t[(i + 1) % 3]))
+    };
+    let mut start = vec![0usize; surface.n_vertices() + 1];
+    for (a, b) in surface.triangles.iter().flat_map(half_edges) {
+        start[a.min(b) as usize + 1] += 1;
+    }
+    for v in 1..start.len() {
+        start[v] += start[v - 1];
+    }
+    let mut fill = start.clone();
+    // Per half-edge: (higher vertex, runs upward, component).
+    let mut bucket = vec![(0u32, false, 0u32); start[start.len() - 1]];
+    for (t, &c) in surface.triangles.iter().zip(&comp) {
+        for (a, b) in half_edges(t) {
+            let lo = a.min(b) as usize;
+            bucket[fill[lo]] = (a.max(b), a < b, c);
+            fill[lo] += 1;
+        }
+    }
+    let open: Vec<u32> = start
+        .par_windows(2)
+        .flat_map_iter(|w| {
+            let mut edges = bucket[w[0]..w[1]].to_vec();
+            edges.sort_unstable();
+            edges
+                .chunk_by(|x, y| x.0 == y.0)
+                .filter(|run| !(run.len() == 2 && run[0].1 != run[1].1))
+                .map(|run| run[0].2)
+                .collect::<Vec<_>>()
         })
         .collect();
-    edges.par_sort_unstable();
     let mut closed = vec![true; n];
-    for run in edges.chunk_by(|x, y| x.0 == y.0) {
-        if !(run.len() == 2 && run[0].1 != run[1].1) {
-            closed[run[0].2 as usize] = false;
-        }
+    for c in open {
+        closed[c as usize] = false;
     }
     let enclosed: f64 = (0..n).filter(|&c| closed[c]).map(|c| volume6[c]).sum();
     comp.iter()

@@ -1033,3 +1033,159 @@ fn polyhedrize_writes_verified_cells() {
         "voxel centres",
     );
 }
+
+/// `chisel bench relax` on fran_cut: rates of both step kernels on both
+/// backends in one run, the traffic figures they imply, and the time to
+/// equilibrium after the chin plan's first increment (the explicit kernel
+/// is bit-exact on lavapipe, so its GPU run lands on the CPU state).
+#[test]
+fn bench_relax_reports_rates_and_equilibrium() {
+    let Some(_gpu) = common::gpu() else { return };
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let report = tmp.path().join("bench.json");
+    let fran = dir.join("fran_cut.vtk");
+    let plan = plan_file("fran_chin_advance.toml");
+    let v = ok_json(&[
+        "bench",
+        "relax",
+        path_str(&fran),
+        "--plan",
+        &plan,
+        "--seconds",
+        "0.05",
+        "--approach",
+        "--json",
+        "--report",
+        path_str(&report),
+    ]);
+    let written: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(written, v);
+    assert!(v["machine"]["threads"].as_u64().unwrap() >= 1);
+    let net = &v["networks"][0];
+    assert_eq!(net["nodes"], 6615);
+    assert_eq!(net["free_nodes"], 4410);
+    let bytes = net["bytes_per_iteration"].as_u64().unwrap();
+    // 84 bytes per free node, 32 per bone node, 4 per CSR entry.
+    let entries = net["csr_entries"].as_u64().unwrap();
+    assert_eq!(bytes, 4410 * 84 + 2205 * 32 + entries * 4);
+    let rates = net["rates"].as_array().unwrap();
+    let runs: Vec<(&str, &str)> = rates
+        .iter()
+        .map(|r| {
+            (
+                r["solver"].as_str().unwrap(),
+                r["backend"].as_str().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            ("explicit", "cpu"),
+            ("explicit", "gpu"),
+            ("chebyshev", "cpu"),
+            ("chebyshev", "gpu")
+        ]
+    );
+    for r in rates {
+        let (n, s) = (
+            r["iterations"].as_f64().unwrap(),
+            r["seconds"].as_f64().unwrap(),
+        );
+        assert!(n >= 8.0 && s > 0.0, "{r}");
+        let rate = r["iterations_per_second"].as_f64().unwrap();
+        assert!((rate - n / s).abs() <= 1e-9 * rate, "{r}");
+        let gbs = r["effective_gb_per_second"].as_f64().unwrap();
+        assert!((gbs - rate * bytes as f64 / 1e9).abs() <= 1e-9 * gbs, "{r}");
+    }
+    let settled = net["time_to_equilibrium"].as_array().unwrap();
+    assert_eq!(settled.len(), 4);
+    for s in settled {
+        assert_eq!(s["status"], "converged", "{s}");
+        // Both solvers reach the same state within their stop tests.
+        assert!(s["gap_percent"].as_f64().unwrap() < 3.0, "{s}");
+    }
+    assert_eq!(settled[1]["gap_percent"], 0.0, "explicit GPU vs CPU");
+    assert_eq!(settled[0]["iterations"], settled[1]["iterations"]);
+    let approach = &net["approach"];
+    assert_eq!(approach["reference_status"], "converged");
+    for a in approach["runs"].as_array().unwrap() {
+        assert_eq!(a["reached"], true, "{a}");
+        assert!(a["gap_percent"].as_f64().unwrap() <= 1.0, "{a}");
+    }
+}
+
+/// `--grid` and `--refine` build the refined networks of the benchmarks:
+/// fran_cut refined 2× has 89 × 97 vertices per layer.
+#[test]
+fn bench_relax_refines_the_scan_grid() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let fran = dir.join("fran_cut.vtk");
+    let v = ok_json(&[
+        "bench",
+        "relax",
+        path_str(&fran),
+        "--grid",
+        "45,49",
+        "--refine",
+        "1,2",
+        "--backend",
+        "cpu",
+        "--solver",
+        "explicit",
+        "--seconds",
+        "0.02",
+        "--json",
+    ]);
+    let nodes: Vec<u64> = (v["networks"].as_array().unwrap().iter())
+        .map(|n| n["nodes"].as_u64().unwrap())
+        .collect();
+    assert_eq!(nodes, [6615, 3 * 89 * 97]);
+    for n in v["networks"].as_array().unwrap() {
+        assert_eq!(n["rates"].as_array().unwrap().len(), 1);
+        assert!(n["time_to_equilibrium"].is_null());
+        assert!(n["spectrum"].is_null());
+    }
+}
+
+#[test]
+fn bench_relax_arguments_are_checked() {
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let fran = dir.join("fran_cut.vtk");
+    let fran = path_str(&fran);
+    let run = |extra: &[&str], names: &str| {
+        let mut args = vec!["bench", "relax", fran, "--backend", "cpu"];
+        args.extend(extra);
+        assert_clean_error(&args, names);
+    };
+    run(&["--refine", "8"], "--grid COLS,ROWS");
+    run(
+        &["--grid", "10,10"],
+        "fran_cut.vtk: --grid 10,10 needs 100 vertices",
+    );
+    run(&["--grid", "45"], "--grid takes COLS,ROWS");
+    run(&["--refine", "0"], "--refine factors are 1..=64");
+    run(&["--seconds", "0"], "--seconds takes a positive number");
+    let cut_plan = plan_file("ct_phantom_jaw_advance.toml");
+    run(
+        &["--plan", &cut_plan],
+        "ct_phantom_jaw_advance.toml: the plan cuts the bone",
+    );
+    assert_clean_error(
+        &[
+            "bench",
+            "relax",
+            "/nonexistent/skin.ply",
+            "--backend",
+            "cpu",
+        ],
+        "/nonexistent/skin.ply",
+    );
+}

@@ -6,6 +6,7 @@
 //! not a terminal), `--json` prints the report on stdout, `--report FILE`
 //! writes it atomically.
 
+mod bench;
 mod convert;
 mod cut;
 mod demo;
@@ -174,6 +175,8 @@ enum Command {
     Render(render::Args),
     /// The main job on embedded generated data: phantom → GPU kernels → previews + report.
     Demo(demo::Args),
+    /// Benchmarks with JSON reports: `bench relax` (tissue step kernels, CPU and GPU in one run).
+    Bench(bench::Args),
 }
 
 impl Global {
@@ -229,6 +232,7 @@ pub fn main() -> ExitCode {
         Command::Phantom(a) => phantom::run(&cli.global, a),
         Command::Render(a) => render::run(&cli.global, a),
         Command::Demo(a) => demo::run(&cli.global, a),
+        Command::Bench(a) => bench::run(&cli.global, a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

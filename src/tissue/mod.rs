@@ -30,6 +30,7 @@
 //! settle where the exact equilibrium is. Reports and
 //! [`Simulation::positions`] give absolute positions.
 
+pub mod bench;
 pub mod chebyshev;
 pub mod cpu;
 pub mod ct;

@@ -523,3 +523,30 @@ pub struct ResolvedPlan {
     pub name: Option<String>,
     pub steps: Vec<ResolvedStep>,
 }
+
+impl ResolvedPlan {
+    /// One surgery increment: the first increment of the first step,
+    /// divided by `divide` (≥ 1), as a one-step plan of one increment
+    /// relaxed to convergence (what the time-to-equilibrium benchmarks
+    /// run); `None` for a plan without steps.
+    pub fn first_increment(&self, divide: u32) -> Option<ResolvedPlan> {
+        let s = self.steps.first()?;
+        let f = 1.0 / (f64::from(s.increments) * f64::from(divide.max(1)));
+        let motion = Motion {
+            translate: s.motion.translate * f,
+            rotation: (s.motion.rotation).map(|(axis, angle, c)| (axis, angle * f, c)),
+        };
+        Some(ResolvedPlan {
+            name: self.name.clone(),
+            steps: vec![ResolvedStep {
+                name: s.name.clone(),
+                bone_vertices: s.bone_vertices.clone(),
+                start: s.start.clone(),
+                motion,
+                increments: 1,
+                iterations: Iterations::Converge,
+                reset_velocities: false,
+            }],
+        })
+    }
+}

@@ -1,0 +1,319 @@
+//! `chisel bench relax MESH`: iterations per second of the tissue step
+//! kernels on the CPU mirror and the GPU in the same run, the bytes one
+//! iteration must move and the effective bandwidth, and the time to
+//! equilibrium after one surgery increment per solver (issue 3 §8; the
+//! criterion bench `benches/relax.rs` measures the same on fran_cut).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde_json::json;
+
+use super::{Global, vec3_arg};
+use crate::parity::Backend;
+use crate::tissue::bench::{
+    Machine, approach_equilibrium, increment_bone, iteration_rate, time_to_equilibrium,
+};
+use crate::tissue::phantom::refine_grid;
+use crate::tissue::{Fragments, NetworkParams, Plan, ResolvedPlan, Solver, SpringNetwork};
+
+/// Arguments of `chisel bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum What {
+    /// Tissue relaxation: step kernel rates (CPU and GPU, same run), memory
+    /// traffic, time to equilibrium after one surgery increment.
+    Relax(RelaxArgs),
+}
+
+/// Which backends a benchmark runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Backends {
+    Cpu,
+    Gpu,
+    Both,
+}
+
+/// Arguments of `chisel bench relax`.
+#[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RelaxArgs {
+    /// Epidermis mesh (any format `chisel stats` reads).
+    mesh: PathBuf,
+    /// Bone mesh (default: the skin scaled by 0.7 about the origin).
+    #[arg(long)]
+    bone: Option<PathBuf>,
+    /// Origin O of the layer construction `x,y,z` (default: SPEC §1.1 rule).
+    #[arg(long, value_delimiter = ',')]
+    origin: Option<Vec<f32>>,
+    /// The mesh is a structured scan grid of `COLS,ROWS` vertices (vertex i
+    /// at column i / ROWS, row i % ROWS; fran_cut.vtk: 45,49), which
+    /// `--refine` subdivides.
+    #[arg(long, value_delimiter = ',')]
+    grid: Option<Vec<usize>>,
+    /// Refinement factors of the grid, one network each (fran_cut: 1,8,13
+    /// give 6.6k, 408k and 1.07M nodes); needs `--grid` unless just 1.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    refine: Vec<usize>,
+    /// Solvers whose step kernel is timed (and relaxed with `--plan`).
+    #[arg(long, value_delimiter = ',', default_value = "explicit,chebyshev")]
+    solver: Vec<Solver>,
+    /// Where the kernels run.
+    #[arg(long, value_enum, default_value = "both")]
+    backend: Backends,
+    /// Timed seconds per rate (after a warm-up batch).
+    #[arg(long, default_value_t = 3.0)]
+    seconds: f64,
+    /// Surgery plan: the bone is moved by its first increment for the
+    /// rates, and each solver relaxes that increment to its stop test
+    /// (time to equilibrium). Without a plan the bone stays at rest.
+    #[arg(long)]
+    plan: Option<PathBuf>,
+    /// With `--plan`: also the iterations and time until every free node
+    /// is within 1 % of the largest displacement of the equilibrium itself
+    /// (a reference from Chebyshev at ε = 10⁻⁷ · diagonal), each run
+    /// capped at `--max-iterations`.
+    #[arg(long, requires = "plan")]
+    approach: bool,
+    /// Divide the increment by the refinement factor (keeps the bone's step
+    /// below the spacing of refined networks).
+    #[arg(long, requires = "plan")]
+    scale_increment: bool,
+    /// Iteration cap of each relaxation.
+    #[arg(long, default_value_t = 40_000)]
+    max_iterations: u32,
+    /// JSON report.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Print the report on stdout (the figures go to stderr as they come).
+    #[arg(long)]
+    json: bool,
+}
+
+pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    match &args.what {
+        What::Relax(a) => relax(global, a),
+    }
+}
+
+/// Checks the arguments before any work: factors, grid, seconds, solvers.
+fn check(args: &RelaxArgs) -> anyhow::Result<Option<(usize, usize)>> {
+    anyhow::ensure!(
+        args.seconds.is_finite() && args.seconds > 0.0,
+        "--seconds takes a positive number of seconds; got {}",
+        args.seconds
+    );
+    anyhow::ensure!(
+        !args.refine.is_empty(),
+        "--refine needs at least one factor"
+    );
+    if let Some(f) = args.refine.iter().find(|&&f| f == 0 || f > 64) {
+        anyhow::bail!("--refine factors are 1..=64; got {f}");
+    }
+    anyhow::ensure!(
+        !args.solver.is_empty(),
+        "--solver needs at least one solver"
+    );
+    anyhow::ensure!(args.max_iterations > 0, "--max-iterations must be ≥ 1");
+    let grid = match args.grid.as_deref() {
+        None => None,
+        Some(&[c, r]) if c >= 2 && r >= 2 => Some((c, r)),
+        Some(g) => anyhow::bail!("--grid takes COLS,ROWS, each ≥ 2; got {g:?}"),
+    };
+    if grid.is_none() && args.refine.iter().any(|&f| f != 1) {
+        anyhow::bail!("--refine above 1 subdivides a scan grid: give its --grid COLS,ROWS");
+    }
+    if let Some(path) = &args.report {
+        crate::io::check_output_path(path)?;
+    }
+    Ok(grid)
+}
+
+fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
+    let grid = check(args)?;
+    let machine = Machine::now();
+    let skin = crate::io::read_mesh(&args.mesh)?;
+    if let Some((c, r)) = grid
+        && skin.n_vertices() != c * r
+    {
+        anyhow::bail!(
+            "{}: --grid {c},{r} needs {} vertices; the mesh has {}",
+            args.mesh.display(),
+            c * r,
+            skin.n_vertices()
+        );
+    }
+    let bone = (args.bone.as_deref())
+        .map(crate::io::read_mesh)
+        .transpose()?;
+    let plan = args.plan.as_deref().map(Plan::from_path).transpose()?;
+    if let Some(p) = &plan {
+        anyhow::ensure!(
+            p.cuts.is_empty(),
+            "{}: the plan cuts the bone; `bench relax` takes plans of steps only",
+            args.plan.as_deref().map_or(Path::new("-"), |p| p).display()
+        );
+    }
+    let gpu = match args.backend {
+        Backends::Cpu => None,
+        Backends::Gpu | Backends::Both => Some(global.gpu()?),
+    };
+    let mut backends: Vec<Backend<'_>> = Vec::new();
+    if args.backend != Backends::Gpu {
+        backends.push(Backend::Cpu);
+    }
+    if let Some(g) = &gpu {
+        backends.push(Backend::Gpu(g));
+    }
+    let params = NetworkParams {
+        origin: vec3_arg("origin", args.origin.as_deref())?.map(|o| o.to_array()),
+        ..Default::default()
+    };
+    global.note(format!(
+        "machine: {} ({} CPUs, {} threads), load {}",
+        machine.cpu.as_deref().unwrap_or("unknown CPU"),
+        machine.cpus,
+        machine.threads,
+        machine
+            .load_average
+            .map_or("unknown".into(), |l| format!("{} {} {}", l[0], l[1], l[2]))
+    ));
+    let mut networks = Vec::new();
+    for &factor in &args.refine {
+        let t = Instant::now();
+        let mesh = match grid {
+            Some((c, r)) => refine_grid(&skin, c, r, factor)?,
+            None => skin.clone(),
+        };
+        let net = SpringNetwork::build(&mesh, bone.as_ref(), &params)?;
+        let build_seconds = t.elapsed().as_secs_f64();
+        // The Chebyshev solver's one-time spectrum estimate, timed apart.
+        let t = Instant::now();
+        let spectrum = args
+            .solver
+            .contains(&Solver::Chebyshev)
+            .then(|| net.spectrum());
+        let spectrum_seconds = spectrum.map(|_| t.elapsed().as_secs_f64());
+        global.note(format!(
+            "network ×{factor}: {} nodes ({} free), {} CSR entries, {:.2} MB per iteration, built in {build_seconds:.2} s",
+            net.n_nodes(),
+            net.n_free,
+            net.csr.entries.len(),
+            net.bytes_per_iteration() as f64 / 1e6
+        ));
+        let increment = plan
+            .as_ref()
+            .map(|p| -> anyhow::Result<ResolvedPlan> {
+                let resolved = p.resolve(&net, &Fragments::new())?;
+                let divide = if args.scale_increment { factor } else { 1 };
+                resolved
+                    .first_increment(divide as u32)
+                    .ok_or_else(|| anyhow::anyhow!("the plan has no steps"))
+            })
+            .transpose()?;
+        let bone_now = increment
+            .as_ref()
+            .map_or_else(|| net.bone_rest().to_vec(), |i| increment_bone(&net, i));
+        let runs: Vec<(Solver, Backend<'_>)> = (args.solver.iter())
+            .flat_map(|&s| backends.iter().map(move |&b| (s, b)))
+            .collect();
+        let bar = global.progress(runs.len() as u64, "rates");
+        let mut rates = Vec::new();
+        for &(solver, backend) in &runs {
+            bar.set_message(format!("{} {}", solver.name(), backend.name()));
+            let r = iteration_rate(&net, solver, backend, &bone_now, args.seconds)?;
+            bar.suspend(|| {
+                global.note(format!(
+                    "  {:>9} {:>3}: {:>9.1} it/s, {:>6.2} GB/s effective{}",
+                    solver.name(),
+                    r.backend,
+                    r.iterations_per_second,
+                    r.effective_gb_per_second,
+                    r.cpu_seconds_per_iteration
+                        .map(|c| format!(", {:.1} ms CPU per iteration", c * 1e3))
+                        .unwrap_or_default()
+                ))
+            });
+            rates.push(r);
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        let mut equilibrium = serde_json::Value::Null;
+        let mut approach = serde_json::Value::Null;
+        if let Some(increment) = &increment {
+            let bar = global.progress(runs.len() as u64, "equilibrium");
+            let settled = time_to_equilibrium(&net, increment, &runs, args.max_iterations, |s| {
+                bar.suspend(|| {
+                    global.note(format!(
+                        "  {:>9} {:>3}: {} after {} iterations, {:.3} s, {:.3} % from the first run",
+                        s.solver.name(),
+                        s.backend,
+                        s.status,
+                        s.iterations,
+                        s.seconds,
+                        s.gap_percent
+                    ))
+                });
+                bar.inc(1);
+            })?;
+            bar.finish_and_clear();
+            equilibrium = json!(settled);
+            if args.approach {
+                let bar = global.progress(runs.len() as u64, "approach");
+                let eq = approach_equilibrium(
+                    &net,
+                    increment,
+                    &runs,
+                    0.01,
+                    args.max_iterations,
+                    |a| {
+                        bar.suspend(|| {
+                            global.note(format!(
+                                "  {:>9} {:>3}: within 1 % of equilibrium {} after {} iterations, {:.3} s",
+                                a.solver.name(),
+                                a.backend,
+                                if a.reached { "reached" } else { "NOT reached" },
+                                a.iterations,
+                                a.seconds
+                            ))
+                        });
+                        bar.inc(1);
+                    },
+                )?;
+                bar.finish_and_clear();
+                approach = json!(eq);
+            }
+        }
+        networks.push(json!({
+            "refine": factor,
+            "nodes": net.n_nodes(),
+            "free_nodes": net.n_free,
+            "csr_entries": net.csr.entries.len(),
+            "springs": net.springs.len(),
+            "build_seconds": build_seconds,
+            "spectrum": spectrum,
+            "spectrum_seconds": spectrum_seconds,
+            "bytes_per_iteration": net.bytes_per_iteration(),
+            "rates": rates,
+            "time_to_equilibrium": equilibrium,
+            "approach": approach,
+        }));
+    }
+    let report = json!({
+        "command": "bench relax",
+        "mesh": args.mesh,
+        "bone": args.bone,
+        "grid": grid.map(|(c, r)| [c, r]),
+        "plan": args.plan,
+        "scale_increment": args.scale_increment,
+        "machine": machine,
+        "adapter": gpu.as_ref().map(|g| g.describe()),
+        "networks": networks,
+    });
+    super::report::emit_optional(&report, args.json, args.report.as_deref())
+}

@@ -1189,3 +1189,51 @@ fn bench_relax_arguments_are_checked() {
         "/nonexistent/skin.ply",
     );
 }
+
+/// A rectangle that ends inside the solid leaves open cut curves, which
+/// `--cap` cannot close: the run says so, and the report marks the piece
+/// open. A knife that misses the surface is reported too.
+#[test]
+fn cut_warns_when_caps_cannot_close_or_the_knife_misses() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cube = tmp.path().join("cube.ply");
+    chisel::io::write_mesh(&cube, &common::cube()).unwrap();
+    let report = tmp.path().join("r.json");
+    // z = 0.5, x from −0.5 to 0.5: one curve over the faces y = 0, x = 0
+    // and y = 1, ending at x = 0.5 inside the cube.
+    let out = ok(&[
+        "cut",
+        path_str(&cube),
+        "--rect",
+        "0,0.5,0.5,0,0,1,1,0,0,0.5,2",
+        "--cap",
+        "-o",
+        path_str(&tmp.path().join("rect")),
+        "--report",
+        path_str(&report),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: 1 cut curve(s) end inside the surface"),
+        "{stderr}"
+    );
+    let v: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(v["stats"]["curves_open"], 1);
+    assert!(
+        (v["pieces"].as_array().unwrap().iter()).any(|p| p["closed"] == false),
+        "{v}"
+    );
+    let out = ok(&[
+        "cut",
+        path_str(&cube),
+        "--plane",
+        "0,0,5,0,0,1",
+        "-o",
+        path_str(&tmp.path().join("miss")),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("warning: the knives cross no triangle"),
+        "{stderr}"
+    );
+}

@@ -200,6 +200,30 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             crate::cut::SPHERE_CHORD_ERROR
         ));
     }
+    let s = &result.stats;
+    if s.triangles_split == 0 {
+        eprintln!(
+            "warning: the knives cross no triangle of {}: the pieces are its connected components",
+            args.mesh.display()
+        );
+    }
+    let crossings: usize = (pieces.iter())
+        .filter_map(|p| p["self_intersecting_pairs"].as_u64())
+        .sum::<u64>() as usize;
+    if args.cap && s.curves_open > 0 {
+        eprintln!(
+            "warning: {} cut curve(s) end inside the surface (a rectangle or knife mesh that \
+             does not cut through, or a surface border): they are not capped, and the pieces \
+             they bound stay open (`closed: false` in the report), the two sides of each such \
+             slit touching along it ({crossings} touching or crossing triangle pairs in all)",
+            s.curves_open
+        );
+    } else if crossings > 0 {
+        eprintln!(
+            "warning: capped pieces cross themselves in {crossings} triangle pairs; a crossing \
+             input keeps its crossings (`chisel stats` counts them)"
+        );
+    }
     global.note(format!(
         "{} pieces; tree visited {} of {} nodes, tested {} of {} triangles; wrote {}",
         result.pieces.len(),

@@ -1237,3 +1237,66 @@ fn cut_warns_when_caps_cannot_close_or_the_knife_misses() {
         "{stderr}"
     );
 }
+
+/// An empty marching-cubes surface says why: a level outside the data, a
+/// label no voxel has; a 2-D image and a fractional label are refused.
+#[test]
+fn mc_says_why_a_surface_is_empty() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vol = tmp.path().join("v.nhdr");
+    let data: Vec<u8> = (0..27).map(|i| if i == 13 { 7 } else { 1 }).collect();
+    let v = chisel::Volume::new(
+        [3; 3],
+        [1.0; 3],
+        [0.0; 3],
+        chisel::volume::VolumeData::U8(data),
+    )
+    .unwrap();
+    chisel::io::write_volume(&vol, &v).unwrap();
+    let flat = tmp.path().join("flat.nhdr");
+    let data = vec![1u8; 9];
+    let f = chisel::Volume::new(
+        [3, 3, 1],
+        [1.0; 3],
+        [0.0; 3],
+        chisel::volume::VolumeData::U8(data),
+    )
+    .unwrap();
+    chisel::io::write_volume(&flat, &f).unwrap();
+    let out = tmp.path().join("s.ply");
+    let mc = |input: &Path, what: &[&str], names: &str| {
+        let mut args = vec![
+            "mc",
+            path_str(input),
+            "--backend",
+            "cpu",
+            "-o",
+            path_str(&out),
+        ];
+        args.extend(what);
+        assert_clean_error(&args, names);
+        assert!(!out.exists());
+    };
+    mc(
+        &vol,
+        &["--level", "9"],
+        "level 9 lies outside the data range 1 to 7",
+    );
+    mc(
+        &vol,
+        &["--label", "3"],
+        "label 3 occurs in no voxel (values 1 to 7)",
+    );
+    mc(&vol, &["--label", "2.5"], "--label takes a whole number");
+    mc(
+        &flat,
+        &["--level", "0.5"],
+        "marching cubes needs at least 2 samples along each axis",
+    );
+    // In range, every sample on one side (≥ 1): closing the border helps.
+    mc(
+        &vol,
+        &["--level", "1"],
+        "no cell has samples on both sides of level 1 (try --close-border",
+    );
+}

@@ -59,7 +59,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(dir) = &args.groups_dir {
         super::check_output_dir(dir)?;
     }
+    if let Some(l) = args.label
+        && l.fract() != 0.0
+    {
+        anyhow::bail!("--label takes a whole number (a voxel value); got {l}");
+    }
     let volume = crate::io::read_volume(&args.volume)?;
+    if volume.dims.iter().any(|&d| d < 2) {
+        anyhow::bail!(
+            "{}: a volume of {:?} samples has no cells: marching cubes needs at least 2 samples along each axis",
+            args.volume.display(),
+            volume.dims
+        );
+    }
     let read_s = t.elapsed().as_secs_f64();
     let iso = match (args.level, args.label) {
         (Some(l), None) => IsoSpec::Level(l),
@@ -82,19 +94,28 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     )?;
     let mc_s = t.elapsed().as_secs_f64();
     if surface.mesh.n_triangles() == 0 {
-        let what = match iso {
-            IsoSpec::Level(l) => format!("level {l}"),
-            IsoSpec::Label(l) => format!("label {l}"),
+        let values = || (0..volume.data.len()).map(|i| volume.data.get_f64(i));
+        let (lo, hi) = values().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+        let border = if args.close_border {
+            ""
+        } else {
+            " (try --close-border: it closes surfaces at the volume border)"
         };
-        anyhow::bail!(
-            "{}: the surface at {what} is empty (no voxel on one side of it{}); nothing written",
-            args.volume.display(),
-            if args.close_border {
-                ""
-            } else {
-                ", or only at the volume border: try --close-border"
+        let why = match iso {
+            IsoSpec::Level(l) if f64::from(l) < lo || f64::from(l) > hi => {
+                format!("level {l} lies outside the data range {lo} to {hi}")
             }
-        );
+            IsoSpec::Label(l) if !values().any(|x| x == l) => {
+                format!("label {l} occurs in no voxel (values {lo} to {hi})")
+            }
+            IsoSpec::Level(l) => {
+                format!("no cell has samples on both sides of level {l}{border}")
+            }
+            IsoSpec::Label(l) => format!("no cell has samples in and out of label {l}{border}"),
+        };
+        anyhow::bail!("{}: {why}; nothing written", args.volume.display());
     }
     crate::io::write_mesh(&args.output, &surface.mesh)?;
     if let Some(dir) = &args.groups_dir {

@@ -265,26 +265,11 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
             equilibrium = json!(settled);
             if args.approach {
                 let bar = global.progress(runs.len() as u64, "approach");
-                let eq = approach_equilibrium(
-                    &net,
-                    increment,
-                    &runs,
-                    0.01,
-                    args.max_iterations,
-                    |a| {
-                        bar.suspend(|| {
-                            global.note(format!(
-                                "  {:>9} {:>3}: within 1 % of equilibrium {} after {} iterations, {:.3} s",
-                                a.solver.name(),
-                                a.backend,
-                                if a.reached { "reached" } else { "NOT reached" },
-                                a.iterations,
-                                a.seconds
-                            ))
-                        });
+                let eq =
+                    approach_equilibrium(&net, increment, &runs, 0.01, args.max_iterations, |a| {
+                        bar.suspend(|| global.note(format!("  within 1 % of equilibrium: {a}")));
                         bar.inc(1);
-                    },
-                )?;
+                    })?;
                 bar.finish_and_clear();
                 approach = json!(eq);
             }

@@ -731,7 +731,7 @@ fn mc_and_capped_cut_of_the_ct_bone() {
             "-o",
             path_str(&surface),
         ],
-        "is empty",
+        "level -500 lies outside the data range 0 to 3926",
     );
     assert!(!surface.exists());
 }

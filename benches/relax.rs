@@ -27,21 +27,13 @@ use std::time::{Duration, Instant};
 use chisel::Backend;
 use chisel::gpu::Gpu;
 use chisel::tissue::bench::{
-    approach_equilibrium, increment_bone, process_cpu_seconds, time_to_equilibrium,
+    Machine, approach_equilibrium, increment_bone, process_cpu_seconds, time_to_equilibrium,
 };
 use chisel::tissue::phantom::{FRAN_CHIN_ADVANCE_TOML, FRAN_GRID, refine_grid};
 use chisel::tissue::{
     Fragments, NetworkParams, Plan, RelaxOptions, ResolvedPlan, Simulation, Solver, SpringNetwork,
 };
 use criterion::{Criterion, SamplingMode, Throughput};
-
-/// `/proc/loadavg`'s three load averages (figures taken on a shared
-/// machine are pessimistic when these exceed its core count).
-fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg")
-        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
-        .unwrap_or_else(|_| "unknown".into())
-}
 
 #[path = "common/mod.rs"]
 mod bench_common;
@@ -107,7 +99,7 @@ fn main() {
     eprintln!(
         "cpu: {} rayon threads; load average {}",
         rayon::current_num_threads(),
-        load_average()
+        Machine::now().load_text()
     );
     let nets = networks();
     let mut rates: Vec<(String, &'static str, &'static str, f64, f64, u64)> = Vec::new();
@@ -185,7 +177,7 @@ fn main() {
         );
     }
     eprintln!("(* 2 / CPU-seconds per iteration: what 2 otherwise idle cores would give)");
-    eprintln!("load average: {}", load_average());
+    eprintln!("load average: {}", Machine::now().load_text());
     let tte = std::env::var("CHISEL_BENCH_TTE").unwrap_or_default();
     if tte == "0" {
         c.final_summary();
@@ -242,7 +234,7 @@ fn main() {
             within_one_percent(net, *refined, &gpu, with_gpu);
         }
     }
-    eprintln!("load average: {}", load_average());
+    eprintln!("load average: {}", Machine::now().load_text());
     c.final_summary();
 }
 

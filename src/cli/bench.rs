@@ -179,9 +179,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         machine.cpu.as_deref().unwrap_or("unknown CPU"),
         machine.cpus,
         machine.threads,
-        machine
-            .load_average
-            .map_or("unknown".into(), |l| format!("{} {} {}", l[0], l[1], l[2]))
+        machine.load_text()
     ));
     let mut networks = Vec::new();
     for &factor in &args.refine {

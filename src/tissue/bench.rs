@@ -62,6 +62,12 @@ impl Machine {
             load_average,
         }
     }
+
+    /// The load averages as `"1.47 1.40 1.36"`, or `unknown`.
+    pub fn load_text(&self) -> String {
+        self.load_average
+            .map_or("unknown".into(), |l| format!("{} {} {}", l[0], l[1], l[2]))
+    }
 }
 
 /// Iteration rate of one solver's step kernel on one backend.

@@ -13,6 +13,8 @@ use std::path::PathBuf;
 pub enum Position {
     /// 1-based line number of a text file or text header.
     Line(usize),
+    /// 1-based line and column (in characters) of a text file.
+    LineColumn(usize, usize),
     /// 0-based byte offset into a (binary) file.
     Byte(u64),
     /// A named header field (e.g. `sizes` of an NRRD header).
@@ -25,6 +27,7 @@ impl fmt::Display for Position {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Position::Line(n) => write!(f, "line {n}"),
+            Position::LineColumn(n, c) => write!(f, "line {n}, column {c}"),
             Position::Byte(n) => write!(f, "byte {n}"),
             Position::Field(k) => write!(f, "field `{k}`"),
             Position::Whole => write!(f, "whole file"),

@@ -427,10 +427,41 @@ fn relax_fran_chin_advance_agrees_between_backends() {
 
 #[test]
 fn relax_rejects_a_bad_plan_clearly() {
+    let tmp = tempfile::tempdir().unwrap();
+    // The plan is checked before the inputs are read: the missing CT is
+    // never reached, the step's unknown fragment is reported.
+    let typo = tmp.path().join("typo.toml");
+    std::fs::write(
+        &typo,
+        "[[cut]]\nname = \"chin\"\nknife = { plane = { point = [0.0, 0.0, 112.0], normal = [0.0, 0.0, 1.0] } }\n\
+         side = \"positive\"\n[[step]]\nname = \"advance\"\nselect = { fragment = \"chn\" }\n",
+    )
+    .unwrap();
+    let run = chisel(&[
+        "relax",
+        "--ct",
+        "no_such_ct.nhdr",
+        "--skin",
+        "500",
+        "--bone",
+        "1150",
+        "--plan",
+        path_str(&typo),
+        "-o",
+        path_str(&tmp.path().join("o.ply")),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success()
+            && stderr.contains(
+                "typo.toml: plan step 1 `advance`: unknown fragment `chn` (known: [chin])"
+            )
+            && !stderr.contains("no_such_ct"),
+        "{stderr}"
+    );
     let Some(dir) = common::data_dir() else {
         return;
     };
-    let tmp = tempfile::tempdir().unwrap();
     let plan = tmp.path().join("bad_plan.toml");
     std::fs::write(&plan, "[[step]]\nname = \"x\"\nselect = { sphere = { center = [0, 0, 0], radius = 1.0 } }\ntranslate = [0, 0, 1]\nincrements = 0\niterations = 1\nfoo = 3\n").unwrap();
     let out = tmp.path().join("o.ply");

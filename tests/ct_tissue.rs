@@ -129,7 +129,7 @@ fn ct_phantom_layers_by_marching_cubes() {
 fn plan_cut_frees_the_phantom_jaw_as_a_closed_piece() {
     let (_, layers) = phantom_layers(5.0);
     let plan = ct_demo_plan().unwrap();
-    let cut = cut_bone(&layers.bone, &plan.cuts).unwrap();
+    let cut = cut_bone(&layers.bone, &plan.cuts, None).unwrap();
     let jaw = &cut.fragments["jaw"];
     let jaw_pieces: Vec<_> = cut
         .pieces
@@ -174,8 +174,10 @@ fn plan_cut_frees_the_phantom_jaw_as_a_closed_piece() {
         point: [0.0, -500.0, 0.0],
         normal: [0.0, -1.0, 0.0],
     };
-    let e = cut_bone(&layers.bone, &missing).unwrap_err().to_string();
-    assert!(e.contains("no bone piece lies on the Positive side"), "{e}");
+    let e = cut_bone(&layers.bone, &missing, Some("chin.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("chin.toml: plan cut 1 `jaw`: no bone piece lies on the positive side of the plane through (0, -500, 0) with normal (0, -1, 0)"), "{e}");
 }
 
 #[test]
@@ -223,7 +225,7 @@ fn subcutis_lies_between_skin_and_bone_along_the_normal() {
 fn jaw_advance_moves_the_fragment_and_the_chin_skin() {
     let (_, layers) = phantom_layers(6.0);
     let mut plan = ct_demo_plan().unwrap();
-    let cut = cut_bone(&layers.bone, &plan.cuts).unwrap();
+    let cut = cut_bone(&layers.bone, &plan.cuts, None).unwrap();
     let params = NetworkParams {
         subcutis_depth: Some(CT_SUBCUTIS_DEPTH),
         ..Default::default()
@@ -290,7 +292,7 @@ fn headsq_layers_and_chin_fragment() {
     assert!(c.shortest_before < 0.01 && c.shortest_after > 0.01, "{c:?}");
     assert_eq!(f.bone_groups, 76);
     let plan = Plan::from_toml_str(HEADSQ_CHIN_ADVANCE_TOML, "headsq").unwrap();
-    let cut = cut_bone(&layers.bone, &plan.cuts).unwrap();
+    let cut = cut_bone(&layers.bone, &plan.cuts, None).unwrap();
     let chin: Vec<_> = cut
         .pieces
         .iter()

@@ -253,7 +253,18 @@ fn plan_err(toml: &str) -> String {
 #[test]
 fn plan_validation_names_the_problem() {
     let e = plan_err("[[step]]\nselect = { vertices = [1] }\ntranslat = [1, 0, 0]\n");
-    assert!(e.contains("translat") && e.contains("line 3"), "{e}");
+    assert!(
+        e.contains("translat") && e.contains("line 3, column 1"),
+        "{e}"
+    );
+    // toml says only "duplicate key"; the message names it.
+    let e = plan_err(
+        "[[step]]\nselect = { vertices = [1] }\n  translate = [1, 0, 0]\n  translate = [2, 0, 0]\n",
+    );
+    assert!(
+        e.contains("line 4, column 3") && e.contains("duplicate key `translate`"),
+        "{e}"
+    );
     let e =
         plan_err("[[step]]\nselect = { sphere = { center = [0,0,0], radius = 1, extra = 2 } }\n");
     assert!(e.contains("extra"), "{e}");
@@ -276,6 +287,62 @@ fn plan_validation_names_the_problem() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("max"), "{e}");
+    let e = Plan::from_json_str("{\"steps\": [\n  {\"select\": 3}]}", "p.json")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("p.json: line 2, column 14") && !e.contains(" at line "),
+        "{e}"
+    );
+}
+
+#[test]
+fn plan_cut_errors_name_the_file_the_cut_and_the_problem() {
+    let cut = |knife: &str| {
+        plan_err(&format!(
+            "[[cut]]\nname = \"jaw\"\nknife = {knife}\nside = \"positive\"\n\
+             [[step]]\nselect = {{ fragment = \"jaw\" }}\n"
+        ))
+    };
+    for (knife, want) in [
+        (
+            "{ plane = { point = [0.0, 0.0, 112.0], normal = [0.0, 0.0, 0.0] } }",
+            "test.toml: plan cut 1 `jaw`: the plane's normal is zero \
+             (knife: plane through (0, 0, 112) with normal (0, 0, 0))",
+        ),
+        (
+            "{ sphere = { center = [1.0, 2.0, 3.0], radius = 0.0 } }",
+            "the sphere's radius must be > 0 (knife: sphere centred at (1, 2, 3) with radius 0)",
+        ),
+        (
+            "{ rect = { center = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0], u = [0.0, 0.0, 2.0], half_extents = [1.0, 1.0] } }",
+            "the rectangle's normal is zero or parallel to u",
+        ),
+        (
+            "{ rect = { center = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0], u = [1.0, 0.0, 0.0], half_extents = [1.0, -1.0] } }",
+            "half extents must be > 0",
+        ),
+    ] {
+        let e = cut(knife);
+        assert!(e.contains(want) && !e.contains("Plane {"), "{e}");
+    }
+    // A step naming no cut fails before any work is done.
+    let plan = Plan::from_toml_str(
+        "[[cut]]\nname = \"jaw\"\nknife = { plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] } }\n\
+         side = \"positive\"\n[[step]]\nname = \"advance\"\nselect = { fragment = \"chin\" }\n",
+        "test.toml",
+    )
+    .unwrap();
+    let e = plan
+        .check_fragments(&Fragments::new())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("test.toml: plan step 1 `advance`: unknown fragment `chin` (known: [jaw])"),
+        "{e}"
+    );
+    let supplied = Fragments::from([("chin".to_string(), vec![0])]);
+    plan.check_fragments(&supplied).unwrap();
 }
 
 #[test]
@@ -302,7 +369,7 @@ fn plan_errors_name_the_file_and_increments_are_bounded() {
         ),
         (
             "rotate = { axis = [0, 0, 0], degrees = 5, center = [0, 0, 0] }",
-            "got axis [0.0, 0.0, 0.0], degrees 5, center [0.0, 0.0, 0.0]",
+            "got axis (0, 0, 0), degrees 5, center (0, 0, 0)",
         ),
     ] {
         let e = Plan::from_toml_str(

@@ -120,6 +120,7 @@ impl Job {
         mut fragments: Fragments,
         params: &NetworkParams,
     ) -> anyhow::Result<Job> {
+        plan.check_fragments(&fragments)?;
         let (bone, cut) = match (bone, plan.cuts.is_empty()) {
             (bone, true) => (bone, None),
             (None, false) => anyhow::bail!(
@@ -127,7 +128,7 @@ impl Job {
                 plan.cuts.len()
             ),
             (Some(b), false) => {
-                let cut = cut_bone(&b, &plan.cuts)?;
+                let cut = cut_bone(&b, &plan.cuts, plan.source.as_deref())?;
                 let report = json!({
                     "pieces": cut.pieces,
                     "fragments": cut.fragments.iter()
@@ -287,6 +288,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
         }
     }
+    // The plan is checked before the inputs are read (a CT takes seconds).
+    let plan = Plan::from_path(&args.plan)?;
+    plan.check_fragments(&Fragments::new())?;
     let gpu = match args.backend {
         BackendArg::Gpu => Some(global.gpu()?),
         BackendArg::Cpu => None,
@@ -346,7 +350,6 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    let plan = Plan::from_path(&args.plan)?;
     let job = Job::build(skin, bone, plan, Fragments::new(), &params)?;
     let build_s = t.elapsed().as_secs_f64();
     global.note(format!(

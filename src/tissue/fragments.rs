@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::plan::{Fragments, Selector};
+use super::plan::{Fragments, Selector, point_text};
 use crate::cut::{CutOptions, CutStats, Knife, Side, cut_mesh};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::{Error, Result};
@@ -75,6 +75,85 @@ impl KnifeSpec {
             },
         }
     }
+
+    /// What is wrong with the knife's numbers, if anything.
+    fn problem(&self) -> Option<&'static str> {
+        let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
+        match self {
+            KnifeSpec::Plane { point, normal } => {
+                if !finite(point) || !finite(normal) {
+                    Some("the plane's point and normal must be finite")
+                } else if Vec3::from_array(*normal) == Vec3::ZERO {
+                    Some("the plane's normal is zero")
+                } else {
+                    None
+                }
+            }
+            KnifeSpec::Rect {
+                center,
+                normal,
+                u,
+                half_extents,
+            } => {
+                if !finite(center) || !finite(normal) || !finite(u) || !finite(half_extents) {
+                    Some("the rectangle's numbers must be finite")
+                } else if half_extents.iter().any(|h| *h <= 0.0) {
+                    Some("the rectangle's half extents must be > 0")
+                } else if Vec3::from_array(*normal)
+                    .cross(Vec3::from_array(*u))
+                    .length()
+                    == 0.0
+                {
+                    Some("the rectangle's normal is zero or parallel to u")
+                } else {
+                    None
+                }
+            }
+            KnifeSpec::Sphere { center, radius } => {
+                if !finite(center) || !radius.is_finite() {
+                    Some("the sphere's centre and radius must be finite")
+                } else if *radius <= 0.0 {
+                    Some("the sphere's radius must be > 0")
+                } else {
+                    None
+                }
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for KnifeSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            KnifeSpec::Plane { point, normal } => write!(
+                f,
+                "plane through {} with normal {}",
+                point_text(point),
+                point_text(normal)
+            ),
+            KnifeSpec::Rect {
+                center,
+                normal,
+                u,
+                half_extents,
+            } => write!(
+                f,
+                "rectangle centred at {} with normal {}, u {}, half extents {} × {}",
+                point_text(center),
+                point_text(normal),
+                point_text(u),
+                half_extents[0],
+                half_extents[1]
+            ),
+            KnifeSpec::Sphere { center, radius } => {
+                write!(
+                    f,
+                    "sphere centred at {} with radius {radius}",
+                    point_text(center)
+                )
+            }
+        }
+    }
 }
 
 /// Which side of the knife a fragment takes.
@@ -85,6 +164,15 @@ pub enum KeepSide {
     Positive,
     /// Behind the plane / rectangle, inside the sphere.
     Negative,
+}
+
+impl std::fmt::Display for KeepSide {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            KeepSide::Positive => "positive",
+            KeepSide::Negative => "negative",
+        })
+    }
 }
 
 fn yes() -> bool {
@@ -116,34 +204,9 @@ impl BoneCut {
         if self.name.trim().is_empty() {
             return Err(Error::InvalidInput(format!("{what}: `name` is empty")));
         }
-        let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
-        let ok = match &self.knife {
-            KnifeSpec::Plane { point, normal } => {
-                finite(point) && finite(normal) && Vec3::from_array(*normal) != Vec3::ZERO
-            }
-            KnifeSpec::Rect {
-                center,
-                normal,
-                u,
-                half_extents,
-            } => {
-                finite(center)
-                    && finite(normal)
-                    && finite(u)
-                    && half_extents.iter().all(|h| h.is_finite() && *h > 0.0)
-                    && Vec3::from_array(*normal)
-                        .cross(Vec3::from_array(*u))
-                        .length()
-                        > 0.0
-            }
-            KnifeSpec::Sphere { center, radius } => {
-                finite(center) && radius.is_finite() && *radius > 0.0
-            }
-        };
-        if !ok {
+        if let Some(problem) = self.knife.problem() {
             return Err(Error::InvalidInput(format!(
-                "{what}: knife {:?} needs finite numbers, a non-zero normal (not parallel to u), \
-                 positive half extents / radius",
+                "{what}: {problem} (knife: {})",
                 self.knife
             )));
         }
@@ -151,7 +214,8 @@ impl BoneCut {
             w.validate(&format!("{what} `within`"))?;
             if w.contains(Vec3::ZERO).is_none() {
                 return Err(Error::InvalidInput(format!(
-                    "{what}: `within` takes a sphere, box or half_space, got {w:?}"
+                    "{what}: `within` takes a sphere, box or half_space, got {}",
+                    w.describe()
                 )));
             }
         }
@@ -202,10 +266,20 @@ fn centroid(mesh: &TriMesh) -> DVec3 {
     }
 }
 
-/// Validates every cut and checks that names are unique.
-pub fn validate_cuts(cuts: &[BoneCut]) -> Result<()> {
+/// `source: plan cut i `name`` for messages (`source` names the plan file).
+fn cut_label(source: Option<&str>, i: usize, name: &str) -> String {
+    let cut = format!("plan cut {} `{name}`", i + 1);
+    match source {
+        Some(src) => format!("{src}: {cut}"),
+        None => cut,
+    }
+}
+
+/// Validates every cut and checks that names are unique; `source` (the
+/// plan file) prefixes errors.
+pub fn validate_cuts(cuts: &[BoneCut], source: Option<&str>) -> Result<()> {
     for (i, c) in cuts.iter().enumerate() {
-        let what = format!("plan cut {} `{}`", i + 1, c.name);
+        let what = cut_label(source, i, &c.name);
         c.validate(&what)?;
         if cuts[..i].iter().any(|d| d.name == c.name) {
             return Err(Error::InvalidInput(format!(
@@ -218,10 +292,11 @@ pub fn validate_cuts(cuts: &[BoneCut]) -> Result<()> {
 
 /// Runs `cuts` in order on `bone` (each cuts every piece of the previous
 /// one) and names the fragments. Errors: invalid or duplicate cut names, a
-/// cut whose fragment is empty (names the knife, side and `within`).
-pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
+/// cut whose fragment is empty (names the knife, side and `within`);
+/// `source` (the plan file) prefixes them.
+pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut], source: Option<&str>) -> Result<CutBone> {
     bone.validate()?;
-    validate_cuts(cuts)?;
+    validate_cuts(cuts, source)?;
     // (piece, indices of the cuts whose fragment holds it, area centroid)
     let mut pieces: Vec<(TriMesh, Vec<usize>, DVec3)> =
         vec![(bone.clone(), Vec::new(), centroid(bone))];
@@ -255,14 +330,13 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut]) -> Result<CutBone> {
         }
         if taken == 0 {
             return Err(Error::InvalidInput(format!(
-                "plan cut {} `{}`: no bone piece lies on the {:?} side of {:?}{}",
-                ci + 1,
-                c.name,
+                "{}: no bone piece lies on the {} side of the {}{}",
+                cut_label(source, ci, &c.name),
                 c.side,
                 c.knife,
                 c.within
                     .as_ref()
-                    .map(|w| format!(" with its centroid in {w:?}"))
+                    .map(|w| format!(" with its centroid in the {}", w.describe()))
                     .unwrap_or_default()
             )));
         }

@@ -54,6 +54,11 @@ pub enum Selector {
     Fragment(String),
 }
 
+/// `(x, y, z)` with each coordinate printed as it was written.
+pub(crate) fn point_text(v: &[f32; 3]) -> String {
+    format!("({}, {}, {})", v[0], v[1], v[2])
+}
+
 fn finite3(v: &[f32; 3]) -> bool {
     v.iter().all(|c| c.is_finite())
 }
@@ -67,14 +72,17 @@ impl Selector {
             Selector::Sphere { center, radius } => {
                 if !finite3(center) || !radius.is_finite() || *radius <= 0.0 {
                     return bad(format!(
-                        "sphere needs a finite centre and a radius > 0, got centre {center:?}, radius {radius}"
+                        "sphere needs a finite centre and a radius > 0, got centre {}, radius {radius}",
+                        point_text(center)
                     ));
                 }
             }
             Selector::Box { min, max } => {
                 if !finite3(min) || !finite3(max) || (0..3).any(|a| min[a] > max[a]) {
                     return bad(format!(
-                        "box needs finite corners with min ≤ max, got min {min:?}, max {max:?}"
+                        "box needs finite corners with min ≤ max, got min {}, max {}",
+                        point_text(min),
+                        point_text(max)
                     ));
                 }
             }
@@ -82,7 +90,9 @@ impl Selector {
                 if !finite3(point) || !finite3(normal) || Vec3::from_array(*normal).length() == 0.0
                 {
                     return bad(format!(
-                        "half_space needs a finite point and a non-zero finite normal, got point {point:?}, normal {normal:?}"
+                        "half_space needs a finite point and a non-zero finite normal, got point {}, normal {}",
+                        point_text(point),
+                        point_text(normal)
                     ));
                 }
             }
@@ -116,13 +126,23 @@ impl Selector {
         }
     }
 
-    fn describe(&self) -> String {
+    /// The selector in words, for messages.
+    pub fn describe(&self) -> String {
         match self {
-            Selector::Sphere { center, radius } => format!("sphere {center:?} r {radius}"),
-            Selector::Box { min, max } => format!("box {min:?}..{max:?}"),
-            Selector::HalfSpace { point, normal } => {
-                format!("half_space through {point:?} normal {normal:?}")
+            Selector::Sphere { center, radius } => {
+                format!(
+                    "sphere centred at {} with radius {radius}",
+                    point_text(center)
+                )
             }
+            Selector::Box { min, max } => {
+                format!("box from {} to {}", point_text(min), point_text(max))
+            }
+            Selector::HalfSpace { point, normal } => format!(
+                "half_space through {} with normal {}",
+                point_text(point),
+                point_text(normal)
+            ),
             Selector::Vertices(ids) => format!("{} vertex ids", ids.len()),
             Selector::Fragment(name) => format!("fragment `{name}`"),
         }
@@ -250,13 +270,33 @@ pub struct Plan {
 /// and keeps a report line.
 pub const MAX_INCREMENTS: u32 = 100_000;
 
-/// Line (1-based) of byte `offset` in `text`.
-fn line_of(text: &str, offset: usize) -> usize {
-    text.as_bytes()[..offset.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
+/// Line and column (1-based, the column in characters) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> Position {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    Position::LineColumn(
+        before.matches('\n').count() + 1,
+        before[line_start..].chars().count() + 1,
+    )
+}
+
+/// A TOML error's message, with the offending key or value quoted when the
+/// message does not already quote it (toml says only "duplicate key").
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let message = e.message().trim_end().to_string();
+    let snippet = e
+        .span()
+        .and_then(|s| text.get(s))
+        .map(str::trim)
+        .filter(|t| !t.is_empty() && t.len() <= 60 && !t.contains('\n'));
+    match snippet {
+        Some(t) if !message.contains('`') && !message.contains('"') => format!("{message} `{t}`"),
+        _ => message,
+    }
 }
 
 impl Plan {
@@ -265,8 +305,8 @@ impl Plan {
         let plan: Plan = toml::from_str(text).map_err(|e| {
             let at = e
                 .span()
-                .map_or(Position::Whole, |s| Position::Line(line_of(text, s.start)));
-            Error::format(origin, at, "a surgery plan", e.message().to_string())
+                .map_or(Position::Whole, |s| line_column(text, s.start));
+            Error::format(origin, at, "a surgery plan", toml_message(text, &e))
         })?;
         Plan {
             source: Some(origin.to_string()),
@@ -278,11 +318,17 @@ impl Plan {
     /// Parses and validates a JSON plan; `origin` names the source in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Plan> {
         let plan: Plan = serde_json::from_str(text).map_err(|e| {
+            let message = e.to_string();
+            // serde_json appends " at line L column C"; the position says it.
+            let message = match message.rfind(" at line ") {
+                Some(i) => message[..i].to_string(),
+                None => message,
+            };
             Error::format(
                 origin,
-                Position::Line(e.line()),
+                Position::LineColumn(e.line(), e.column()),
                 "a surgery plan",
-                e.to_string(),
+                message,
             )
         })?;
         Plan {
@@ -338,7 +384,7 @@ impl Plan {
                 .map_or(String::new(), |s| format!("{s}: "));
             return Err(Error::InvalidInput(format!("{src}plan has no steps")));
         }
-        super::fragments::validate_cuts(&self.cuts)?;
+        super::fragments::validate_cuts(&self.cuts, self.source.as_deref())?;
         for (i, s) in self.steps.iter().enumerate() {
             let what = self.step_label(i);
             let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
@@ -353,7 +399,10 @@ impl Plan {
                 return bad("iterations must be ≥ 1 or \"converge\", got 0".into());
             }
             if !finite3(&s.translate) {
-                return bad(format!("translate is not finite: {:?}", s.translate));
+                return bad(format!(
+                    "translate is not finite: {}",
+                    point_text(&s.translate)
+                ));
             }
             if let Some(r) = &s.rotate
                 && (!finite3(&r.axis)
@@ -362,9 +411,36 @@ impl Plan {
                     || Vec3::from_array(r.axis).length() == 0.0)
             {
                 return bad(format!(
-                    "rotate needs a finite non-zero axis, finite centre and angle, got axis {:?}, degrees {}, center {:?}",
-                    r.axis, r.degrees, r.center
+                    "rotate needs a finite non-zero axis, finite centre and angle, got axis {}, degrees {}, center {}",
+                    point_text(&r.axis),
+                    r.degrees,
+                    point_text(&r.center)
                 ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that every `fragment = "name"` selector names one of the
+    /// plan's `[[cut]]`s or a fragment in `supplied`, before any work is
+    /// done (the same error [`Plan::resolve`] would give after the cuts).
+    pub fn check_fragments(&self, supplied: &Fragments) -> Result<()> {
+        for (i, s) in self.steps.iter().enumerate() {
+            if let Selector::Fragment(name) = &s.select
+                && !supplied.contains_key(name)
+                && !self.cuts.iter().any(|c| &c.name == name)
+            {
+                let known: Vec<&str> = self
+                    .cuts
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .chain(supplied.keys().map(String::as_str))
+                    .collect();
+                return Err(Error::InvalidInput(format!(
+                    "{}: unknown fragment `{name}` (known: [{}])",
+                    self.step_label(i),
+                    known.join(", ")
+                )));
             }
         }
         Ok(())
@@ -446,10 +522,10 @@ fn select(sel: &Selector, bone: &[DVec3], fragments: &Fragments, what: &str) -> 
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
         return Err(Error::InvalidInput(format!(
-            "{what}: empty selection: {} selects no bone vertex (the bone layer spans {:?}..{:?})",
+            "{what}: empty selection: the {} selects no bone vertex (the bone layer spans {} to {})",
             sel.describe(),
-            lo.as_vec3().to_array(),
-            hi.as_vec3().to_array()
+            point_text(&lo.as_vec3().to_array()),
+            point_text(&hi.as_vec3().to_array())
         )));
     }
     Ok(ids)

@@ -74,7 +74,10 @@ fn plan_cuts_parse_and_are_validated() {
     let e = err(
         "[[cut]]\nname = \"a\"\nknife = { plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 0.0] } }\nside = \"positive\"\n",
     );
-    assert!(e.contains("non-zero normal"), "{e}");
+    assert!(
+        e.contains("bad.toml: plan cut 1 `a`: the plane's normal is zero"),
+        "{e}"
+    );
     let e = err(&format!(
         "[[cut]]\nname = \"a\"\n{plane}\nside = \"positive\"\nwithin = {{ vertices = [1] }}\n"
     ));

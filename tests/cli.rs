@@ -104,6 +104,63 @@ fn missing_and_garbage_inputs_are_clean_errors() {
     assert!(!out.exists(), "no partial preview on failure");
 }
 
+/// Every command that draws a preview refuses a non-PNG name before it reads
+/// its input (the missing input is never reached).
+#[test]
+fn previews_must_be_png_names_checked_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (mesh, volume, jpg) = (p("missing.ply"), p("missing.nhdr"), p("look.jpg"));
+    let (out, pieces, plan) = (p("o.ply"), p("pieces"), plan_file("fran_chin_advance.toml"));
+    let runs: [Vec<&str>; 7] = [
+        vec!["render", &mesh, "-o", &jpg],
+        vec!["convert", &mesh, &out, "--preview", &jpg],
+        vec!["mc", &volume, "--level", "1", "-o", &out, "--preview", &jpg],
+        vec![
+            "cut",
+            &mesh,
+            "--sphere",
+            "0,0,0,1",
+            "-o",
+            &pieces,
+            "--preview",
+            &jpg,
+        ],
+        vec![
+            "relax",
+            &mesh,
+            "--plan",
+            &plan,
+            "-o",
+            &out,
+            "--preview",
+            &jpg,
+        ],
+        vec!["hull", &volume, "--threshold", "1", "--preview", &jpg],
+        vec![
+            "polyhedrize",
+            &volume,
+            "--threshold",
+            "1",
+            "--preview",
+            &jpg,
+        ],
+    ];
+    for args in runs {
+        let run = chisel(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("look.jpg")
+                && stderr.contains("expected a `.png` file name")
+                && stderr.contains("the extension `.jpg`")
+                && !stderr.contains("missing"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(!Path::new(&jpg).exists());
+}
+
 #[test]
 fn stats_meshes_match_the_data_readme() {
     let Some(dir) = common::data_dir() else {

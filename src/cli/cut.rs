@@ -132,7 +132,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         anyhow::bail!("--explode must be between 0 and 10, got {}", args.explode);
     }
     super::check_output_dir(&args.output)?;
-    for path in [&args.preview, &args.report].into_iter().flatten() {
+    if let Some(path) = &args.preview {
+        crate::io::check_png_output(path)?;
+    }
+    if let Some(path) = &args.report {
         crate::io::check_output_path(path)?;
     }
     let mesh = crate::io::read_mesh(&args.mesh)?;

@@ -178,6 +178,15 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.output {
+        crate::io::check_mesh_output(path)?;
+    }
+    if let Some(path) = &args.preview {
+        crate::io::check_png_output(path)?;
+    }
+    if let Some(path) = &args.report {
+        crate::io::check_output_path(path)?;
+    }
     let (selection, component) = args.select.parse()?;
     let mut timings = serde_json::Map::new();
     let mut stage = |name: &str, t: Instant| {

@@ -53,7 +53,10 @@ pub struct Args {
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     crate::io::check_mesh_output(&args.output)?;
-    for path in [&args.preview, &args.report].into_iter().flatten() {
+    if let Some(path) = &args.preview {
+        crate::io::check_png_output(path)?;
+    }
+    if let Some(path) = &args.report {
         crate::io::check_output_path(path)?;
     }
     if let Some(dir) = &args.groups_dir {

@@ -80,6 +80,18 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    for path in [&args.output, &args.cells_json, &args.report]
+        .into_iter()
+        .flatten()
+    {
+        crate::io::check_output_path(path)?;
+    }
+    if let Some(path) = &args.mesh {
+        crate::io::check_mesh_output(path)?;
+    }
+    if let Some(path) = &args.preview {
+        crate::io::check_png_output(path)?;
+    }
     let (selection, component) = args.select.parse()?;
     let mut timings = serde_json::Map::new();
     let mut stage = |name: &str, t: Instant| {

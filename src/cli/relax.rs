@@ -274,10 +274,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.bone_output {
         crate::io::check_mesh_output(path)?;
     }
-    for path in [&args.preview, &args.bone_preview, &args.report]
-        .into_iter()
-        .flatten()
-    {
+    for path in [&args.preview, &args.bone_preview].into_iter().flatten() {
+        crate::io::check_png_output(path)?;
+    }
+    if let Some(path) = &args.report {
         crate::io::check_output_path(path)?;
     }
     if args.bone.is_none() {

@@ -30,6 +30,7 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    crate::io::check_png_output(&args.output)?;
     let mesh = crate::io::read_mesh(&args.input)?;
     let gpu = global.gpu()?;
     let opts = RenderOptions {

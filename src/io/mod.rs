@@ -119,6 +119,26 @@ pub fn check_output_path(path: &Path) -> Result<()> {
     check_parent_folder(path)
 }
 
+/// Checks an output image path: [`check_output_path`] and a `.png` name
+/// (previews are PNG; a `.jpg` name would hold PNG data).
+pub fn check_png_output(path: &Path) -> Result<()> {
+    check_output_path(path)?;
+    let name = file_name_lower(path);
+    if name.ends_with(".png") {
+        return Ok(());
+    }
+    let found = match name.rsplit_once('.') {
+        Some((_, ext)) => format!("the extension `.{ext}`"),
+        None => "no extension".into(),
+    };
+    Err(Error::format(
+        path,
+        Position::Whole,
+        "a `.png` file name (previews are written as PNG)",
+        found,
+    ))
+}
+
 /// Checks that the folder `path` would be written into exists.
 pub fn check_parent_folder(path: &Path) -> Result<()> {
     let dir = path

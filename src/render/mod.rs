@@ -230,6 +230,7 @@ impl Image {
 
     /// Writes the image as PNG to `path`, atomically (temp file + rename).
     pub fn save_png(&self, path: &Path) -> Result<()> {
+        crate::io::check_png_output(path)?;
         crate::io::write_atomic(path, &self.to_png()?)
     }
 

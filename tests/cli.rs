@@ -387,6 +387,9 @@ fn demo_runs_and_writes_its_outputs() {
     assert_eq!(crossings["before"], 0);
     assert_eq!(crossings["after"], 0);
     assert_eq!(chisel::mesh::self_intersections(&mesh).pairs.len(), 0);
+    // The skin follows the jaw, it does not outrun it.
+    let ratio = report["skin_overshoot"]["ratio"].as_f64().unwrap();
+    assert!(ratio > 0.5 && ratio < 1.1, "skin/bone displacement {ratio}");
     assert!(
         report["ct"]["skin_collapse"]["collapsed_edges"]
             .as_u64()
@@ -467,6 +470,25 @@ fn relax_fran_chin_advance_agrees_between_backends() {
             "{backend}"
         );
         assert_eq!(v["relax"]["status"], "converged", "{backend}");
+        // Without bend springs the chin skin outruns the 4 mm bone move by
+        // about 24 % (README known limits), and the run says so.
+        let overshoot = &v["skin_overshoot"];
+        let bone = overshoot["bone_max"].as_f64().unwrap();
+        let ratio = overshoot["ratio"].as_f64().unwrap();
+        // The plan's translate = [0.00335, 0, -0.00218].
+        assert!(
+            (bone - 0.00335f64.hypot(0.00218)).abs() < 1e-6,
+            "bone moves {bone} m"
+        );
+        assert!(
+            (ratio - max as f64 / bone).abs() < 1e-4 && ratio > 1.1,
+            "{overshoot}"
+        );
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            stderr.contains("more than the bone's largest move"),
+            "{stderr}"
+        );
         reports.push((mesh, v));
     }
     assert!(tmp.path().join("fran.png").is_file());
@@ -600,6 +622,8 @@ fn relax_ct_headsq_chin_advance_end_to_end() {
     assert!(v["network"]["springs_per_class"][5].as_u64().unwrap() > 30_000);
     assert_eq!(v["skin_self_intersecting_pairs"]["before"], 0);
     assert_eq!(v["skin_self_intersecting_pairs"]["after"], 0);
+    let ratio = v["skin_overshoot"]["ratio"].as_f64().unwrap();
+    assert!(ratio > 0.5 && ratio < 1.1, "skin/bone displacement {ratio}");
     let chin = v["cut"]["fragments"]["chin"].as_u64().unwrap();
     assert!(chin > 1000, "{chin} chin vertices");
     assert_eq!(v["cut"]["knives"][0]["curves_open"], 0);

@@ -129,6 +129,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let out = |name: &str| args.out.join(name);
     crate::io::write_mesh(&out("relaxed_skin.ply"), &relaxed)?;
     let crossings = super::relax::skin_crossings(&job.skin, &relaxed);
+    let overshoot = super::relax::skin_overshoot(&job.network, &gpu_report);
     let (bone_before, bone_after) = bone_before_after(&job, &gpu_report)
         .ok_or_else(|| anyhow::anyhow!("the demo network has no bone mesh"))?;
     crate::io::write_mesh(&out("bone_moved.ply"), &bone_after)?;
@@ -171,6 +172,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "network": super::relax::network_json(&job.network, params.subcutis_depth),
         "relax_gpu": gpu_report,
         "skin_self_intersecting_pairs": crossings,
+        "skin_overshoot": overshoot,
         "parity": {
             "cpu_status": cpu_report.status,
             "cpu_iterations": cpu_report.iterations,
@@ -192,10 +194,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     }
     global.note(format!(
-        "demo: CT {:?} → skin {} / bone {} vertices (GPU marching cubes {}), jaw cut free; \
-         {} nodes, GPU {:?} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
+        "demo: CT {}×{}×{} → skin {} / bone {} vertices (GPU marching cubes {}), jaw cut free; \
+         {} nodes, GPU relaxation {} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
          CPU mirror {} (max |Δ| {:.2e} mm); wrote {}",
-        volume.dims,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
         layers.figures.skin_vertices,
         layers.figures.bone_vertices,
         if mc_same { "= CPU" } else { "DIFFERS from CPU" },
@@ -214,7 +218,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     );
     anyhow::ensure!(
         same_status,
-        "GPU and CPU mirror ended differently: {:?}/{} vs {:?}/{}",
+        "GPU and CPU mirror ended differently: {} after {} vs {} after {} iterations",
         gpu_report.status,
         gpu_report.iterations,
         cpu_report.status,

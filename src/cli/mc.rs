@@ -146,7 +146,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             views: vec![View::Front, View::Right, View::Top, View::Iso],
             width: 384,
             height: 384,
-            title: Some(format!("chisel mc: {}", args.volume.display())),
+            title: Some(format!(
+                "chisel mc: {} at {}",
+                args.volume.display(),
+                match iso {
+                    IsoSpec::Level(l) => format!("level {l}"),
+                    IsoSpec::Label(l) => format!("label {l}"),
+                }
+            )),
             facing: args.view.facing()?,
             ..Default::default()
         };

@@ -433,6 +433,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let relaxed = report.skin_mesh(&job.network);
     crate::io::write_mesh(&args.output, &relaxed)?;
     let crossings = skin_crossings(&job.skin, &relaxed);
+    let overshoot = skin_overshoot(&job.network, &report);
     let bones = bone_before_after(&job, &report);
     if let (Some(path), Some((_, after))) = (&args.bone_output, &bones) {
         crate::io::write_mesh(path, after)?;
@@ -480,6 +481,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     ));
     let mut done = value(true);
     done["skin_self_intersecting_pairs"] = crossings;
+    done["skin_overshoot"] = overshoot;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&done)?);
     }
@@ -487,6 +489,32 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         super::report::write_json(path, &done)?;
     }
     Ok(())
+}
+
+/// Skin moves above this multiple of the bone's largest move are warned about.
+const OVERSHOOT_WARNING: f32 = 1.1;
+
+/// The largest skin and bone displacements and their ratio, with a warning
+/// when the skin moves more than 10 % beyond the bone: tissue carried by
+/// the bone should follow it, not outrun it, so a large overshoot means
+/// the network buckled (the seed's springs carry no bending).
+pub fn skin_overshoot(network: &SpringNetwork, report: &RelaxReport) -> serde_json::Value {
+    let bone = report.positions[network.n_free..]
+        .iter()
+        .zip(network.bone_rest())
+        .map(|(p, r)| Vec3::new(p[0] - r[0], p[1] - r[1], p[2] - r[2]).length())
+        .fold(0.0f32, f32::max);
+    let skin = report.max_displacement;
+    let ratio = if bone > 0.0 { skin / bone } else { 0.0 };
+    if ratio > OVERSHOOT_WARNING {
+        eprintln!(
+            "warning: the skin moves up to {skin:.4}, {:.0} % more than the bone's largest \
+             move ({bone:.4}): the tissue bulges or buckles instead of following the bone \
+             (bend springs, --bending, resist that)",
+            (ratio - 1.0) * 100.0
+        );
+    }
+    json!({ "skin_max": skin, "bone_max": bone, "ratio": ratio })
 }
 
 /// Crossing triangle pairs of the skin before and after relaxing (exact,

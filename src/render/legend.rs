@@ -1,10 +1,11 @@
 //! The colour-map legend: a vertical viridis bar (maximum at the top) with
 //! the field name above it and tick values beside it, drawn on the CPU into
-//! a strip at the right of the view grid.
+//! a strip at the right of the view grid. A field of a few whole numbers
+//! (piece or group ids, depths) gets one swatch per value instead.
 
-use super::Image;
 use super::colormap::sample_srgb8;
 use super::text::{draw_text, fill_rect, text_height, text_width};
+use super::{Image, color_coord};
 
 /// Text scale of legend labels (8×8 glyphs drawn 16×16).
 const SCALE: u32 = 2;
@@ -17,15 +18,32 @@ const GAP: u32 = 4;
 /// Label and outline colour.
 pub(crate) const INK: [u8; 4] = [30, 30, 30, 255];
 
-/// What the legend shows: the field name and the range mapped to 0 and 1.
+/// Most values a legend lists as swatches.
+pub(crate) const MAX_CATEGORIES: usize = 16;
+/// Gap between swatch rows, pixels.
+const ROW_GAP: u32 = 6;
+
+/// What the legend shows: the field name, the range mapped to 0 and 1 and,
+/// for a field of a few whole numbers, those values (ascending; empty for
+/// a continuous field).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Legend {
     pub name: String,
     pub lo: f32,
     pub hi: f32,
+    pub categories: Vec<f32>,
 }
 
 impl Legend {
+    /// The row pitch of the swatches when the field is categorical and they
+    /// fit into a strip `height` tall (else the continuous bar is drawn).
+    fn swatch_pitch(&self, height: u32) -> Option<u32> {
+        let n = self.categories.len() as u32;
+        let top = PAD + text_height(SCALE) + PAD;
+        let pitch = text_height(SCALE) + ROW_GAP;
+        (n > 0 && top + n * pitch <= height.saturating_sub(PAD)).then_some(pitch)
+    }
+
     /// Top and bottom rows of the bar inside a strip `height` tall.
     fn bar_rows(height: u32) -> (u32, u32) {
         let top = PAD + text_height(SCALE) + PAD;
@@ -57,10 +75,22 @@ impl Legend {
             .collect()
     }
 
+    /// Labels beside the bar or the swatches, top to bottom.
+    fn labels(&self, height: u32) -> Vec<(f32, String)> {
+        if self.swatch_pitch(height).is_some() {
+            self.categories
+                .iter()
+                .map(|&v| (v, category_label(v)))
+                .collect()
+        } else {
+            self.ticks(height)
+        }
+    }
+
     /// Width of the strip for a grid `height` pixels tall.
     pub fn width(&self, height: u32) -> u32 {
         let labels = self
-            .ticks(height)
+            .labels(height)
             .iter()
             .map(|(_, s)| text_width(s, SCALE))
             .max()
@@ -81,6 +111,10 @@ impl Legend {
             SCALE,
             INK,
         );
+        if let Some(pitch) = self.swatch_pitch(height) {
+            self.draw_swatches(img, x0, y0, pitch);
+            return;
+        }
         let (top, bottom) = Self::bar_rows(height);
         let bar_x = x0 + i64::from(PAD);
         let rows = bottom - top;
@@ -116,6 +150,34 @@ impl Legend {
             draw_text(img, tx, ty, &label, SCALE, INK);
         }
     }
+
+    /// One outlined swatch per category, lowest value at the top, each
+    /// labelled with its value.
+    fn draw_swatches(&self, img: &mut Image, x0: i64, y0: i64, pitch: u32) {
+        let size = text_height(SCALE);
+        let x = x0 + i64::from(PAD);
+        let top = y0 + i64::from(PAD + text_height(SCALE) + PAD);
+        for (k, &v) in self.categories.iter().enumerate() {
+            let y = top + i64::from(k as u32 * pitch);
+            let [r, g, b] = sample_srgb8(color_coord(v, self.lo, self.hi));
+            fill_rect(img, x - 1, y - 1, BAR_W + 2, size + 2, INK);
+            fill_rect(img, x, y, BAR_W, size, [r, g, b, 255]);
+            let label = category_label(v);
+            draw_text(
+                img,
+                x + i64::from(BAR_W + TICK + GAP),
+                y,
+                &label,
+                SCALE,
+                INK,
+            );
+        }
+    }
+}
+
+/// A category's label: the whole number.
+fn category_label(v: f32) -> String {
+    format!("{v:.0}")
 }
 
 /// A short label for `v` on a scale whose ticks are `step` apart: fixed
@@ -161,6 +223,7 @@ mod tests {
             name: "height".into(),
             lo: -1.0,
             hi: 3.0,
+            categories: Vec::new(),
         };
         let tall = l.ticks(400);
         assert_eq!(tall.len(), 5);
@@ -176,6 +239,7 @@ mod tests {
             name: "f".into(),
             lo: 0.0,
             hi: 1.0,
+            categories: Vec::new(),
         };
         let h = 300;
         let w = l.width(h);
@@ -189,5 +253,39 @@ mod tests {
         let x = PAD + BAR_W / 2;
         assert_eq!(img.pixel(x, top)[..3], sample_srgb8(1.0));
         assert_eq!(img.pixel(x, bottom)[..3], sample_srgb8(0.0));
+    }
+
+    #[test]
+    fn categories_get_one_labelled_swatch_each() {
+        let l = Legend {
+            name: "piece".into(),
+            lo: 0.0,
+            hi: 3.0,
+            categories: vec![0.0, 1.0, 2.0, 3.0],
+        };
+        let h = 300;
+        let pitch = l.swatch_pitch(h).expect("4 swatches fit 300 px");
+        let w = l.width(h);
+        let mut img = Image {
+            width: w,
+            height: h,
+            rgba: vec![255; (w * h * 4) as usize],
+        };
+        l.draw(&mut img, 0, 0, h);
+        let top = PAD + text_height(SCALE) + PAD;
+        for (k, t) in [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0].into_iter().enumerate() {
+            let y = top + k as u32 * pitch + text_height(SCALE) / 2;
+            assert_eq!(
+                img.pixel(PAD + BAR_W / 2, y)[..3],
+                sample_srgb8(t),
+                "swatch {k}"
+            );
+        }
+        // Between swatches the strip stays background, unlike a bar.
+        let gap = top + pitch - ROW_GAP / 2;
+        assert_eq!(img.pixel(PAD + BAR_W / 2, gap), [255; 4]);
+        // Too many for the strip: the continuous bar with ticks.
+        assert!(l.swatch_pitch(100).is_none());
+        assert_eq!(l.labels(100).len(), 2);
     }
 }

@@ -61,7 +61,7 @@ use crate::mesh::TriMesh;
 use crate::{Error, Gpu, Result};
 
 use camera::{Frame, bounding_sphere, view_camera};
-use legend::{INK, Legend};
+use legend::{INK, Legend, MAX_CATEGORIES};
 use pipeline::{BACKGROUND, CellDraw, PanelGeometry, render_grid};
 use text::{draw_text, fill_rect, text_height, text_width};
 
@@ -509,24 +509,52 @@ fn colour_legend(
         name: names.join(" / "),
         lo,
         hi,
+        categories: if user.is_none() {
+            categories(used.iter().flat_map(|(_, v)| v.iter().copied()))
+        } else {
+            Vec::new()
+        },
     }))
+}
+
+/// The distinct values (ascending) when there are 2 to [`MAX_CATEGORIES`]
+/// of them, all whole numbers (ids, labels, depths); else none. Non-finite
+/// values are skipped, as they are drawn grey.
+fn categories(values: impl Iterator<Item = f32>) -> Vec<f32> {
+    let mut seen: Vec<f32> = Vec::new();
+    for v in values.filter(|v| v.is_finite()) {
+        if v.fract() != 0.0 || v.abs() > 1e6 {
+            return Vec::new();
+        }
+        if !seen.contains(&v) {
+            if seen.len() == MAX_CATEGORIES {
+                return Vec::new();
+            }
+            seen.push(v);
+        }
+    }
+    if seen.len() < 2 {
+        return Vec::new();
+    }
+    seen.sort_by(f32::total_cmp);
+    seen
 }
 
 /// Per-vertex colour-map coordinates: (v − lo)/(hi − lo) clamped to [0, 1];
 /// 0.5 for a constant field; −1 (drawn grey) for non-finite values.
 fn color_coords(values: &[f32], lo: f32, hi: f32) -> Vec<f32> {
-    values
-        .iter()
-        .map(|&v| {
-            if !v.is_finite() {
-                -1.0
-            } else if hi > lo {
-                ((v - lo) / (hi - lo)).clamp(0.0, 1.0)
-            } else {
-                0.5
-            }
-        })
-        .collect()
+    values.iter().map(|&v| color_coord(v, lo, hi)).collect()
+}
+
+/// One value's colour-map coordinate (see [`color_coords`]).
+pub(crate) fn color_coord(v: f32, lo: f32, hi: f32) -> f32 {
+    if !v.is_finite() {
+        -1.0
+    } else if hi > lo {
+        ((v - lo) / (hi - lo)).clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
 }
 
 /// All undirected edges `[lo, hi]` of `triangles`, sorted, one entry per
@@ -543,7 +571,7 @@ pub(crate) fn undirected_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 2]> {
 
 #[cfg(test)]
 mod tests {
-    use super::fit_title;
+    use super::{MAX_CATEGORIES, categories, fit_title};
 
     #[test]
     fn titles_shrink_then_shorten_to_fit() {
@@ -551,5 +579,20 @@ mod tests {
         assert_eq!(fit_title("abcdef", 48), ("abcdef".to_string(), 1));
         // 48 px hold 6 glyphs at scale 1: 3 kept and the ellipsis.
         assert_eq!(fit_title("abcdefg", 48), ("abc...".to_string(), 1));
+    }
+
+    #[test]
+    fn a_few_whole_numbers_are_categories() {
+        let ids = [2.0, 0.0, 1.0, 2.0, f32::NAN, 0.0];
+        assert_eq!(categories(ids.into_iter()), vec![0.0, 1.0, 2.0]);
+        // Fractions, a single value, or too many values: a continuous bar.
+        assert!(categories([0.0, 0.5].into_iter()).is_empty());
+        assert!(categories([3.0, 3.0].into_iter()).is_empty());
+        let many = (0..=MAX_CATEGORIES).map(|k| k as f32);
+        assert!(categories(many).is_empty());
+        assert_eq!(
+            categories((0..MAX_CATEGORIES).map(|k| k as f32)).len(),
+            MAX_CATEGORIES
+        );
     }
 }

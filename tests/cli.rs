@@ -151,9 +151,8 @@ fn previews_must_be_png_names_checked_first() {
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
         assert!(
-            stderr.contains("look.jpg")
-                && stderr.contains("expected a `.png` file name")
-                && stderr.contains("the extension `.jpg`")
+            stderr.contains("look.jpg: unsupported format: image extension `.jpg`")
+                && stderr.contains("name the file .png")
                 && !stderr.contains("missing"),
             "{args:?}: {stderr}"
         );

@@ -129,7 +129,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let out = |name: &str| args.out.join(name);
     crate::io::write_mesh(&out("relaxed_skin.ply"), &relaxed)?;
     let crossings = super::relax::skin_crossings(&job.skin, &relaxed);
-    let overshoot = super::relax::skin_overshoot(&job.network, &gpu_report);
+    let overshoot = super::relax::skin_overshoot(&job.network, &job.plan, &gpu_report)?;
     let (bone_before, bone_after) = bone_before_after(&job, &gpu_report)
         .ok_or_else(|| anyhow::anyhow!("the demo network has no bone mesh"))?;
     crate::io::write_mesh(&out("bone_moved.ply"), &bone_after)?;

@@ -17,7 +17,8 @@ use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
 use crate::render::{Facing, Panel, RenderOptions, View};
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
-use crate::tissue::network::{Material, Stiffness};
+use crate::tissue::network::{Material, SpringClass, Stiffness};
+use crate::tissue::relax::bone_displacements;
 use crate::tissue::{
     CtParams, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork,
     Status, cut_bone, layers_from_ct,
@@ -120,7 +121,6 @@ impl Job {
         mut fragments: Fragments,
         params: &NetworkParams,
     ) -> anyhow::Result<Job> {
-        plan.check_fragments(&fragments)?;
         let (bone, cut) = match (bone, plan.cuts.is_empty()) {
             (bone, true) => (bone, None),
             (None, false) => anyhow::bail!(
@@ -203,10 +203,10 @@ pub fn before_mesh(skin: &TriMesh) -> TriMesh {
 }
 
 /// The bone mesh before and after the plan, each with its `displacement`
-/// (bone nodes are the network's nodes `2n..`, in bone-mesh order).
+/// (bone nodes are the network's nodes `n_free..`, in bone-mesh order).
 pub fn bone_before_after(job: &Job, report: &RelaxReport) -> Option<(TriMesh, TriMesh)> {
     let bone = job.bone.as_ref()?;
-    let first = 2 * job.skin.n_vertices();
+    let first = job.network.n_free;
     let moved = TriMesh {
         positions: report.positions[first..first + bone.n_vertices()]
             .iter()
@@ -267,6 +267,14 @@ pub fn network_json(net: &SpringNetwork, subcutis_depth: Option<f32>) -> serde_j
     })
 }
 
+/// Where the epidermis and bone come from.
+enum Input<'a> {
+    /// A CT volume with the skin and bone iso-levels.
+    Ct(&'a Path, f32, f32),
+    /// An epidermis mesh (the bone mesh is `--bone`, if any).
+    Mesh(&'a Path),
+}
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     // Every output is checked before the work starts.
@@ -288,15 +296,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
         }
     }
-    // The plan is checked before the inputs are read (a CT takes seconds).
-    let plan = Plan::from_path(&args.plan)?;
-    plan.check_fragments(&Fragments::new())?;
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
-    let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
-    let (skin, bone, ct) = match (&args.ct, &args.mesh) {
+    let input = match (&args.ct, &args.mesh) {
         (Some(ct), _) => {
             let (Some(skin_level), Some(bone_text)) = (args.skin, args.bone.as_deref()) else {
                 anyhow::bail!("--ct needs --skin LEVEL and --bone LEVEL");
@@ -304,6 +304,22 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             let bone_level: f32 = bone_text.parse().map_err(|_| {
                 anyhow::anyhow!("with --ct, --bone is the bone iso-level; got `{bone_text}`")
             })?;
+            Input::Ct(ct, skin_level, bone_level)
+        }
+        (None, Some(mesh)) => Input::Mesh(mesh),
+        (None, None) => anyhow::bail!("give an epidermis MESH or --ct VOLUME"),
+    };
+    // The plan is checked before the inputs are read (a CT takes seconds);
+    // its steps may select only fragments its own cuts free.
+    let plan = Plan::from_path(&args.plan)?;
+    plan.check_fragments(&Fragments::new())?;
+    let gpu = match args.backend {
+        BackendArg::Gpu => Some(global.gpu()?),
+        BackendArg::Cpu => None,
+    };
+    let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
+    let (skin, bone, ct) = match input {
+        Input::Ct(ct, skin_level, bone_level) => {
             let volume = crate::io::read_volume(ct)?;
             let mut ct_params = CtParams::for_volume(&volume, skin_level, bone_level);
             if let Some(e) = args.skin_min_edge {
@@ -324,7 +340,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             ));
             (layers.skin, Some(layers.bone), Some(layers.figures))
         }
-        (None, Some(mesh)) => {
+        Input::Mesh(mesh) => {
             let skin = crate::io::read_mesh(mesh)?;
             let bone = args
                 .bone
@@ -333,7 +349,6 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 .transpose()?;
             (skin, bone, None)
         }
-        (None, None) => anyhow::bail!("give an epidermis MESH or --ct VOLUME"),
     };
     let params = NetworkParams {
         origin: vec3_arg("origin", args.origin.as_deref())?.map(|o| o.to_array()),
@@ -433,7 +448,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let relaxed = report.skin_mesh(&job.network);
     crate::io::write_mesh(&args.output, &relaxed)?;
     let crossings = skin_crossings(&job.skin, &relaxed);
-    let overshoot = skin_overshoot(&job.network, &report);
+    let overshoot = skin_overshoot(&job.network, &job.plan, &report)?;
     let bones = bone_before_after(&job, &report);
     if let (Some(path), Some((_, after))) = (&args.bone_output, &bones) {
         crate::io::write_mesh(path, after)?;
@@ -493,28 +508,58 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 
 /// Skin moves above this multiple of the bone's largest move are warned about.
 const OVERSHOOT_WARNING: f32 = 1.1;
+/// Bone moves below this fraction of the bone layer's bounding-box diagonal
+/// give no ratio (a plan that moves the bone and back, or not at all).
+const OVERSHOOT_MIN_BONE_MOVE: f32 = 1e-3;
 
-/// The largest skin and bone displacements and their ratio, with a warning
-/// when the skin moves more than 10 % beyond the bone: tissue carried by
-/// the bone should follow it, not outrun it, so a large overshoot means
-/// the network buckled (the seed's springs carry no bending).
-pub fn skin_overshoot(network: &SpringNetwork, report: &RelaxReport) -> serde_json::Value {
-    let bone = report.positions[network.n_free..]
+/// The largest skin and bone displacements and their ratio (`null` when
+/// the bone hardly moved), with a warning when the skin moves more than
+/// 10 % beyond the bone. Tissue carried by a translated bone should follow
+/// it, not outrun it, so a large overshoot means the network bulged or
+/// buckled. Plans that rotate are not warned about: skin farther from the
+/// axis than any bone rightly moves more.
+pub fn skin_overshoot(
+    network: &SpringNetwork,
+    plan: &Plan,
+    report: &RelaxReport,
+) -> anyhow::Result<serde_json::Value> {
+    let length = |u: &[f32; 4]| Vec3::new(u[0], u[1], u[2]).length();
+    let bone = bone_displacements(network, &report.positions[network.n_free..])?
         .iter()
-        .zip(network.bone_rest())
-        .map(|(p, r)| Vec3::new(p[0] - r[0], p[1] - r[1], p[2] - r[2]).length())
+        .map(length)
         .fold(0.0f32, f32::max);
+    let (lo, hi) = network.bone_rest().iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), r| {
+            (
+                lo.min(Vec3::new(r[0], r[1], r[2])),
+                hi.max(Vec3::new(r[0], r[1], r[2])),
+            )
+        },
+    );
     let skin = report.max_displacement;
-    let ratio = if bone > 0.0 { skin / bone } else { 0.0 };
-    if ratio > OVERSHOOT_WARNING {
+    let ratio = (bone > OVERSHOOT_MIN_BONE_MOVE * (hi - lo).length()).then(|| skin / bone);
+    let rotates = plan.steps.iter().any(|s| s.rotate.is_some());
+    if let Some(r) = ratio
+        && r > OVERSHOOT_WARNING
+        && !rotates
+    {
+        let hint = if network
+            .springs
+            .iter()
+            .any(|s| s.class == SpringClass::Bending)
+        {
+            ""
+        } else {
+            "; the network has no bend springs (--bending 1 adds them)"
+        };
         eprintln!(
             "warning: the skin moves up to {skin:.4}, {:.0} % more than the bone's largest \
-             move ({bone:.4}): the tissue bulges or buckles instead of following the bone \
-             (bend springs, --bending, resist that)",
-            (ratio - 1.0) * 100.0
+             move ({bone:.4}): the tissue bulges or buckles instead of following the bone{hint}",
+            (r - 1.0) * 100.0
         );
     }
-    json!({ "skin_max": skin, "bone_max": bone, "ratio": ratio })
+    Ok(json!({ "skin_max": skin, "bone_max": bone, "ratio": ratio }))
 }
 
 /// Crossing triangle pairs of the skin before and after relaxing (exact,

@@ -123,20 +123,17 @@ pub fn check_output_path(path: &Path) -> Result<()> {
 /// (previews are PNG; a `.jpg` name would hold PNG data).
 pub fn check_png_output(path: &Path) -> Result<()> {
     check_output_path(path)?;
-    let name = file_name_lower(path);
-    if name.ends_with(".png") {
+    if file_name_lower(path).ends_with(".png") {
         return Ok(());
     }
-    let found = match name.rsplit_once('.') {
-        Some((_, ext)) => format!("the extension `.{ext}`"),
-        None => "no extension".into(),
+    let found = match path.extension() {
+        Some(ext) => format!("extension `.{}`", ext.to_string_lossy()),
+        None => "a name without extension".into(),
     };
-    Err(Error::format(
-        path,
-        Position::Whole,
-        "a `.png` file name (previews are written as PNG)",
-        found,
-    ))
+    Err(Error::Unsupported {
+        path: path.into(),
+        what: format!("image {found} (previews are PNG: name the file .png)"),
+    })
 }
 
 /// Checks that the folder `path` would be written into exists.

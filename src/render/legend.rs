@@ -175,9 +175,9 @@ impl Legend {
     }
 }
 
-/// A category's label: the whole number.
+/// A category's label: the whole number (`0`, never `-0`).
 fn category_label(v: f32) -> String {
-    format!("{v:.0}")
+    format!("{:.0}", v + 0.0)
 }
 
 /// A short label for `v` on a scale whose ticks are `step` apart: fixed

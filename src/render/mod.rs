@@ -13,7 +13,9 @@
 //!   through viridis, interpolated per fragment, over the field's finite
 //!   min..max or a user range (values outside clamp; non-finite values draw
 //!   dark grey), with a legend strip at the right: colour bar, field name and
-//!   tick values (8×8 bitmap font at 2×).
+//!   tick values (8×8 bitmap font at 2×), or, for 2 to 16 whole-number
+//!   values without a user range, one labelled swatch per value (lowest at
+//!   the top) when they fit the strip's height.
 //! * **Camera**: orthographic, framing the bounding sphere of the drawn
 //!   vertices (box centre, largest distance) with an 8 % margin; one sphere
 //!   for all views and panels, so sizes compare.
@@ -228,7 +230,8 @@ impl Image {
         Ok(out)
     }
 
-    /// Writes the image as PNG to `path`, atomically (temp file + rename).
+    /// Writes the image as PNG to `path`, atomically (temp file + rename);
+    /// a name not ending in `.png` is refused.
     pub fn save_png(&self, path: &Path) -> Result<()> {
         crate::io::check_png_output(path)?;
         crate::io::write_atomic(path, &self.to_png()?)

@@ -104,7 +104,7 @@ impl KnifeSpec {
                     .length()
                     == 0.0
                 {
-                    Some("the rectangle's normal is zero or parallel to u")
+                    Some("the rectangle's normal or u is zero, or they are parallel")
                 } else {
                     None
                 }
@@ -329,16 +329,19 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut], source: Option<&str>) -> Resul
             }
         }
         if taken == 0 {
-            return Err(Error::InvalidInput(format!(
-                "{}: no bone piece lies on the {} side of the {}{}",
-                cut_label(source, ci, &c.name),
-                c.side,
-                c.knife,
-                c.within
-                    .as_ref()
-                    .map(|w| format!(" with its centroid in the {}", w.describe()))
-                    .unwrap_or_default()
-            )));
+            let what = cut_label(source, ci, &c.name);
+            return Err(Error::InvalidInput(match &c.within {
+                None => format!(
+                    "{what}: no bone piece lies on the {} side of the {}",
+                    c.side, c.knife
+                ),
+                Some(w) => format!(
+                    "{what}: no bone piece on the {} side of the {} has its centroid in the {}",
+                    c.side,
+                    c.knife,
+                    w.describe()
+                ),
+            }));
         }
         stats.push(total);
         pieces = next;

@@ -54,7 +54,8 @@ pub enum Selector {
     Fragment(String),
 }
 
-/// `(x, y, z)` with each coordinate printed as it was written.
+/// `(x, y, z)`, each coordinate in the shortest form that reads back as
+/// the same `f32` (`1.0` prints as `1`).
 pub(crate) fn point_text(v: &[f32; 3]) -> String {
     format!("({}, {}, {})", v[0], v[1], v[2])
 }
@@ -324,9 +325,16 @@ impl Plan {
                 Some(i) => message[..i].to_string(),
                 None => message,
             };
+            // serde_json counts columns in bytes (0 at the end of input
+            // after a newline); the position is recounted in characters.
+            let line_start: usize = text
+                .split_inclusive('\n')
+                .take(e.line().saturating_sub(1))
+                .map(str::len)
+                .sum();
             Error::format(
                 origin,
-                Position::LineColumn(e.line(), e.column()),
+                line_column(text, line_start + e.column().saturating_sub(1)),
                 "a surgery plan",
                 message,
             )
@@ -422,8 +430,9 @@ impl Plan {
     }
 
     /// Checks that every `fragment = "name"` selector names one of the
-    /// plan's `[[cut]]`s or a fragment in `supplied`, before any work is
-    /// done (the same error [`Plan::resolve`] would give after the cuts).
+    /// plan's `[[cut]]`s or a fragment in `supplied`, so that a typo fails
+    /// before any work is done rather than in [`Plan::resolve`] after the
+    /// cuts.
     pub fn check_fragments(&self, supplied: &Fragments) -> Result<()> {
         for (i, s) in self.steps.iter().enumerate() {
             if let Selector::Fragment(name) = &s.select

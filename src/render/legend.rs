@@ -233,6 +233,18 @@ mod tests {
         assert!(l.width(400) >= 2 * PAD + BAR_W + text_width("-1.0", SCALE));
     }
 
+    /// `l` drawn alone on white into a strip `h` tall and as wide as it asks.
+    fn drawn(l: &Legend, h: u32) -> Image {
+        let w = l.width(h);
+        let mut img = Image {
+            width: w,
+            height: h,
+            rgba: vec![255; (w * h * 4) as usize],
+        };
+        l.draw(&mut img, 0, 0, h);
+        img
+    }
+
     #[test]
     fn bar_runs_from_max_colour_at_top_to_min_at_bottom() {
         let l = Legend {
@@ -242,13 +254,7 @@ mod tests {
             categories: Vec::new(),
         };
         let h = 300;
-        let w = l.width(h);
-        let mut img = Image {
-            width: w,
-            height: h,
-            rgba: vec![255; (w * h * 4) as usize],
-        };
-        l.draw(&mut img, 0, 0, h);
+        let img = drawn(&l, h);
         let (top, bottom) = Legend::bar_rows(h);
         let x = PAD + BAR_W / 2;
         assert_eq!(img.pixel(x, top)[..3], sample_srgb8(1.0));
@@ -265,13 +271,7 @@ mod tests {
         };
         let h = 300;
         let pitch = l.swatch_pitch(h).expect("4 swatches fit 300 px");
-        let w = l.width(h);
-        let mut img = Image {
-            width: w,
-            height: h,
-            rgba: vec![255; (w * h * 4) as usize],
-        };
-        l.draw(&mut img, 0, 0, h);
+        let img = drawn(&l, h);
         let top = PAD + text_height(SCALE) + PAD;
         for (k, t) in [0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0].into_iter().enumerate() {
             let y = top + k as u32 * pitch + text_height(SCALE) / 2;
@@ -284,7 +284,21 @@ mod tests {
         // Between swatches the strip stays background, unlike a bar.
         let gap = top + pitch - ROW_GAP / 2;
         assert_eq!(img.pixel(PAD + BAR_W / 2, gap), [255; 4]);
-        // Too many for the strip: the continuous bar with ticks.
+        // Each label is drawn right of its swatch, inside the strip's width.
+        let label_x = PAD + BAR_W + TICK + GAP;
+        for k in 0..4 {
+            let y0 = top + k * pitch;
+            let inked = |xs: std::ops::Range<u32>| {
+                xs.flat_map(|x| (y0..y0 + text_height(SCALE)).map(move |y| (x, y)))
+                    .any(|(x, y)| img.pixel(x, y) == INK)
+            };
+            assert!(inked(label_x..img.width), "label {k}");
+            assert!(
+                !inked(img.width - PAD + 1..img.width),
+                "label {k} reaches the edge"
+            );
+        }
+        // The strip is too short for four rows: the continuous bar with ticks.
         assert!(l.swatch_pitch(100).is_none());
         assert_eq!(l.labels(100).len(), 2);
     }

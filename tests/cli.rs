@@ -160,6 +160,99 @@ fn previews_must_be_png_names_checked_first() {
     assert!(!Path::new(&jpg).exists());
 }
 
+/// Negative thresholds parse, and mistakes in outputs or options are
+/// reported before the work and before any output is written.
+#[test]
+fn volume_commands_check_their_options_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let ball = p("ball.nrrd");
+    ok(&["phantom", "ball", "--r", "4", "-o", &ball]);
+    // A threshold below every sample selects them all (CT data in HU).
+    let v = ok_json(&["stats", &ball, "--threshold", "-5", "--json"]);
+    assert_eq!(v["threshold"]["voxels"], 216, "{v}");
+    assert_eq!(v["threshold"]["selection"], "value >= -5");
+    let fails = |args: &[&str], says: &str| {
+        let run = chisel(args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    };
+    let (mesh, png) = (p("hull.ply"), p("hull.png"));
+    fails(
+        &[
+            "hull",
+            &ball,
+            "--threshold",
+            "1",
+            "-o",
+            &mesh,
+            "--preview",
+            &png,
+            "--view-up",
+            "1,0,0",
+            "--view-front",
+            "2,0,0",
+        ],
+        "must not be parallel",
+    );
+    assert!(!Path::new(&mesh).exists(), "no output before the check");
+    fails(
+        &[
+            "polyhedrize",
+            &ball,
+            "--threshold",
+            "1",
+            "-o",
+            &p("cells.ply"),
+        ],
+        "-o takes the binary cell list",
+    );
+    fails(
+        &[
+            "polyhedrize",
+            &ball,
+            "--threshold",
+            "1",
+            "--cells-json",
+            &p("cells.txt"),
+        ],
+        "name the file .json",
+    );
+    fails(
+        &[
+            "polyhedrize",
+            &ball,
+            "--threshold",
+            "1",
+            "--slice",
+            "3",
+            "--mesh",
+            &mesh,
+        ],
+        "--slice gives 2-D polygons",
+    );
+    for command in ["scan", "stats"] {
+        fails(
+            &[
+                command,
+                &ball,
+                "--threshold",
+                "1",
+                "--report",
+                &p("nodir/r.json"),
+            ],
+            "folder",
+        );
+    }
+    fails(&["convert", &ball, &p("x.raw")], "volume extension `.raw`");
+    fails(
+        &["convert", &ball, &p("x")],
+        "volume file name without extension",
+    );
+    assert!(!Path::new(&p("x.raw")).exists());
+}
+
 #[test]
 fn stats_meshes_match_the_data_readme() {
     let Some(dir) = common::data_dir() else {

@@ -56,10 +56,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             if let Some(path) = &args.preview {
                 let opts = crate::render::RenderOptions {
                     views: vec![crate::render::View::Front, crate::render::View::Iso],
-                    title: args
-                        .output
-                        .file_name()
-                        .map(|n| n.to_string_lossy().into_owned()),
+                    title: Some(super::file_name(&args.output)),
                     ..Default::default()
                 };
                 crate::render::render_png(&global.gpu()?, &m, &opts, path)?;
@@ -71,11 +68,26 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 m.n_triangles()
             ));
         }
-        _ => anyhow::bail!(
-            "cannot convert between a mesh and a volume ({} → {}); use `chisel mc` for surfaces",
-            args.input.display(),
-            args.output.display()
-        ),
+        (input_is_volume, _) => {
+            // An output name of neither kind gets the input kind's list.
+            let other_kind = if input_is_volume {
+                crate::io::check_mesh_output(&args.output)
+            } else {
+                crate::io::check_volume_output(&args.output)
+            };
+            if other_kind.is_err() {
+                if input_is_volume {
+                    crate::io::check_volume_output(&args.output)?;
+                } else {
+                    crate::io::check_mesh_output(&args.output)?;
+                }
+            }
+            anyhow::bail!(
+                "cannot convert between a mesh and a volume ({} → {}); use `chisel mc` for surfaces",
+                args.input.display(),
+                args.output.display()
+            )
+        }
     }
     Ok(())
 }

@@ -128,6 +128,8 @@ fn merged(pieces: &[TriMesh], explode: f32) -> TriMesh {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    // The preview's axes are checked before the work, like its path.
+    let facing = args.view.facing()?;
     if !(0.0..=10.0).contains(&args.explode) {
         anyhow::bail!("--explode must be between 0 and 10, got {}", args.explode);
     }
@@ -179,7 +181,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                     args.explode
                 )
             }),
-            facing: args.view.facing()?,
+            facing,
             ..Default::default()
         };
         crate::render::render_png(&gpu, &merged(&result.pieces, args.explode), &opts, path)?;

@@ -151,6 +151,7 @@ pub(super) fn object_json(object: &DigitalObject) -> serde_json::Value {
 
 /// Arguments of `chisel hull`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Volume (any format `chisel stats` reads).
     volume: PathBuf,
@@ -178,6 +179,8 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    // The preview's axes are checked before the work, like its path.
+    let facing = args.view.facing()?;
     if let Some(path) = &args.output {
         crate::io::check_mesh_output(path)?;
     }
@@ -226,10 +229,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             wireframe: true,
             title: Some(format!(
                 "chisel hull: {} ({} faces)",
-                args.volume.display(),
+                super::file_name(&args.volume),
                 hull.n_faces()
             )),
-            facing: args.view.facing()?,
+            facing,
             ..Default::default()
         };
         crate::render::render_png(&gpu, &mesh, &opts, path)?;

@@ -51,6 +51,8 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    // The preview's axes are checked before the work, like its path.
+    let facing = args.view.facing()?;
     let t = Instant::now();
     crate::io::check_mesh_output(&args.output)?;
     if let Some(path) = &args.preview {
@@ -148,13 +150,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             height: 384,
             title: Some(format!(
                 "chisel mc: {} at {}",
-                args.volume.display(),
+                super::file_name(&args.volume),
                 match iso {
                     IsoSpec::Level(l) => format!("level {l}"),
                     IsoSpec::Label(l) => format!("label {l}"),
                 }
             )),
-            facing: args.view.facing()?,
+            facing,
             ..Default::default()
         };
         crate::render::render_png(g, &surface.mesh, &opts, path)?;

@@ -98,6 +98,15 @@ pub(super) fn vec3_arg(name: &str, v: Option<&[f32]>) -> anyhow::Result<Option<g
     }
 }
 
+/// The file name of `path` for preview titles (a long folder would push
+/// the name and the figures out of the title).
+pub(super) fn file_name(path: &std::path::Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 /// Checks an output folder before any work is done: not an existing file,
 /// in a folder that exists (it is created when the outputs are written).
 pub(super) fn check_output_dir(dir: &std::path::Path) -> anyhow::Result<()> {

@@ -24,6 +24,7 @@ use crate::voxel::{DigitalObject, marching_cubes_integers};
 
 /// Arguments of `chisel polyhedrize`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Volume (any format `chisel stats` reads).
     volume: PathBuf,
@@ -80,6 +81,8 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    // The preview's axes are checked before the work, like its path.
+    let facing = args.view.facing()?;
     for path in [&args.output, &args.cells_json, &args.report]
         .into_iter()
         .flatten()
@@ -91,6 +94,28 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     if let Some(path) = &args.preview {
         crate::io::check_png_output(path)?;
+    }
+    // `-o` is the binary cell list, not a mesh (`hull -o` is): a wrong
+    // extension is caught before the work.
+    for (path, ext, what) in [
+        (
+            &args.output,
+            ".cells",
+            "-o takes the binary cell list (--mesh writes the surface)",
+        ),
+        (&args.cells_json, ".json", "--cells-json writes JSON"),
+    ] {
+        if let Some(path) = path
+            && !path.to_string_lossy().to_lowercase().ends_with(ext)
+        {
+            anyhow::bail!("{}: {what}; name the file {ext}", path.display());
+        }
+    }
+    if args.slice.is_some() && (args.mesh.is_some() || args.preview.is_some()) {
+        anyhow::bail!(
+            "--slice gives 2-D polygons (written by -o and --cells-json); --mesh and \
+             --preview draw 3-D shells"
+        );
     }
     let (selection, component) = args.select.parse()?;
     let mut timings = serde_json::Map::new();
@@ -180,6 +205,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         (true, Some(m)) => Some(m.to_mesh(&poly.frame)?),
         (true, None) => Some(poly.to_mesh()?),
     };
+    if mesh.as_ref().is_some_and(|m| m.triangles.is_empty()) {
+        anyhow::bail!(
+            "{}: every shell is flat (2-D or lower), so --mesh / --preview have no \
+             surface to draw; the polygons are in -o / --cells-json",
+            args.volume.display()
+        );
+    }
     let mesh_kind = if merged.is_some() { "merged" } else { "shells" };
     if needs_mesh && let Some(why) = &merge_refused {
         global.note(format!(
@@ -215,7 +247,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                     summary.shells, summary.faces
                 ),
             }),
-            facing: args.view.facing()?,
+            facing,
             ..Default::default()
         };
         crate::render::render_png(gpu, mesh, &opts, path)?;

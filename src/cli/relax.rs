@@ -277,6 +277,8 @@ enum Input<'a> {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
+    // The preview's axes are checked before the work, like its path.
+    let facing = args.view.facing()?;
     // Every output is checked before the work starts.
     crate::io::check_mesh_output(&args.output)?;
     if let Some(path) = &args.bone_output {
@@ -453,7 +455,6 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let (Some(path), Some((_, after))) = (&args.bone_output, &bones) {
         crate::io::write_mesh(path, after)?;
     }
-    let facing = args.view.facing()?;
     let title = job.plan.name.clone().unwrap_or_default();
     if args.preview.is_some() || args.bone_preview.is_some() {
         let opened;

@@ -7,6 +7,7 @@ use crate::render::{RenderOptions, View};
 
 /// Arguments of `chisel render`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Mesh to draw.
     input: PathBuf,
@@ -39,12 +40,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         views: args.views.clone(),
         wireframe: args.wireframe,
         scalars: args.scalars.clone(),
-        title: Some(
-            args.input
-                .file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-        ),
+        title: Some(super::file_name(&args.input)),
         facing: args.view.facing()?,
         ..Default::default()
     };

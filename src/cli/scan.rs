@@ -67,6 +67,7 @@ const MAX_SCAN_LABELS: usize = 65_536;
 
 /// Arguments of `chisel scan`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Volume (any format `chisel stats` reads).
     volume: PathBuf,
@@ -87,7 +88,7 @@ pub struct Args {
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
-    /// Print the report on stdout as JSON (else as text).
+    /// Print the report on stdout as JSON (else only the summary on stderr).
     #[arg(long)]
     json: bool,
 }
@@ -159,6 +160,9 @@ impl ZkhTotals {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.report {
+        crate::io::check_output_path(path)?;
+    }
     let name = args.volume.display();
     let t_total = Instant::now();
     let t = Instant::now();
@@ -260,7 +264,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         t_total.elapsed().as_secs_f64(),
         backend.name(),
     ));
-    super::report::emit(&value, args.json, args.report.as_deref())
+    super::report::emit_optional(&value, args.json, args.report.as_deref())
 }
 
 /// The 6-connected components of the samples `≥ threshold`: the per-voxel

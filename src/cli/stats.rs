@@ -14,6 +14,7 @@ use crate::volume::analysis::{VolumeStats, label_components, threshold_component
 
 /// Arguments of `chisel stats`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Mesh (.vtk .ply .obj .stl .byu) or volume (.nrrd .nhdr .mhd .mha .nii .nii.gz).
     file: PathBuf,
@@ -47,6 +48,9 @@ pub fn is_volume(path: &std::path::Path) -> bool {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    if let Some(path) = &args.report {
+        crate::io::check_output_path(path)?;
+    }
     let value = if is_volume(&args.file) {
         volume_stats(global, args)?
     } else {

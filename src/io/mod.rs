@@ -192,7 +192,10 @@ fn mesh_format(path: &Path) -> Result<MeshFormat> {
         _ => {
             return Err(Error::Unsupported {
                 path: path.into(),
-                what: format!("mesh extension `.{ext}` (known: .vtk .ply .obj .stl .byu .g)"),
+                what: format!(
+                    "mesh {} (known: .vtk .ply .obj .stl .byu .g)",
+                    extension_text(ext)
+                ),
             });
         }
     })
@@ -253,6 +256,21 @@ enum VolumeFormat {
     NiiGz,
 }
 
+/// `extension `.ext`` for messages, or `file name without extension`.
+fn extension_text(ext: &str) -> String {
+    if ext.is_empty() {
+        "file name without extension".into()
+    } else {
+        format!("extension `.{ext}`")
+    }
+}
+
+/// Checks an output volume path: [`check_output_path`] and a known extension.
+pub fn check_volume_output(path: &Path) -> Result<()> {
+    check_output_path(path)?;
+    volume_format(path).map(|_| ())
+}
+
 fn volume_format(path: &Path) -> Result<VolumeFormat> {
     not_a_directory(path, "a volume file")?;
     let name = file_name_lower(path);
@@ -270,8 +288,9 @@ fn volume_format(path: &Path) -> Result<VolumeFormat> {
             return Err(Error::Unsupported {
                 path: path.into(),
                 what: format!(
-                    "volume extension `.{ext}` (known: .nrrd .nhdr .mha .mhd .nii .nii.gz; \
-                     plain raw files need read_raw_volume)"
+                    "volume {} (known: .nrrd .nhdr .mha .mhd .nii .nii.gz; headerless raw \
+                     samples are read through a .nhdr or .mhd header naming them)",
+                    extension_text(ext)
                 ),
             });
         }

@@ -86,6 +86,9 @@ pub enum Error {
     /// The device was lost (driver reset, crash, timeout).
     #[error("GPU device lost: {0}")]
     DeviceLost(String),
+    /// A host allocation failed (the request is too large for this machine).
+    #[error("not enough memory: {0}")]
+    HostMemory(String),
     /// An allocation on the device failed.
     #[error("GPU out of memory while {0}")]
     OutOfMemory(String),

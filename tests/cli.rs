@@ -167,7 +167,18 @@ fn volume_commands_check_their_options_first() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
     let ball = p("ball.nrrd");
-    ok(&["phantom", "ball", "--r", "4", "-o", &ball]);
+    let v = ok_json(&["phantom", "ball", "--r", "4", "-o", &ball, "--json"]);
+    assert_eq!(v["kind"], serde_json::json!({ "shape": "ball", "r": 4 }));
+    // Reports name the selection, and say when the ZKHs were not looked for.
+    let v = ok_json(&["hull", &ball, "--threshold", "1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["threshold"], 1.0);
+    assert_eq!(v["selection"]["component"], "largest");
+    assert!(v["zkh"].is_null() && v["zkh"] != serde_json::json!([]));
+    assert_eq!(v["zkh_skipped"], "--no-zkh");
+    assert_eq!(v["candidates"]["kind"], "local26");
+    let v = ok_json(&["hull", &ball, "--threshold", "1", "--json"]);
+    assert_eq!(v["zkh"], serde_json::json!([]));
+    assert!(v["zkh_skipped"].is_null());
     // A threshold below every sample selects them all (CT data in HU).
     let v = ok_json(&["stats", &ball, "--threshold", "-5", "--json"]);
     assert_eq!(v["threshold"]["voxels"], 216, "{v}");
@@ -1098,7 +1109,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
         "corners",
         "--json",
     ]);
-    assert_eq!(corners["candidates"]["kind"], "ConvexCorners");
+    assert_eq!(corners["candidates"]["kind"], "convex_corners");
 
     let cyl = tmp.path().join("cyl.mha");
     ok(&[
@@ -1125,7 +1136,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     assert_eq!(v["object"]["boundary_facets"], 2848);
     let zkh = v["zkh"].as_array().unwrap();
     assert_eq!(zkh.len(), 1);
-    assert_eq!(zkh[0]["class"], "Tunnel");
+    assert_eq!(zkh[0]["class"], "tunnel");
     assert_eq!(zkh[0]["voxels"], 1200);
     let mesh = chisel::io::read_mesh(&hull_ply).unwrap();
     assert_eq!(
@@ -1191,7 +1202,7 @@ fn polyhedrize_writes_verified_cells() {
     assert_eq!(v["polyhedron"]["shells"], 2);
     assert_eq!(v["marching_cubes"]["triangles"], 13952);
     assert_eq!(v["verified"], true);
-    assert_eq!(v["zkh"][0]["class"], "Tunnel");
+    assert_eq!(v["zkh"][0]["class"], "tunnel");
     // The merged surface: 58 faces, the two caps holed (60 split).
     assert_eq!(v["mesh"], "merged");
     assert_eq!(
@@ -1206,7 +1217,7 @@ fn polyhedrize_writes_verified_cells() {
     .unwrap();
     assert_eq!(back.shells.len(), 2);
     let j: Value = serde_json::from_slice(&std::fs::read(&cells_json).unwrap()).unwrap();
-    assert_eq!(j["shells"][1]["role"], "Background");
+    assert_eq!(j["shells"][1]["role"], "background");
     let m = chisel::io::read_mesh(&mesh).unwrap();
     assert!(m.scalar("depth").is_some());
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);

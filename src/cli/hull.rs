@@ -90,6 +90,15 @@ impl SelectArgs {
         };
         Ok((selection, component))
     }
+
+    /// The selection as given, for reports.
+    pub fn to_json(&self) -> serde_json::Value {
+        json!({
+            "threshold": self.threshold,
+            "label": self.label,
+            "component": self.component,
+        })
+    }
 }
 
 /// How the hull is built: candidates, vertex cells, coplanar policy and
@@ -210,10 +219,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     stage("hull", t);
     let frame = object.frame();
     let t = Instant::now();
-    let zkh = if args.no_zkh || hull.is_planar() {
-        Vec::new()
+    // A flat hull has no inside, so no ZKH (reported as skipped, not as 0).
+    let zkh_skipped = if args.no_zkh {
+        Some("--no-zkh")
+    } else if hull.is_planar() {
+        Some("flat hull: no inside")
     } else {
-        background_components(&object, &hull)?
+        None
+    };
+    let zkh = match zkh_skipped {
+        Some(_) => Vec::new(),
+        None => background_components(&object, &hull)?,
     };
     stage("zkh", t);
     let mesh = hull.to_mesh(&frame)?;
@@ -241,20 +257,25 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "command": "hull",
         "volume": args.volume,
         "dims": volume.dims,
+        "selection": args.select.to_json(),
         "object": object_json(&object),
-        "candidates": { "kind": format!("{kind:?}"), "count": candidates.len() },
+        "candidates": { "kind": kind, "count": candidates.len() },
         "hull": hull.summary(&frame),
-        "zkh": zkh,
+        "zkh": zkh_skipped.is_none().then_some(&zkh),
+        "zkh_skipped": zkh_skipped,
         "outputs": { "mesh": args.output, "preview": args.preview },
         "timings_s": timings,
     });
     global.note(format!(
-        "hull of {} voxels: {} faces, {} vertices, {} integers (eq. 8.2); {} ZKH",
+        "hull of {} voxels: {} faces, {} vertices, {} integers (eq. 8.2); {}",
         object.n_voxels(),
         hull.n_faces(),
         hull.n_vertices(),
         hull.cell_list().integers_eq_8_2(),
-        zkh.len()
+        match zkh_skipped {
+            Some(why) => format!("ZKH skipped ({why})"),
+            None => format!("{} ZKH", zkh.len()),
+        }
     ));
     if args.json {
         println!("{}", serde_json::to_string_pretty(&value)?);

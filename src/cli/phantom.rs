@@ -9,55 +9,70 @@ use serde_json::json;
 use super::Global;
 use crate::phantom::voxel;
 
-/// The objects.
-#[derive(Debug, Clone, clap::Subcommand)]
+/// The objects (in reports `{"shape": "ball", "r": 4}`).
+#[derive(Debug, Clone, clap::Subcommand, serde::Serialize)]
+#[serde(tag = "shape", rename_all = "kebab-case")]
 pub enum Kind {
     /// Digital ball of combinatorial radius R (radius R/2 voxels), centre at a cell corner.
     Ball {
+        /// Combinatorial radius (twice the radius in voxels).
         #[arg(long)]
         r: u32,
     },
     /// Axis-aligned cube of A³ voxels.
     Cube {
+        /// Edge length in voxels.
         #[arg(long)]
         a: u32,
     },
     /// Cylinder of height H along z with a central cylindrical tunnel (diameters in voxels).
     CylinderTunnel {
+        /// Outer diameter in voxels.
         #[arg(long)]
         outer: u32,
+        /// Tunnel diameter in voxels.
         #[arg(long)]
         inner: u32,
+        /// Height in voxels.
         #[arg(long, default_value_t = 15)]
         height: u32,
     },
     /// Torus about z (combinatorial major radius R, tube radius r).
     Torus {
+        /// Combinatorial radius of the centre circle.
         #[arg(long)]
         major: u32,
+        /// Combinatorial radius of the tube.
         #[arg(long)]
         minor: u32,
     },
     /// Ellipsoid (semi-axes A, B, C voxels) with a spherical dent at the +z pole.
     EllipsoidDent {
+        /// Semi-axis along x in voxels.
         #[arg(long)]
         a: u32,
+        /// Semi-axis along y in voxels.
         #[arg(long)]
         b: u32,
+        /// Semi-axis along z in voxels.
         #[arg(long)]
         c: u32,
+        /// Radius of the dent in voxels.
         #[arg(long)]
         dent: u32,
     },
     /// Smooth random blob in an N³ grid: twelve integer metaballs from SEED.
     Blob {
+        /// Grid size N (N³ voxels).
         #[arg(long)]
         n: u32,
+        /// Seed of the metaball placement.
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
     /// The demo's CT-like head (air 0, soft tissue 1000, bone 2000; mm).
     Head {
+        /// Voxel edge in mm.
         #[arg(long, default_value_t = 5.0)]
         voxel: f32,
     },
@@ -97,7 +112,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let stats = crate::volume::VolumeStats::of(&volume);
     let value = json!({
         "command": "phantom",
-        "kind": format!("{:?}", args.kind),
+        "kind": args.kind,
         "dims": volume.dims,
         "spacing": volume.spacing,
         "origin": volume.origin,

@@ -80,6 +80,9 @@ pub struct Args {
     json: bool,
 }
 
+/// Largest preview mesh drawn with its edges.
+const WIREFRAME_MAX_TRIANGLES: usize = 20_000;
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     // The preview's axes are checked before the work, like its path.
     let facing = args.view.facing()?;
@@ -234,7 +237,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             views: vec![View::Front, View::Right, View::Top, View::Iso],
             width: 384,
             height: 384,
-            wireframe: true,
+            // Edges show the faces of a small polyhedron; on tens of
+            // thousands of triangles they only darken the picture.
+            wireframe: mesh.triangles.len() <= WIREFRAME_MAX_TRIANGLES,
             scalars: Some("depth".into()),
             title: Some(match &merged {
                 Some(m) => format!(
@@ -258,6 +263,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "volume": args.volume,
         "dims": volume.dims,
         "slice": args.slice,
+        "selection": args.select.to_json(),
         "object": object_json(&object),
         "topology": topology,
         "backend": format!("{:?}", args.backend).to_lowercase(),

@@ -114,6 +114,7 @@ impl VoxelBox {
 
 /// Where a voxel centre lies relative to the polyhedron (Def. VI).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 #[repr(u8)]
 pub enum Side {
     /// Some face is visible (`s > 0`).

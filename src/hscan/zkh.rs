@@ -35,6 +35,7 @@ use crate::{Error, Result};
 
 /// The class of a ZKH (Def. CA/CO/TU).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ZkhClass {
     /// No incident face (Def. CA, "Hohlraum").
     Cavity,

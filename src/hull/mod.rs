@@ -29,6 +29,7 @@ pub use incremental::{HullStats, MAX_COORD};
 
 /// How faces coplanar with the inserted point are treated (§4.1.6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum CoplanarPolicy {
     /// Coplanar faces count as invisible: triangles only; where the point is
     /// collinear with an edge to a coplanar face that face is replaced too,
@@ -45,6 +46,7 @@ pub enum CoplanarPolicy {
 
 /// Processing order of the candidates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Order {
     /// Lexicographic (x, then y, then z), the seed's basic order.
     Lexicographic,
@@ -107,6 +109,7 @@ impl HalfSpace {
 
 /// Where a point lies relative to the hull.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Containment {
     /// Strictly inside every half-space.
     Inside,

@@ -41,7 +41,19 @@ fn mask_volume(
     inside: impl Fn(i64, i64, i64) -> bool + Sync,
 ) -> crate::Result<Volume> {
     let slice = dims[0] * dims[1];
-    let mut data = vec![0u8; slice * dims[2]];
+    // Up to 8 GB at the largest sizes: a failed allocation is an error,
+    // not an abort.
+    let mut data = Vec::new();
+    data.try_reserve_exact(slice * dims[2]).map_err(|_| {
+        crate::Error::HostMemory(format!(
+            "a {}×{}×{} phantom needs {} bytes",
+            dims[0],
+            dims[1],
+            dims[2],
+            slice * dims[2]
+        ))
+    })?;
+    data.resize(slice * dims[2], 0u8);
     if slice > 0 {
         data.par_chunks_mut(slice).enumerate().for_each(|(z, out)| {
             for (k, o) in out.iter_mut().enumerate() {

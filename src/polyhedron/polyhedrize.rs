@@ -79,6 +79,7 @@ use super::{ZkhClass, background_components, faces_to_press};
 
 /// Which voxels a shell's region holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Role {
     /// Voxels of S (even depth; outward orientation).
     Object,
@@ -106,6 +107,7 @@ impl Role {
 
 /// Why a shell exists.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ShellKind {
     /// CH(S), the root.
     Hull,

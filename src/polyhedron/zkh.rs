@@ -22,6 +22,7 @@ use crate::voxel::{DigitalObject, voxel_centre};
 /// Kind of a ZKH by the number of edge-connected sets of hull faces it
 /// touches.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ZkhClass {
     /// No face touched (Def. CA): a hole enclosed by S.
     Cavity,

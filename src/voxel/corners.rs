@@ -8,6 +8,7 @@ use super::{DigitalObject, voxel_centre, voxel_corner};
 
 /// How candidate vertices are chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum CandidateKind {
     /// Local corners over the 6-neighbourhood (3 symmetric pairs, §4.1.2).
     Local6,

@@ -362,4 +362,16 @@ fn bad_input_is_a_clear_error() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("garbage.nhdr"), "{stderr}");
+    // Fractional values are intensities, not labels.
+    let smooth = tmp.path().join("smooth.nrrd");
+    let ramp = (0..64).map(|i| i as f32 * 0.25).collect();
+    let v = Volume::new([4, 4, 4], [1.0; 3], [0.0; 3], VolumeData::F32(ramp)).unwrap();
+    chisel::io::write_volume(&smooth, &v).unwrap();
+    let out = chisel(&["scan", path_str(&smooth), "--labels"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("smooth.nrrd") && stderr.contains("found the value 0.25"),
+        "{stderr}"
+    );
 }

@@ -215,7 +215,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let candidates = object.candidates(kind);
     stage("candidates", t);
     let t = Instant::now();
-    let hull = ConvexHull::build(&candidates, options)?;
+    let hull = ConvexHull::build(&candidates, options)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     stage("hull", t);
     let frame = object.frame();
     let t = Instant::now();

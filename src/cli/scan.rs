@@ -64,6 +64,9 @@ use crate::voxel::{DigitalObject, Frame};
 
 /// Most distinct non-zero values `--labels` accepts.
 const MAX_SCAN_LABELS: usize = 65_536;
+/// More labels than this draw a warning: probably intensities, not labels
+/// (`chisel stats` lists at most as many).
+const MANY_LABELS: usize = crate::volume::analysis::MAX_LABELS;
 
 /// Arguments of `chisel scan`.
 #[derive(Debug, clap::Args)]
@@ -183,6 +186,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             None => "no non-zero label: nothing to scan".to_string(),
         }
     );
+    if args.threshold.is_none() && structures.len() > MANY_LABELS {
+        eprintln!(
+            "warning: {name}: {} distinct labels; an intensity volume (a CT) is scanned \
+             per threshold (--threshold T), not per label",
+            structures.len()
+        );
+    }
     let label_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let gpu = match args.backend {
@@ -301,6 +311,12 @@ fn labels(volume: &Volume) -> crate::Result<(Vec<u32>, Vec<Structure>)> {
         if is_label(v) && v != last {
             last = v;
             if let Err(at) = values.binary_search_by(|x| x.total_cmp(&v)) {
+                if v.fract() != 0.0 {
+                    return Err(crate::Error::InvalidInput(format!(
+                        "--labels takes whole-number labels, found the value {v}: an \
+                         intensity volume? (use --threshold)"
+                    )));
+                }
                 if values.len() == MAX_SCAN_LABELS {
                     return Err(crate::Error::InvalidInput(format!(
                         "more than {MAX_SCAN_LABELS} distinct non-zero values: not a label \

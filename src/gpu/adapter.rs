@@ -8,6 +8,10 @@ use crate::{Error, Result};
 pub const LAVAPIPE_HINT: &str = "Install a Vulkan driver; without a GPU, Mesa's lavapipe \
      (Debian/Ubuntu: `apt-get install mesa-vulkan-drivers`) works everywhere.";
 
+/// How to choose among the adapters found when the request matches none.
+pub const PICK_HINT: &str = "Choose one of those by index or by a part of its name \
+     (`--adapter 0`, `CHISEL_ADAPTER=llvmpipe`); `chisel info` lists them.";
+
 /// Which adapter to open.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum AdapterChoice {
@@ -179,6 +183,12 @@ pub(crate) fn select(instance: &wgpu::Instance, choice: &AdapterChoice) -> Resul
             .enumerate()
             .map(|(i, a)| format!("{i}: {}", describe(&a.get_info())))
             .collect(),
-        hint: LAVAPIPE_HINT,
+        // With adapters present, a name or index that matches none wants
+        // one of them, not a driver.
+        hint: if all.is_empty() || matches!(choice, AdapterChoice::Auto | AdapterChoice::Cpu) {
+            LAVAPIPE_HINT
+        } else {
+            PICK_HINT
+        },
     })
 }

@@ -666,7 +666,8 @@ fn compact(
 fn planar_hull(pts: &[P3], options: HullOptions) -> crate::Result<ConvexHull> {
     let degenerate = || {
         crate::Error::InvalidInput(format!(
-            "the {} hull candidates are collinear: no polygon or polyhedron (use corner vertices)",
+            "the {} hull candidates are collinear: no polygon or polyhedron \
+             (a line of voxels has a hull through its cell corners: `--vertices corners`)",
             pts.len()
         ))
     };

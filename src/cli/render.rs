@@ -23,8 +23,9 @@ pub struct Args {
     /// Draw the triangle edges over the shading.
     #[arg(long)]
     wireframe: bool,
-    /// Pixel size of each view.
-    #[arg(long, default_value_t = 512)]
+    /// Pixel size of each view (128 to 4096: smaller views have no room
+    /// for their labels and the legend).
+    #[arg(long, default_value_t = 512, value_parser = clap::value_parser!(u32).range(128..=4096))]
     size: u32,
     #[command(flatten)]
     view: ViewAxes,

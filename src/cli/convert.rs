@@ -17,6 +17,9 @@ pub struct Args {
     preview: Option<PathBuf>,
 }
 
+/// An output-path check of one kind (mesh or volume).
+type CheckOutput = fn(&std::path::Path) -> crate::Result<()>;
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     match (is_volume(&args.input), is_volume(&args.output)) {
         (true, true) => {
@@ -69,18 +72,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             ));
         }
         (input_is_volume, _) => {
-            // An output name of neither kind gets the input kind's list.
-            let other_kind = if input_is_volume {
-                crate::io::check_mesh_output(&args.output)
+            // An output name of neither kind gets the input kind's formats.
+            let (same_kind, other_kind): (CheckOutput, CheckOutput) = if input_is_volume {
+                (crate::io::check_volume_output, crate::io::check_mesh_output)
             } else {
-                crate::io::check_volume_output(&args.output)
+                (crate::io::check_mesh_output, crate::io::check_volume_output)
             };
-            if other_kind.is_err() {
-                if input_is_volume {
-                    crate::io::check_volume_output(&args.output)?;
-                } else {
-                    crate::io::check_mesh_output(&args.output)?;
-                }
+            if other_kind(&args.output).is_err() {
+                same_kind(&args.output)?;
             }
             anyhow::bail!(
                 "cannot convert between a mesh and a volume ({} → {}); use `chisel mc` for surfaces",

@@ -252,6 +252,19 @@ fn volume_commands_check_their_options_first() {
         ],
         "--slice gives 2-D polygons",
     );
+    // A slice is verified by its shells; no surface, so no ray-parity check.
+    let v = ok_json(&[
+        "polyhedrize",
+        &ball,
+        "--threshold",
+        "1",
+        "--slice",
+        "3",
+        "--verify",
+        "--json",
+    ]);
+    assert_eq!(v["verified"], true, "{v}");
+    assert!(v["verify_ray_parity_mismatches"].is_null(), "{v}");
     for command in ["scan", "stats"] {
         fails(
             &[

@@ -184,11 +184,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             );
         }
         // The same check by ray parity on the merged surface (§4.4.3),
-        // when it exists; the stage includes merging the read-back shells.
+        // when it exists (not for flat shells only, e.g. a slice: no
+        // surface, no check); the stage includes merging the read-back shells.
         let t = Instant::now();
         let ray_parity = match back.merged_surface() {
-            Ok(m) => Some(back.mismatches_ray_parity(&m, &object, backend, 10)?),
-            Err(_) => None,
+            Ok(m) if !m.triangles.is_empty() => {
+                Some(back.mismatches_ray_parity(&m, &object, backend, 10)?)
+            }
+            _ => None,
         };
         stage("verify_ray_parity", t);
         (Some(true), ray_parity)

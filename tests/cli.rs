@@ -182,7 +182,7 @@ fn volume_commands_check_their_options_first() {
     let v = ok_json(&["hull", &ball, "--threshold", "1", "--no-zkh", "--json"]);
     assert_eq!(v["selection"]["threshold"], 1.0);
     assert_eq!(v["selection"]["component"], "largest");
-    assert!(v["zkh"].is_null() && v["zkh"] != serde_json::json!([]));
+    assert!(v["zkh"].is_null(), "{v}");
     assert_eq!(v["zkh_skipped"], "--no-zkh");
     assert_eq!(v["candidates"]["kind"], "local26");
     let v = ok_json(&["hull", &ball, "--threshold", "1", "--json"]);
@@ -239,18 +239,66 @@ fn volume_commands_check_their_options_first() {
         ],
         "name the file .json",
     );
+    // A slice has no surface: --mesh is a usage error (exit 2).
+    let run = chisel(&[
+        "polyhedrize",
+        &ball,
+        "--threshold",
+        "1",
+        "--slice",
+        "3",
+        "--mesh",
+        &mesh,
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("cannot be used with"), "{stderr}");
+    // A flat object (a 3 × 3 × 1 plate): no ZKH search, and no mesh to
+    // write, refused before the cell list is written.
+    let plate = p("plate.nrrd");
+    let v = chisel::volume::Volume::new(
+        [3, 3, 1],
+        [1.0; 3],
+        [0.0; 3],
+        chisel::volume::VolumeData::U8(vec![1; 9]),
+    )
+    .unwrap();
+    chisel::io::write_volume(Path::new(&plate), &v).unwrap();
+    let v = ok_json(&["hull", &plate, "--threshold", "1", "--json"]);
+    assert_eq!(v["zkh_skipped"], "flat hull: no inside", "{v}");
+    assert!(v["zkh"].is_null(), "{v}");
+    let cells = p("plate.cells");
     fails(
         &[
             "polyhedrize",
-            &ball,
+            &plate,
             "--threshold",
             "1",
-            "--slice",
-            "3",
+            "-o",
+            &cells,
             "--mesh",
             &mesh,
         ],
-        "--slice gives 2-D polygons",
+        "every shell is flat",
+    );
+    assert!(!Path::new(&cells).exists());
+    // Thresholds and vectors may start with a minus sign.
+    let v = ok_json(&["hull", &ball, "--threshold", "-1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["threshold"], -1.0);
+    fails(
+        &[
+            "hull",
+            &ball,
+            "--threshold",
+            "1",
+            "--preview",
+            &png,
+            "--view-up",
+            "-1,0,0",
+            "--view-front",
+            "-2,0,0",
+        ],
+        "must not be parallel",
     );
     // A slice is verified by its shells; no surface, so no ray-parity check.
     let v = ok_json(&[
@@ -283,7 +331,6 @@ fn volume_commands_check_their_options_first() {
         &["convert", &ball, &p("x")],
         "volume file name without extension",
     );
-    assert!(!Path::new(&p("x.raw")).exists());
 }
 
 #[test]

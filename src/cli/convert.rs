@@ -82,9 +82,16 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 same_kind(&args.output)?;
             }
             anyhow::bail!(
-                "cannot convert between a mesh and a volume ({} → {}); use `chisel mc` for surfaces",
+                "cannot convert a {} into a {} ({} → {}){}",
+                if input_is_volume { "volume" } else { "mesh" },
+                if input_is_volume { "mesh" } else { "volume" },
                 args.input.display(),
-                args.output.display()
+                args.output.display(),
+                if input_is_volume {
+                    "; `chisel mc` makes surfaces of volumes"
+                } else {
+                    ""
+                }
             )
         }
     }

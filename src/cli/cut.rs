@@ -20,14 +20,14 @@ pub struct Args {
     /// Mesh to cut.
     mesh: PathBuf,
     /// Infinite plane `px,py,pz,nx,ny,nz` (a point and the normal).
-    #[arg(long, value_delimiter = ',', action = clap::ArgAction::Append)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, action = clap::ArgAction::Append)]
     plane: Vec<f64>,
     /// Bounded rectangle `cx,cy,cz,nx,ny,nz,ux,uy,uz,hu,hv` (centre, normal,
     /// in-plane u axis, half extents along u and v = n × u).
-    #[arg(long, value_delimiter = ',', action = clap::ArgAction::Append)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, action = clap::ArgAction::Append)]
     rect: Vec<f64>,
     /// Sphere `cx,cy,cz,r`.
-    #[arg(long, value_delimiter = ',', action = clap::ArgAction::Append)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, action = clap::ArgAction::Append)]
     sphere: Vec<f64>,
     /// A triangulated knife surface (any mesh format).
     #[arg(long)]
@@ -128,7 +128,7 @@ fn merged(pieces: &[TriMesh], explode: f32) -> TriMesh {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    // The preview's axes are checked before the work, like its path.
+    // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
     if !(0.0..=10.0).contains(&args.explode) {
         anyhow::bail!("--explode must be between 0 and 10, got {}", args.explode);

@@ -188,7 +188,7 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    // The preview's axes are checked before the work, like its path.
+    // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
     if let Some(path) = &args.output {
         crate::io::check_mesh_output(path)?;

@@ -51,7 +51,7 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    // The preview's axes are checked before the work, like its path.
+    // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
     let t = Instant::now();
     crate::io::check_mesh_output(&args.output)?;

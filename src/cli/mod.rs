@@ -53,10 +53,22 @@ pub struct Global {
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct ViewAxes {
     /// World direction that is up in the previews `x,y,z` (headsq: 0,0,-1).
-    #[arg(long, value_delimiter = ',', num_args = 1, requires = "view_front")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 1,
+        allow_hyphen_values = true,
+        requires = "view_front"
+    )]
     view_up: Option<Vec<f32>>,
     /// World direction the front view looks from `x,y,z` (headsq: 0,-1,0).
-    #[arg(long, value_delimiter = ',', num_args = 1, requires = "view_up")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 1,
+        allow_hyphen_values = true,
+        requires = "view_up"
+    )]
     view_front: Option<Vec<f32>>,
 }
 

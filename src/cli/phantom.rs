@@ -95,6 +95,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let Some(output) = &args.output else {
         anyhow::bail!("give the output volume with -o FILE");
     };
+    crate::io::check_volume_output(output)?;
     let volume = match args.kind {
         Kind::Ball { r } => voxel::digital_ball(r)?,
         Kind::Cube { a } => voxel::cube(a)?,

@@ -46,8 +46,9 @@ pub struct Args {
     #[arg(long)]
     press_in: bool,
     /// Only slice Z of the volume: the 2-D analogue (seed 003 ch. 9),
-    /// polygons for the pixel set of one CT slice or label image.
-    #[arg(long)]
+    /// polygons for the pixel set of one CT slice or label image (no
+    /// surface, so not with --mesh or --preview).
+    #[arg(long, conflicts_with_all = ["mesh", "preview"])]
     slice: Option<usize>,
     /// Backend of the inside-shell scans.
     #[arg(long, value_enum, default_value = "cpu")]
@@ -84,7 +85,7 @@ pub struct Args {
 const WIREFRAME_MAX_TRIANGLES: usize = 20_000;
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    // The preview's axes are checked before the work, like its path.
+    // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
     for path in [&args.output, &args.cells_json, &args.report]
         .into_iter()
@@ -113,12 +114,6 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         {
             anyhow::bail!("{}: {what}; name the file {ext}", path.display());
         }
-    }
-    if args.slice.is_some() && (args.mesh.is_some() || args.preview.is_some()) {
-        anyhow::bail!(
-            "--slice gives 2-D polygons (written by -o and --cells-json); --mesh and \
-             --preview draw 3-D shells"
-        );
     }
     let (selection, component) = args.select.parse()?;
     let mut timings = serde_json::Map::new();
@@ -162,6 +157,15 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     bar.finish_and_clear();
     stage("polyhedrize", t);
     let summary = poly.summary();
+    // A mesh needs a 3-D shell; refused before anything is written.
+    let needs_mesh = args.mesh.is_some() || args.preview.is_some();
+    if needs_mesh && summary.shells_by_dimension[3] == 0 {
+        anyhow::bail!(
+            "{}: every shell is flat (2-D or lower), so --mesh / --preview have no \
+             surface to draw; -o and --cells-json write the polygons",
+            args.volume.display()
+        );
+    }
     let bytes = poly.to_bytes();
     if let Some(path) = &args.output {
         crate::io::write_atomic(path, &bytes)?;
@@ -205,19 +209,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Err(e) => (None, Some(e.to_string())),
     };
     stage("merge", t);
-    let needs_mesh = args.mesh.is_some() || args.preview.is_some();
     let mesh = match (needs_mesh, &merged) {
         (false, _) => None,
         (true, Some(m)) => Some(m.to_mesh(&poly.frame)?),
         (true, None) => Some(poly.to_mesh()?),
     };
-    if mesh.as_ref().is_some_and(|m| m.triangles.is_empty()) {
-        anyhow::bail!(
-            "{}: every shell is flat (2-D or lower), so --mesh / --preview have no \
-             surface to draw; the polygons are in -o / --cells-json",
-            args.volume.display()
-        );
-    }
     let mesh_kind = if merged.is_some() { "merged" } else { "shells" };
     if needs_mesh && let Some(why) = &merge_refused {
         global.note(format!(

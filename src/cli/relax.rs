@@ -47,7 +47,7 @@ pub struct Args {
     #[arg(long)]
     plan: PathBuf,
     /// Origin O of the layer construction `x,y,z` (default: SPEC §1.1 rule).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     origin: Option<Vec<f32>>,
     /// Subcutis at this fraction of the way from each skin vertex to the
     /// nearest bone vertex (needs a bone; default 0.5 with `--ct`, else
@@ -277,7 +277,7 @@ enum Input<'a> {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
-    // The preview's axes are checked before the work, like its path.
+    // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
     // Every output is checked before the work starts.
     crate::io::check_mesh_output(&args.output)?;

@@ -33,6 +33,7 @@ pub struct Args {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     crate::io::check_png_output(&args.output)?;
+    let facing = args.view.facing()?;
     let mesh = crate::io::read_mesh(&args.input)?;
     let gpu = global.gpu()?;
     let opts = RenderOptions {
@@ -42,7 +43,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         wireframe: args.wireframe,
         scalars: args.scalars.clone(),
         title: Some(super::file_name(&args.input)),
-        facing: args.view.facing()?,
+        facing,
         ..Default::default()
     };
     crate::render::render_png(&gpu, &mesh, &opts, &args.output)?;

@@ -126,13 +126,15 @@ pub fn check_png_output(path: &Path) -> Result<()> {
     if file_name_lower(path).ends_with(".png") {
         return Ok(());
     }
-    let found = match path.extension() {
-        Some(ext) => format!("extension `.{}`", ext.to_string_lossy()),
-        None => "a name without extension".into(),
-    };
+    let ext = path
+        .extension()
+        .map_or(String::new(), |e| e.to_string_lossy().into_owned());
     Err(Error::Unsupported {
         path: path.into(),
-        what: format!("image {found} (previews are PNG: name the file .png)"),
+        what: format!(
+            "image {} (previews are PNG: name the file .png)",
+            extension_text(&ext)
+        ),
     })
 }
 

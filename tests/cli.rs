@@ -240,16 +240,8 @@ fn volume_commands_check_their_options_first() {
         "name the file .json",
     );
     // A slice has no surface: --mesh is a usage error (exit 2).
-    let run = chisel(&[
-        "polyhedrize",
-        &ball,
-        "--threshold",
-        "1",
-        "--slice",
-        "3",
-        "--mesh",
-        &mesh,
-    ]);
+    let slice = ["polyhedrize", &ball, "--threshold", "1", "--slice", "3"];
+    let run = chisel(&[&slice[..], &["--mesh", &mesh]].concat());
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("cannot be used with"), "{stderr}");
@@ -301,16 +293,7 @@ fn volume_commands_check_their_options_first() {
         "must not be parallel",
     );
     // A slice is verified by its shells; no surface, so no ray-parity check.
-    let v = ok_json(&[
-        "polyhedrize",
-        &ball,
-        "--threshold",
-        "1",
-        "--slice",
-        "3",
-        "--verify",
-        "--json",
-    ]);
+    let v = ok_json(&[&slice[..], &["--verify", "--json"]].concat());
     assert_eq!(v["verified"], true, "{v}");
     assert!(v["verify_ray_parity_mismatches"].is_null(), "{v}");
     for command in ["scan", "stats"] {

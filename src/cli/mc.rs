@@ -100,16 +100,15 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let mc_s = t.elapsed().as_secs_f64();
     if surface.mesh.n_triangles() == 0 {
         let values = || (0..volume.data.len()).map(|i| volume.data.get_f64(i));
-        let (lo, hi) = values().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-            (a.min(x), b.max(x))
-        });
+        let (lo, hi) = crate::reduce::volume_range(&volume, Backend::Cpu)?
+            .map_or((f32::NAN, f32::NAN), |r| (r.min, r.max));
         let border = if args.close_border {
             ""
         } else {
             " (try --close-border: it closes surfaces at the volume border)"
         };
         let why = match iso {
-            IsoSpec::Level(l) if f64::from(l) < lo || f64::from(l) > hi => {
+            IsoSpec::Level(l) if !(lo..=hi).contains(&l) => {
                 format!("level {l} lies outside the data range {lo} to {hi}")
             }
             IsoSpec::Label(l) if !values().any(|x| x == l) => {

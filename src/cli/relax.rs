@@ -529,17 +529,12 @@ pub fn skin_overshoot(
         .iter()
         .map(length)
         .fold(0.0f32, f32::max);
-    let (lo, hi) = network.bone_rest().iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), r| {
-            (
-                lo.min(Vec3::new(r[0], r[1], r[2])),
-                hi.max(Vec3::new(r[0], r[1], r[2])),
-            )
-        },
-    );
+    let diagonal = crate::reduce::cpu::bounds_reduce(network.bone_rest())
+        .map_or(0.0, |(lo, hi)| {
+            length(&[hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 0.0])
+        });
     let skin = report.max_displacement;
-    let ratio = (bone > OVERSHOOT_MIN_BONE_MOVE * (hi - lo).length()).then(|| skin / bone);
+    let ratio = (bone > OVERSHOOT_MIN_BONE_MOVE * diagonal).then(|| skin / bone);
     let rotates = plan.steps.iter().any(|s| s.rotate.is_some());
     if let Some(r) = ratio
         && r > OVERSHOOT_WARNING

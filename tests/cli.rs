@@ -1307,7 +1307,7 @@ fn polyhedrize_writes_verified_cells() {
 /// is bit-exact on lavapipe, so its GPU run lands on the CPU state).
 #[test]
 fn bench_relax_reports_rates_and_equilibrium() {
-    let Some(_gpu) = common::gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let Some(dir) = common::data_dir() else {
         return;
     };
@@ -1375,8 +1375,16 @@ fn bench_relax_reports_rates_and_equilibrium() {
         // Both solvers reach the same state within their stop tests.
         assert!(s["gap_percent"].as_f64().unwrap() < 3.0, "{s}");
     }
-    assert_eq!(settled[1]["gap_percent"], 0.0, "explicit GPU vs CPU");
-    assert_eq!(settled[0]["iterations"], settled[1]["iterations"]);
+    // The explicit kernel is bit-exact with its mirror on a software adapter;
+    // a GPU whose compiler fuses multiply-adds settles to the same state
+    // within rounding (NVIDIA H200: 0.0015 % apart).
+    if gpu.info.device_type == wgpu::DeviceType::Cpu {
+        assert_eq!(settled[1]["gap_percent"], 0.0, "explicit GPU vs CPU");
+        assert_eq!(settled[0]["iterations"], settled[1]["iterations"]);
+    } else {
+        let gap = settled[1]["gap_percent"].as_f64().unwrap();
+        assert!(gap < 0.1, "explicit GPU vs CPU: {gap} %");
+    }
     let approach = &net["approach"];
     assert_eq!(approach["reference_status"], "converged");
     for a in approach["runs"].as_array().unwrap() {

@@ -3,6 +3,7 @@
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use chisel::gpu::Gpu;
 use chisel::{TriMesh, Volume};
@@ -76,10 +77,13 @@ pub fn real_volume(rel: &str) -> Option<Volume> {
     data(rel).map(|p| chisel::io::read_volume(&p).unwrap_or_else(|e| panic!("{e}")))
 }
 
-/// The GPU for parity tests: `None` (skip, with a note) when no adapter
-/// exists on a developer machine; a panic under `CI=true`.
-pub fn gpu() -> Option<Gpu> {
-    chisel::gpu::gpu_for_tests().unwrap_or_else(|e| panic!("{e}"))
+/// The GPU for parity tests, one device per test process shared by all its
+/// tests (as an application shares one): `None` (skip, with a note) when no
+/// adapter exists on a developer machine; a panic under `CI=true`.
+pub fn gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
+    GPU.get_or_init(|| chisel::gpu::gpu_for_tests().unwrap_or_else(|e| panic!("{e}")))
+        .as_ref()
 }
 
 /// Regular tetrahedron, outward winding, 4 vertices, 4 triangles.

@@ -495,10 +495,10 @@ fn ray_parity_labels_on_the_gpu_match_the_cpu() {
         };
         let b = margin_box(&o);
         let cpu = p.voxelize_ray_parity(&m, &b, Backend::Cpu).unwrap();
-        let on_gpu = p.voxelize_ray_parity(&m, &b, Backend::Gpu(&gpu)).unwrap();
+        let on_gpu = p.voxelize_ray_parity(&m, &b, Backend::Gpu(gpu)).unwrap();
         assert_eq!(cpu, on_gpu, "{what}");
         assert_eq!(
-            p.mismatches_ray_parity(&m, &o, Backend::Gpu(&gpu), 1)
+            p.mismatches_ray_parity(&m, &o, Backend::Gpu(gpu), 1)
                 .unwrap()
                 .0,
             0

@@ -86,7 +86,7 @@ fn with_field(mut m: TriMesh, name: &str, f: impl Fn(Vec3) -> f32) -> TriMesh {
 fn sphere_fills_its_disc_and_nothing_else() {
     let Some(gpu) = common::gpu() else { return };
     let size = 128;
-    let img = render_image(&gpu, &common::icosphere(3), &opts(size, &[View::Front])).unwrap();
+    let img = render_image(gpu, &common::icosphere(3), &opts(size, &[View::Front])).unwrap();
     assert_eq!((img.width, img.height), (size, size));
     let (cx, cy, r) = disc(size);
     let (mut inside, mut outside) = (0, 0);
@@ -122,7 +122,7 @@ fn sphere_fills_its_disc_and_nothing_else() {
 fn front_lit_sphere_is_brightest_in_the_middle() {
     let Some(gpu) = common::gpu() else { return };
     let size = 128;
-    let img = render_image(&gpu, &common::icosphere(3), &opts(size, &[View::Front])).unwrap();
+    let img = render_image(gpu, &common::icosphere(3), &opts(size, &[View::Front])).unwrap();
     let (cx, cy, r) = disc(size);
     let centre = luma(img.pixel(cx as u32, cy as u32));
     for k in 0..8 {
@@ -151,8 +151,8 @@ fn flipped_winding_renders_the_same_image() {
         o.wireframe = true;
         let mut flipped = mesh.clone();
         flipped.flip_winding();
-        let a = render_image(&gpu, &mesh, &o).unwrap();
-        let b = render_image(&gpu, &flipped, &o).unwrap();
+        let a = render_image(gpu, &mesh, &o).unwrap();
+        let b = render_image(gpu, &flipped, &o).unwrap();
         let diff = max_channel_diff(&a, &b);
         assert!(diff <= 1, "{name}: images differ by {diff}/255");
     }
@@ -162,7 +162,7 @@ fn flipped_winding_renders_the_same_image() {
 fn open_surface_is_lit_from_both_sides() {
     // The hemisphere's inside (seen from below) must be lit, not black.
     let Some(gpu) = common::gpu() else { return };
-    let img = render_image(&gpu, &hemisphere(2), &opts(96, &[View::Bottom])).unwrap();
+    let img = render_image(gpu, &hemisphere(2), &opts(96, &[View::Bottom])).unwrap();
     let centre = luma(img.pixel(48, 48));
     assert!(centre > 120.0, "inside of the cap is dark: luma {centre}");
 }
@@ -178,9 +178,9 @@ fn wireframe_adds_dark_line_pixels() {
             .filter(|&(x, y)| luma(img.pixel(x, y)) < 70.0)
             .count()
     };
-    let plain = dark(&render_image(&gpu, &mesh, &o).unwrap());
+    let plain = dark(&render_image(gpu, &mesh, &o).unwrap());
     o.wireframe = true;
-    let wired = dark(&render_image(&gpu, &mesh, &o).unwrap());
+    let wired = dark(&render_image(gpu, &mesh, &o).unwrap());
     assert_eq!(plain, 0, "shading alone should have no near-black pixels");
     assert!(wired > 300, "only {wired} line pixels");
 }
@@ -192,7 +192,7 @@ fn colour_map_runs_from_purple_to_yellow_with_a_legend() {
     let size = 128;
     let mut o = opts(size, &[View::Front]);
     o.scalars = Some("height".into());
-    let img = render_image(&gpu, &mesh, &o).unwrap();
+    let img = render_image(gpu, &mesh, &o).unwrap();
     assert!(img.width > size, "no legend strip");
     assert_eq!(img.height, size);
     // Front view: +y (max) near the top of the disc, −y (min) near the bottom.
@@ -231,7 +231,7 @@ fn user_range_clamps_the_colours() {
     let mut o = opts(96, &[View::Front]);
     o.scalars = Some("height".into());
     o.scalar_range = Some((5.0, 6.0));
-    let img = render_image(&gpu, &mesh, &o).unwrap();
+    let img = render_image(gpu, &mesh, &o).unwrap();
     // Every value lies below the range: the whole sphere takes the min colour
     // (purple: blue above green), top and bottom alike.
     for y in [30, 48, 70] {
@@ -240,7 +240,7 @@ fn user_range_clamps_the_colours() {
     }
     o.scalar_range = Some((1.0, 1.0));
     assert!(matches!(
-        render_image(&gpu, &mesh, &o),
+        render_image(gpu, &mesh, &o),
         Err(Error::InvalidInput(_))
     ));
 }
@@ -252,7 +252,7 @@ fn views_form_the_expected_grid() {
     let views = [View::Front, View::Back, View::Right, View::Top, View::Iso];
     let mut o = opts(64, &views);
     o.height = 48;
-    let img = render_image(&gpu, &mesh, &o).unwrap();
+    let img = render_image(gpu, &mesh, &o).unwrap();
     assert_eq!((img.width, img.height), (3 * 64, 2 * 48));
     // Five cells drawn, the sixth (bottom right) left empty.
     for (k, (cx, cy)) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1)]
@@ -266,7 +266,7 @@ fn views_form_the_expected_grid() {
     }
     assert!((128..192).all(|x| (48..96).all(|y| is_background(img.pixel(x, y)))));
     o.title = Some("cube".into());
-    let titled = render_image(&gpu, &mesh, &o).unwrap();
+    let titled = render_image(gpu, &mesh, &o).unwrap();
     assert_eq!((titled.width, titled.height), (192, 96 + TITLE_HEIGHT));
     assert_eq!(
         titled.rgba[(TITLE_HEIGHT * 192 * 4) as usize..],
@@ -297,7 +297,7 @@ fn panels_share_one_framing_and_one_colour_range() {
         },
     ];
     let o = opts(size, &[View::Front, View::Iso]);
-    let img = render_panels(&gpu, &panels, &o).unwrap();
+    let img = render_panels(gpu, &panels, &o).unwrap();
     assert!(img.width > 2 * size, "legend strip expected");
     assert_eq!(img.height, 2 * size);
     // Widths of the discs along the centre row of the front views.
@@ -329,7 +329,7 @@ fn bad_requests_are_errors() {
     });
     let mut o = opts(32, &[View::Front]);
     o.scalars = Some("gamma".into());
-    match render_image(&gpu, &mesh, &o) {
+    match render_image(gpu, &mesh, &o) {
         Err(Error::InvalidInput(msg)) => {
             assert!(
                 msg.contains("`gamma`") && msg.contains("alpha, beta"),
@@ -340,15 +340,15 @@ fn bad_requests_are_errors() {
     }
     let empty = TriMesh::new(vec![Vec3::ZERO; 3], vec![]).unwrap();
     assert!(matches!(
-        render_image(&gpu, &empty, &opts(32, &[View::Front])),
+        render_image(gpu, &empty, &opts(32, &[View::Front])),
         Err(Error::InvalidInput(_))
     ));
     assert!(matches!(
-        render_image(&gpu, &common::tetra(), &opts(32, &[])),
+        render_image(gpu, &common::tetra(), &opts(32, &[])),
         Err(Error::InvalidInput(_))
     ));
     assert!(matches!(
-        render_image(&gpu, &common::tetra(), &opts(0, &[View::Front])),
+        render_image(gpu, &common::tetra(), &opts(0, &[View::Front])),
         Err(Error::InvalidInput(_))
     ));
     let bad = TriMesh {
@@ -357,7 +357,7 @@ fn bad_requests_are_errors() {
         scalars: vec![],
     };
     assert!(matches!(
-        render_image(&gpu, &bad, &opts(32, &[View::Front])),
+        render_image(gpu, &bad, &opts(32, &[View::Front])),
         Err(Error::InvalidInput(_))
     ));
 }
@@ -379,14 +379,14 @@ fn png_file_round_trips() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tetra.png");
     let o = opts(40, &[View::Front, View::Iso]);
-    render_png(&gpu, &common::tetra(), &o, &path).unwrap();
+    render_png(gpu, &common::tetra(), &o, &path).unwrap();
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
     let info = reader.next_frame(&mut buf).unwrap();
     assert_eq!((info.width, info.height), (80, 40));
     assert_eq!(info.color_type, png::ColorType::Rgba);
-    let direct = render_image(&gpu, &common::tetra(), &o).unwrap();
+    let direct = render_image(gpu, &common::tetra(), &o).unwrap();
     assert_eq!(&buf[..info.buffer_size()], &direct.rgba[..]);
     // Only the PNG is left in the folder (the write went through a temp file).
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
@@ -420,7 +420,7 @@ fn real_meshes_render_framed_and_winding_independent() {
             views: vec![View::Front, View::Iso],
             ..Default::default()
         };
-        let img = render_image(&gpu, &mesh, &o).unwrap();
+        let img = render_image(gpu, &mesh, &o).unwrap();
         for x0 in [0, 128] {
             let c = coverage(&img, x0, 0, 128, 128);
             assert!(c > min_cover, "{rel}: view at x={x0} covers only {c}");
@@ -434,7 +434,7 @@ fn real_meshes_render_framed_and_winding_independent() {
         }
         let mut flipped = mesh.clone();
         flipped.flip_winding();
-        let diff = max_channel_diff(&img, &render_image(&gpu, &flipped, &o).unwrap());
+        let diff = max_channel_diff(&img, &render_image(gpu, &flipped, &o).unwrap());
         assert!(diff <= 1, "{rel}: flipped winding differs by {diff}/255");
     }
 }
@@ -453,9 +453,9 @@ fn fran_front_view_faces_the_face() {
         height: 128,
         ..Default::default()
     };
-    let auto = coverage(&render_image(&gpu, &mesh, &o).unwrap(), 0, 0, 128, 128);
+    let auto = coverage(&render_image(gpu, &mesh, &o).unwrap(), 0, 0, 128, 128);
     o.facing = Facing::Axes;
-    let axes = coverage(&render_image(&gpu, &mesh, &o).unwrap(), 0, 0, 128, 128);
+    let axes = coverage(&render_image(gpu, &mesh, &o).unwrap(), 0, 0, 128, 128);
     assert!(auto > axes + 0.05, "auto {auto} vs axes {axes}");
 }
 
@@ -491,8 +491,8 @@ fn near_zero_scalars_draw_no_hairlines() {
     // A fixed range keeps both legends continuous (the exact 0/1 field
     // would get swatches): only the surfaces are compared.
     o.scalar_range = Some((0.0, 1.0));
-    let a = render_image(&gpu, &field(1e-12), &o).unwrap();
-    let b = render_image(&gpu, &field(0.0), &o).unwrap();
+    let a = render_image(gpu, &field(1e-12), &o).unwrap();
+    let b = render_image(gpu, &field(0.0), &o).unwrap();
     let diff = max_channel_diff(&a, &b);
     assert!(diff <= 1, "near-zero values change the image by {diff}/255");
 }

@@ -78,7 +78,7 @@ fn demo_relaxation_on_the_gpu_matches_the_cpu() {
         ..RelaxOptions::default()
     };
     let a = relax(&net, &plan, &opts, Backend::Cpu).unwrap();
-    let b = relax(&net, &plan, &opts, Backend::Gpu(&gpu)).unwrap();
+    let b = relax(&net, &plan, &opts, Backend::Gpu(gpu)).unwrap();
     assert_eq!(a.iterations, b.iterations);
     assert_eq!(b.status, Status::Converged);
     let tol = chisel::tissue::cpu::position_tolerance(a.iterations as u32, net.diagonal());

@@ -78,11 +78,11 @@ fn assert_bits_eq(what: &str, a: Bounds, b: Bounds) {
 #[test]
 fn synthetic() {
     let Some(gpu) = common::gpu() else { return };
-    check(&gpu, "tetra", &positions(&common::tetra()));
-    check(&gpu, "cube", &positions(&common::cube()));
-    check(&gpu, "icosphere4", &positions(&common::icosphere(4)));
+    check(gpu, "tetra", &positions(&common::tetra()));
+    check(gpu, "cube", &positions(&common::cube()));
+    check(gpu, "icosphere4", &positions(&common::icosphere(4)));
     check(
-        &gpu,
+        gpu,
         "random_mesh",
         &positions(&common::random_mesh(7, 3000, 10)),
     );
@@ -101,7 +101,7 @@ fn synthetic() {
         b * wg + 1,
         1_000_007,
     ] {
-        check(&gpu, &format!("n{n}"), &random_positions(n as u64, n, 1e3));
+        check(gpu, &format!("n{n}"), &random_positions(n as u64, n, 1e3));
     }
 }
 
@@ -117,8 +117,8 @@ fn extremes_land_anywhere() {
         let mut p = random_positions(at as u64 + 11, n, 1.0);
         p[at] = [-5.0, 6.0, -7.0, 0.0];
         p[(at + 1) % n] = [8.0, -9.0, 10.0, 0.0];
-        check(&gpu, &format!("extremes@{at}"), &p);
-        let b = reduce::bounds_reduce(&p, Backend::Gpu(&gpu))
+        check(gpu, &format!("extremes@{at}"), &p);
+        let b = reduce::bounds_reduce(&p, Backend::Gpu(gpu))
             .unwrap()
             .unwrap();
         assert_eq!(b.min.to_array(), [-5.0, -9.0, -7.0]);
@@ -137,8 +137,8 @@ fn signed_zero_infinity_and_subnormals() {
         [0.0, f32::INFINITY, 0.0, 0.0],
         [f32::NEG_INFINITY, 0.0, 0.0, 0.0],
     ];
-    check(&gpu, "zeros", &p);
-    let b = reduce::bounds_reduce(&p, Backend::Gpu(&gpu))
+    check(gpu, "zeros", &p);
+    let b = reduce::bounds_reduce(&p, Backend::Gpu(gpu))
         .unwrap()
         .unwrap();
     assert_eq!(b.min.x, f32::NEG_INFINITY);
@@ -151,7 +151,7 @@ fn signed_zero_infinity_and_subnormals() {
 #[test]
 fn nan_and_empty() {
     let Some(gpu) = common::gpu() else { return };
-    for backend in [Backend::Cpu, Backend::Gpu(&gpu)] {
+    for backend in [Backend::Cpu, Backend::Gpu(gpu)] {
         assert_eq!(reduce::bounds_reduce(&[], backend).unwrap(), None);
         let mut p = random_positions(3, 1000, 1.0);
         p[500][1] = f32::NAN;
@@ -211,8 +211,8 @@ fn real_meshes() {
         };
         let Some(gpu) = common::gpu() else { return };
         let p = positions(&mesh);
-        check(&gpu, rel, &p);
-        let b = reduce::mesh_bounds(&mesh, Backend::Gpu(&gpu))
+        check(gpu, rel, &p);
+        let b = reduce::mesh_bounds(&mesh, Backend::Gpu(gpu))
             .unwrap()
             .unwrap();
         let readme = Tolerance {
@@ -233,11 +233,11 @@ fn real_meshes() {
 fn negative_control() {
     let Some(gpu) = common::gpu() else { return };
     let p = random_positions(5, 50_000, 1.0);
-    let buffers = BoundsBuffers::new(&gpu, &p).unwrap();
+    let buffers = BoundsBuffers::new(gpu, &p).unwrap();
     let mut encoder = gpu.encoder("bounds_reduce");
-    buffers.record(&gpu, &mut encoder).unwrap();
+    buffers.record(gpu, &mut encoder).unwrap();
     gpu.submit_and_wait(encoder).unwrap();
-    let mut got = buffers.pass_outputs(&gpu).unwrap().swap_remove(0);
+    let mut got = buffers.pass_outputs(gpu).unwrap().swap_remove(0);
     let want: Vec<[u32; 4]> = cpu::bounds_pass_positions(&p)
         .into_iter()
         .flatten()

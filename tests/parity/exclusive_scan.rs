@@ -75,14 +75,14 @@ fn edge_sizes() {
         (1_000_007, 3),
     ] {
         let v = random_values(n as u64, n, 1000);
-        check(&gpu, &format!("n{n}"), &v, true);
+        check(gpu, &format!("n{n}"), &v, true);
         assert_eq!(
-            ScanBuffers::upload(&gpu, &v).unwrap().n_levels(),
+            ScanBuffers::upload(gpu, &v).unwrap().n_levels(),
             levels,
             "n{n}"
         );
     }
-    let empty = check(&gpu, "empty", &[], true);
+    let empty = check(gpu, "empty", &[], true);
     assert_eq!(empty.total, 0);
 }
 
@@ -91,11 +91,11 @@ fn random_sizes() {
     let Some(gpu) = common::gpu() else { return };
     for (seed, n) in random_values(41, 6, 200_000).into_iter().enumerate() {
         let v = random_values(seed as u64 + 100, n as usize + 1, 1 << 12);
-        check(&gpu, &format!("random{seed}"), &v, true);
+        check(gpu, &format!("random{seed}"), &v, true);
     }
     // All ones: offsets are the indices.
     let ones = vec![1u32; 70_001];
-    let s = check(&gpu, "ones", &ones, true);
+    let s = check(gpu, "ones", &ones, true);
     assert!(s.offsets.iter().enumerate().all(|(i, &o)| o as usize == i));
     assert_eq!(s.total, 70_001);
 }
@@ -105,7 +105,7 @@ fn wraps_mod_2_32() {
     // Large values overflow many times; both sides wrap identically.
     let Some(gpu) = common::gpu() else { return };
     let v = random_values(8, 100_000, u32::MAX);
-    let s = check(&gpu, "wrapping", &v, false);
+    let s = check(gpu, "wrapping", &v, false);
     let exact: u64 = v.iter().map(|&x| u64::from(x)).sum();
     assert_eq!(u64::from(s.total), exact % (1 << 32));
 }
@@ -121,7 +121,7 @@ fn grid_2d() {
         eprintln!("skipping grid_2d: {n} values exceed one binding");
         return;
     }
-    check(&gpu, "grid_2d", &random_values(77, n, 16), true);
+    check(gpu, "grid_2d", &random_values(77, n, 16), true);
 }
 
 #[test]
@@ -138,7 +138,7 @@ fn real_headsq_mask() {
         .iter()
         .map(|&x| u32::from(x >= 500.0))
         .collect();
-    let s = check(&gpu, "headsq>=500", &mask, true);
+    let s = check(gpu, "headsq>=500", &mask, true);
     assert_eq!(s.total as usize, mask.iter().filter(|&&m| m == 1).count());
     assert!(s.total > 0 && (s.total as usize) < mask.len());
 }
@@ -151,7 +151,7 @@ fn real_bunny_counts() {
     let Some(gpu) = common::gpu() else { return };
     // Per-triangle vertex counts (3 each): offsets 3·t, total 3·#F.
     let per_tri = vec![3u32; mesh.n_triangles()];
-    let s = check(&gpu, "bunny/tri_vertices", &per_tri, true);
+    let s = check(gpu, "bunny/tri_vertices", &per_tri, true);
     assert!(
         s.offsets
             .iter()
@@ -163,7 +163,7 @@ fn real_bunny_counts() {
     // vertices): the scan is the CSR offsets built by counting sort.
     let csr = Csr::vertex_triangles(mesh.n_vertices(), &mesh.triangles);
     let counts: Vec<u32> = csr.offsets.windows(2).map(|w| w[1] - w[0]).collect();
-    let s = check(&gpu, "bunny/valence", &counts, true);
+    let s = check(gpu, "bunny/valence", &counts, true);
     compare_exact("bunny/csr", &csr.offsets[..counts.len()], &s.offsets).unwrap();
     assert_eq!(Some(&s.total), csr.offsets.last());
 }
@@ -173,7 +173,7 @@ fn negative_control() {
     let Some(gpu) = common::gpu() else { return };
     let v = random_values(9, 3000, 100);
     let want = cpu::exclusive_scan(&v);
-    let mut got = scan::exclusive_scan(&v, Backend::Gpu(&gpu)).unwrap();
+    let mut got = scan::exclusive_scan(&v, Backend::Gpu(gpu)).unwrap();
     compare_exact("exclusive_scan/control", &want.offsets, &got.offsets).unwrap();
     let k = 2049;
     got.offsets[k] += 1;

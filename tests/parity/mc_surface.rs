@@ -141,7 +141,7 @@ fn mc_random_volumes() {
         // 1000: samples exactly at the level (clamped interpolation).
         for (close, level) in [(false, 1000.5), (true, 1000.5), (true, 1000.0)] {
             check(
-                &gpu,
+                gpu,
                 &format!("random {seed} close {close} level {level}"),
                 &vol,
                 IsoSpec::Level(level),
@@ -157,7 +157,7 @@ fn mc_labels() {
     let mut next = xorshift(9);
     let data: Vec<u8> = (0..30 * 20 * 10).map(|_| (next() % 4) as u8).collect();
     let vol = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
-    check(&gpu, "labels", &vol, IsoSpec::Label(2.0), true);
+    check(gpu, "labels", &vol, IsoSpec::Label(2.0), true);
 }
 
 /// A binding cap of 64 KiB forces many classify slabs and one-or-two-layer
@@ -190,7 +190,7 @@ fn mc_headsq() {
     };
     for level in [500.0, 1150.0] {
         check(
-            &gpu,
+            gpu,
             &format!("headsq {level}"),
             &vol,
             IsoSpec::Level(level),
@@ -205,7 +205,7 @@ fn mc_sentinels_and_negative_control() {
     let vol = random_volume(3, [20, 18, 16]);
     let iso = IsoSpec::Level(1000.5);
     let field = Field::new(&vol, iso, true).unwrap();
-    let raw = surface::gpu::marching_cubes_raw(&gpu, &field).unwrap();
+    let raw = surface::gpu::marching_cubes_raw(gpu, &field).unwrap();
     assert!(!raw.triangles.is_empty());
     assert_eq!(find_sentinel(&raw.triangles, [u32::MAX; 4]), None);
     assert!(
@@ -217,7 +217,7 @@ fn mc_sentinels_and_negative_control() {
         .unwrap();
     let ok = surface::finish(&field, surface::gpu::assemble(raw.clone()));
     let tol = position_tolerance(&vol);
-    compare("unchanged", &cpu, &ok, tolerance_on(&gpu, &vol)).unwrap();
+    compare("unchanged", &cpu, &ok, tolerance_on(gpu, &vol)).unwrap();
     // One grid coordinate off by twice the tolerance (in grid units, so the
     // world difference is twice its absolute part plus the relative slack).
     let slack = (tol.abs + tol.rel * 64.0) / vol.spacing[1] as f32;

@@ -108,23 +108,23 @@ fn synthetic() {
         1_000_007,
     ] {
         check(
-            &gpu,
+            gpu,
             &format!("n{n}"),
             &random_samples(n as u64 + 1, n, 4096.0),
         );
     }
     let zeros = [0.0, -0.0, 0.0, -0.0];
-    check(&gpu, "zeros", &zeros);
-    let r = reduce::range_reduce(&zeros, Backend::Gpu(&gpu))
+    check(gpu, "zeros", &zeros);
+    let r = reduce::range_reduce(&zeros, Backend::Gpu(gpu))
         .unwrap()
         .unwrap();
     assert_eq!(bits(r), [(-0.0f32).to_bits(), 0.0f32.to_bits()]);
     check(
-        &gpu,
+        gpu,
         "inf",
         &[1.0, f32::INFINITY, -3.0, f32::NEG_INFINITY, 2.0],
     );
-    check(&gpu, "constant", &vec![42.5; 3 * b + 1]);
+    check(gpu, "constant", &vec![42.5; 3 * b + 1]);
 }
 
 #[test]
@@ -144,7 +144,7 @@ fn grid_2d() {
     let mut s = random_samples(17, n, 1.0);
     s[n - 1] = 3.0;
     s[n / 2] = -3.0;
-    check(&gpu, "grid_2d", &s);
+    check(gpu, "grid_2d", &s);
 }
 
 #[test]
@@ -169,7 +169,7 @@ fn chunked_over_binding_limit() {
 #[test]
 fn nan_and_empty() {
     let Some(gpu) = common::gpu() else { return };
-    for backend in [Backend::Cpu, Backend::Gpu(&gpu)] {
+    for backend in [Backend::Cpu, Backend::Gpu(gpu)] {
         assert_eq!(reduce::range_reduce(&[], backend).unwrap(), None);
         for nan in [f32::NAN, -f32::NAN] {
             let mut s = random_samples(3, 1000, 1.0);
@@ -190,7 +190,7 @@ fn integer_volumes_convert_exactly() {
     data[100] = i16::MIN;
     data[4000] = i16::MAX;
     let v = Volume::new([16, 16, 16], [1.0; 3], [0.0; 3], VolumeData::I16(data)).unwrap();
-    let r = reduce::volume_range(&v, Backend::Gpu(&gpu))
+    let r = reduce::volume_range(&v, Backend::Gpu(gpu))
         .unwrap()
         .unwrap();
     assert_eq!((r.min, r.max), (-32768.0, 32767.0));
@@ -204,8 +204,8 @@ fn real(rel: &str, min: f32, max: f32, chunk_bytes: u64) {
     };
     let Some(gpu) = common::gpu() else { return };
     let samples = v.data.to_f32();
-    check(&gpu, rel, &samples);
-    let r = reduce::volume_range(&v, Backend::Gpu(&gpu))
+    check(gpu, rel, &samples);
+    let r = reduce::volume_range(&v, Backend::Gpu(gpu))
         .unwrap()
         .unwrap();
     assert_eq!((r.min, r.max), (min, max), "{rel} vs README");
@@ -243,11 +243,11 @@ fn real_frogtissue() {
 fn negative_control() {
     let Some(gpu) = common::gpu() else { return };
     let s = random_samples(5, 50_000, 1.0);
-    let buffers = RangeBuffers::new(&gpu, &s).unwrap();
+    let buffers = RangeBuffers::new(gpu, &s).unwrap();
     let mut encoder = gpu.encoder("range_reduce");
-    buffers.record(&gpu, &mut encoder).unwrap();
+    buffers.record(gpu, &mut encoder).unwrap();
     gpu.submit_and_wait(encoder).unwrap();
-    let mut got = buffers.pass_outputs(&gpu).unwrap().swap_remove(0);
+    let mut got = buffers.pass_outputs(gpu).unwrap().swap_remove(0);
     let want: Vec<u32> = cpu::range_pass_samples(&s).into_iter().flatten().collect();
     compare_exact("range_reduce/control", &want, &got).unwrap();
     let k = 12;

@@ -10,17 +10,17 @@ use crate::common;
 #[test]
 fn spring_chebyshev_single_dispatch() {
     let Some(gpu) = common::gpu() else { return };
-    check_single_step(&gpu, Solver::Chebyshev);
+    check_single_step(gpu, Solver::Chebyshev);
 }
 
 #[test]
 fn spring_chebyshev_after_n_iterations() {
     let Some(gpu) = common::gpu() else { return };
-    check_iterations(&gpu, Solver::Chebyshev, 201);
+    check_iterations(gpu, Solver::Chebyshev, 201);
 }
 
 #[test]
 fn spring_chebyshev_stop_status() {
     let Some(gpu) = common::gpu() else { return };
-    check_stop_status(&gpu, Solver::Chebyshev);
+    check_stop_status(gpu, Solver::Chebyshev);
 }

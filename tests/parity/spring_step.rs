@@ -280,17 +280,17 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
 #[test]
 fn spring_step_single_dispatch() {
     let Some(gpu) = common::gpu() else { return };
-    check_single_step(&gpu, Solver::Explicit);
+    check_single_step(gpu, Solver::Explicit);
 }
 
 #[test]
 fn spring_step_after_n_iterations() {
     let Some(gpu) = common::gpu() else { return };
-    check_iterations(&gpu, Solver::Explicit, 201);
+    check_iterations(gpu, Solver::Explicit, 201);
 }
 
 #[test]
 fn spring_step_stop_status() {
     let Some(gpu) = common::gpu() else { return };
-    check_stop_status(&gpu, Solver::Explicit);
+    check_stop_status(gpu, Solver::Explicit);
 }

@@ -51,7 +51,7 @@ fn tissue_reduce_max_matches() {
     for n in [1usize, 255, 257, 70_001] {
         let (v, p, s) = inputs(n, 77 + n as u64);
         let a = cpu::tissue_reduce_max(n, &v, &p, &s);
-        let b = tissue_gpu::tissue_reduce_max(&gpu, &v, &p, &s).unwrap();
+        let b = tissue_gpu::tissue_reduce_max(gpu, &v, &p, &s).unwrap();
         assert_eq!(find_sentinel(&b, u32::MAX), None, "result not written");
         let what = format!("tissue_reduce_max n={n}");
         compare_f32(&what, &decode(a), &decode(b), TOL).unwrap_or_else(|m| panic!("{m}"));
@@ -67,9 +67,9 @@ fn tissue_reduce_max_flags_non_finite_values() {
     let (mut v, p, s) = inputs(5000, 3);
     v[4321][1] = f32::NAN;
     let a = cpu::tissue_reduce_max(v.len(), &v, &p, &s);
-    let b = tissue_gpu::tissue_reduce_max(&gpu, &v, &p, &s).unwrap();
+    let b = tissue_gpu::tissue_reduce_max(gpu, &v, &p, &s).unwrap();
     assert!(a[0] >= 0x7f80_0000 && b[0] >= 0x7f80_0000, "{a:?} {b:?}");
     v[4321][1] = f32::INFINITY;
-    let b = tissue_gpu::tissue_reduce_max(&gpu, &v, &p, &s).unwrap();
+    let b = tissue_gpu::tissue_reduce_max(gpu, &v, &p, &s).unwrap();
     assert!(b[0] >= 0x7f80_0000);
 }

@@ -140,12 +140,12 @@ fn oracle_icosphere_normals_are_radial() {
 #[test]
 fn synthetic() {
     let Some(gpu) = common::gpu() else { return };
-    check(&gpu, "tetra", &common::tetra());
-    check(&gpu, "cube", &common::cube());
-    check(&gpu, "icosphere4", &common::icosphere(4));
+    check(gpu, "tetra", &common::tetra());
+    check(gpu, "cube", &common::cube());
+    check(gpu, "icosphere4", &common::icosphere(4));
     for seed in [1, 2, 3] {
         check(
-            &gpu,
+            gpu,
             &format!("random{seed}"),
             &common::random_mesh(seed, 500, 2000),
         );
@@ -162,17 +162,17 @@ fn synthetic() {
         vec![[0, 1, 2], [0, 1, 4]],
     )
     .unwrap();
-    check(&gpu, "degenerate", &degenerate);
-    let got = gpu_normals(&gpu, "degenerate", &NormalsInput::new(&degenerate));
+    check(gpu, "degenerate", &degenerate);
+    let got = gpu_normals(gpu, "degenerate", &NormalsInput::new(&degenerate));
     assert_eq!(got[3], [0.0; 4], "unused vertex");
     assert_eq!(got[4], [0.0; 4], "vertex of a zero-area triangle only");
     // No triangles at all, and no vertices at all.
     check(
-        &gpu,
+        gpu,
         "points",
         &TriMesh::new(vec![Vec3::ONE; 3], vec![]).unwrap(),
     );
-    check(&gpu, "empty", &TriMesh::default());
+    check(gpu, "empty", &TriMesh::default());
 }
 
 #[test]
@@ -203,7 +203,7 @@ fn real_meshes() {
             "{rel}: mirror vs f64 oracle {err:e} exceeds TOL"
         );
         let Some(gpu) = common::gpu() else { return };
-        let got = gpu_normals(&gpu, rel, &input);
+        let got = gpu_normals(gpu, rel, &input);
         let err_gpu = max_oracle_error(&mesh, &got);
         assert!(
             err_gpu <= f64::from(cpu::TOL.abs),
@@ -221,7 +221,7 @@ fn negative_control() {
     let mesh = common::icosphere(2);
     let input = NormalsInput::new(&mesh);
     let want = cpu::vertex_normals(&input);
-    let mut got = gpu_normals(&gpu, "icosphere2", &input);
+    let mut got = gpu_normals(gpu, "icosphere2", &input);
     compare_vec("vertex_normals/control", &want, &got, cpu::TOL).unwrap();
     let k = 97;
     got[k][1] += 4.0 * cpu::TOL.abs;

@@ -5,6 +5,10 @@
 //! a memory-bound pass would hit. On a software adapter (lavapipe, ~1 M
 //! voxels/s) the GPU runs only the CT head.
 //!
+//! `gpu_kernels` (printed, median of 5 runs) is the three kernels' time on
+//! the GPU clock (timestamp queries; samples resident, no uploads or
+//! readbacks): the kernels themselves, next to `gpu_end_to_end`.
+//!
 //! `forest/*` times [`Forest::build`] alone (the tree that
 //! `marching_cubes` builds beside the group figures).
 //!
@@ -15,7 +19,7 @@ use std::time::{Duration, Instant};
 use chisel::Backend;
 use chisel::gpu::Gpu;
 use chisel::surface::tree::LEAF_BLOCK;
-use chisel::surface::{Forest, IsoSpec, McOptions, Surface, marching_cubes};
+use chisel::surface::{Field, Forest, IsoSpec, McOptions, Surface, gpu, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 
@@ -134,6 +138,23 @@ fn main() {
             group.bench_function(format!("gpu_end_to_end/{name}"), |b| {
                 b.iter(|| marching_cubes(vol, iso, &opts, Backend::Gpu(g)))
             });
+            // The three kernels alone, on the GPU clock (median of runs; a
+            // criterion loop over it would re-run the whole pipeline for
+            // every few milliseconds of kernel time).
+            if let Ok(field) = Field::new(vol, iso, opts.close_border) {
+                let runs = if quick() { 3 } else { 5 };
+                let mut k: Vec<f64> = (0..runs)
+                    .filter_map(|_| gpu::marching_cubes_raw(g, &field).ok()?.kernel_seconds)
+                    .collect();
+                k.sort_by(f64::total_cmp);
+                if let Some(&k) = k.get(k.len() / 2) {
+                    eprintln!(
+                        "mc/{name}: gpu_kernels {:.3} ms = {:.1} M voxels/s (GPU clock, median of {runs})",
+                        k * 1e3,
+                        voxels as f64 / k / 1e6
+                    );
+                }
+            }
         }
     }
     group.finish();

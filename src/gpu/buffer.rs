@@ -66,6 +66,28 @@ impl<T: Pod> GpuArray<T> {
         Self::from_slice(gpu, label, &vec![sentinel; len])
     }
 
+    /// A new buffer of `len` zeros, cleared on the device (nothing crosses
+    /// the bus): for outputs a kernel writes in full before anything reads
+    /// them, where a sentinel would never be checked.
+    pub fn zeroed(gpu: &Gpu, label: &str, len: usize) -> Result<Self> {
+        let bytes = Self::check_size(gpu, label, len)?;
+        let label = format!("chisel.{label}");
+        let buffer = gpu.scoped(&label, || {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(&label),
+                size: bytes.max(std::mem::size_of::<T>() as u64),
+                usage: STORAGE,
+                mapped_at_creation: false,
+            })
+        })?;
+        Ok(GpuArray {
+            buffer,
+            len,
+            label,
+            _t: PhantomData,
+        })
+    }
+
     /// Wraps an existing buffer holding `len` elements.
     pub(crate) fn from_raw(buffer: wgpu::Buffer, len: usize, label: &str) -> Self {
         GpuArray {

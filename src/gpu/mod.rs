@@ -14,9 +14,9 @@ mod registry;
 mod timing;
 
 pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
-pub use buffer::{GpuArray, UniformBuffer, chunk_ranges};
+pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges};
 pub use registry::{Kernel, Shader, preprocess};
-pub use timing::GpuTiming;
+pub use timing::{PassTimer, PassTimes};
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};

@@ -1,79 +1,81 @@
-//! GPU timing: timestamp queries around a compute pass when the device has
-//! `TIMESTAMP_QUERY`, wall clock around submit + wait otherwise.
+//! GPU timing: timestamp queries around the compute passes of one command
+//! encoder, when the device has `TIMESTAMP_QUERY`.
+//!
+//! ```text
+//! let timer = gpu.pass_timer(2);                  // None without timestamps
+//! pass 0: timestamp_writes: timer.as_ref().map(|t| t.writes(0))
+//! pass 1: timestamp_writes: timer.as_ref().map(|t| t.writes(1))
+//! let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
+//! gpu.submit_and_wait(encoder)?;
+//! let seconds = times.map(|t| t.finish(gpu)).transpose()?;  // Σ (end − begin)
+//! ```
 
-use std::time::{Duration, Instant};
-
-use super::Gpu;
+use super::{Gpu, GpuArray, Staged};
 use crate::Result;
 
-/// How long a piece of GPU work took, and by which clock.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct GpuTiming {
-    /// Seconds.
-    pub seconds: f64,
-    /// `true`: GPU timestamps around the pass; `false`: host wall clock
-    /// around submit and wait (includes submission overhead).
-    pub gpu_clock: bool,
+/// Begin/end timestamp queries for `passes` compute passes.
+#[derive(Debug)]
+pub struct PassTimer {
+    set: wgpu::QuerySet,
+    passes: u32,
+}
+
+/// Resolved timestamps on their way back to the host.
+#[derive(Debug)]
+pub struct PassTimes {
+    ticks: Staged<u64>,
 }
 
 impl Gpu {
-    /// Records one compute pass with `record`, submits it and waits; returns
-    /// the time the pass took on the GPU clock when available.
-    pub fn timed_pass(
-        &self,
-        label: &str,
-        record: impl FnOnce(&mut wgpu::ComputePass<'_>),
-    ) -> Result<GpuTiming> {
-        let mut encoder = self.encoder(label);
-        let query = self.features.timestamps.then(|| {
-            let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+    /// A timer for up to `passes` compute passes of one encoder, or `None`
+    /// when the device has no timestamp queries (or `passes` is 0).
+    pub fn pass_timer(&self, passes: u32) -> Option<PassTimer> {
+        (self.features.timestamps && passes > 0).then(|| PassTimer {
+            set: self.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("chisel.timing"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            });
-            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("chisel.timing.resolve"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve)
+                count: 2 * passes,
+            }),
+            passes,
+        })
+    }
+}
+
+impl PassTimer {
+    /// The timestamp writes of pass `i` (`i < passes`): its begin and end.
+    pub fn writes(&self, i: u32) -> wgpu::ComputePassTimestampWrites<'_> {
+        debug_assert!(i < self.passes, "pass {i} of {}", self.passes);
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.set,
+            beginning_of_pass_write_index: Some(2 * i),
+            end_of_pass_write_index: Some(2 * i + 1),
+        }
+    }
+
+    /// Resolves the queries and copies them out with `encoder` (read them
+    /// with [`PassTimes::finish`] after the submit).
+    pub fn stage(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<PassTimes> {
+        let n = 2 * self.passes;
+        let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("chisel.timing.resolve"),
+            size: u64::from(n) * 8,
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
         });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&format!("chisel.{label}")),
-                timestamp_writes: query
-                    .as_ref()
-                    .map(|(set, _)| wgpu::ComputePassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }),
-            });
-            record(&mut pass);
-        }
-        let start = Instant::now();
-        match query {
-            Some((set, resolve)) => {
-                encoder.resolve_query_set(&set, 0..2, &resolve, 0);
-                let ticks = super::GpuArray::<u64>::from_raw(resolve, 2, "timing");
-                let staged = ticks.stage(self, &mut encoder)?;
-                self.submit_and_wait(encoder)?;
-                let t = staged.finish(self)?;
-                let period = f64::from(self.queue.get_timestamp_period());
-                let ns = t[1].saturating_sub(t[0]) as f64 * period;
-                Ok(GpuTiming {
-                    seconds: ns * 1e-9,
-                    gpu_clock: true,
-                })
-            }
-            None => {
-                self.submit_and_wait(encoder)?;
-                Ok(GpuTiming {
-                    seconds: Duration::as_secs_f64(&start.elapsed()),
-                    gpu_clock: false,
-                })
-            }
-        }
+        encoder.resolve_query_set(&self.set, 0..n, &resolve, 0);
+        let ticks = GpuArray::<u64>::from_raw(resolve, n as usize, "timing");
+        Ok(PassTimes {
+            ticks: ticks.stage(gpu, encoder)?,
+        })
+    }
+}
+
+impl PassTimes {
+    /// Seconds of all timed passes together on the GPU clock, Σ (end − begin).
+    pub fn finish(self, gpu: &Gpu) -> Result<f64> {
+        let t = self.ticks.finish(gpu)?;
+        let period = f64::from(gpu.queue.get_timestamp_period());
+        let ticks: u64 = t.chunks(2).map(|p| p[1].saturating_sub(p[0])).sum();
+        Ok(ticks as f64 * period * 1e-9)
     }
 }

@@ -6,13 +6,20 @@
 //! points, a 2 MiB readback for a 512³ volume) — no dependency on the
 //! engine's generic scan kernels.
 //!
-//! Slabs: pass 1 classifies slabs sized so their samples fit one storage
-//! binding ([`Gpu::max_binding_bytes`]); pass 2 re-slabs knowing the exact
-//! per-layer vertex and triangle counts, so that samples, `vert_base`,
-//! positions and triangles of a slab each fit one binding. Output is read
-//! back per slab; vertices and triangles come out in the CPU mirror's order
-//! (point order, cell order), so the grouping finishes on the host with the
-//! same union-find numbering.
+//! Samples: when the whole (padded) grid fits one storage binding
+//! ([`Gpu::max_binding_bytes`]; 2 GiB on an H200, a 800³ f32 grid) it is
+//! converted and uploaded once and stays resident for both passes;
+//! otherwise each slab uploads its own layers. Pass 1 classifies slabs whose
+//! samples fit one binding; pass 2 re-slabs knowing the exact per-layer
+//! vertex and triangle counts, so that samples, `vert_base`, positions and
+//! triangles of a slab each fit one binding. `vert_base` is cleared on the
+//! device (the vertex pass writes all of it); positions and triangles start
+//! as sentinels. Output is read back per slab; vertices and triangles come
+//! out in the CPU mirror's order (point order, cell order), so the grouping
+//! finishes on the host with the same union-find numbering. With timestamp
+//! queries the kernels' GPU time is measured too ([`GpuRaw::kernel_seconds`]).
+
+use rayon::prelude::*;
 
 use super::cpu::RawSurface;
 use super::field::Field;
@@ -86,6 +93,10 @@ pub struct GpuRaw {
     pub positions: Vec<[f32; 4]>,
     /// #F `[v0, v1, v2, cell]`.
     pub triangles: Vec<[u32; 4]>,
+    /// GPU-clock seconds of the three kernels over all slabs (timestamp
+    /// queries; `None` when the device has none). Excludes uploads,
+    /// readbacks and the host scan.
+    pub kernel_seconds: Option<f64>,
 }
 
 /// Marching cubes of `field` on the GPU, grouping finished on the host.
@@ -144,23 +155,40 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     }
     let table = GpuArray::from_slice(gpu, "mc.table", &tables::table().flat())?;
     let dims = [nx as u32, ny as u32, nz as u32];
+    let resident = if nz as u64 * layer_bytes <= max {
+        Some(upload_layers(gpu, field, 0, nz)?)
+    } else {
+        None
+    };
+    let mut kernel_seconds = gpu.features.timestamps.then_some(0.0);
+    let mut add_time = |t: Option<f64>| {
+        if let (Some(sum), Some(t)) = (kernel_seconds.as_mut(), t) {
+            *sum += t;
+        }
+    };
 
     // Pass 1: block sums of the whole grid.
     let mut counts: Vec<[u32; 2]> = Vec::with_capacity(nz * bpl);
     let mut a = 0;
     while a < nz {
         let b = (a + classify_layers).min(nz);
-        let samples = upload_layers(gpu, field, a, (b + 1).min(nz))?;
-        counts.extend(classify(
-            gpu,
-            &table,
-            &samples,
-            dims,
-            a,
-            b - a,
-            bpl,
-            field.level,
-        )?);
+        let slab_samples;
+        let samples = match &resident {
+            Some(all) => Samples {
+                buffer: all,
+                z_first: 0,
+            },
+            None => {
+                slab_samples = upload_layers(gpu, field, a, (b + 1).min(nz))?;
+                Samples {
+                    buffer: &slab_samples,
+                    z_first: a,
+                }
+            }
+        };
+        let (c, t) = classify(gpu, &table, samples, dims, a, b - a, bpl, field.level)?;
+        counts.extend(c);
+        add_time(t);
         a = b;
     }
 
@@ -180,6 +208,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     let mut out = GpuRaw {
         positions: Vec::with_capacity(total_v as usize),
         triangles: Vec::with_capacity(total_t as usize),
+        kernel_seconds: None,
     };
     let fits = |a: usize, b: usize| -> bool {
         let samples = ((b + 2).min(nz) - a) as u64 * layer_bytes;
@@ -207,12 +236,31 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
             n_v: layer_v[a..b].iter().sum::<u64>() as usize,
             n_t: layer_t[a..b.min(nz - 1)].iter().sum::<u64>() as usize,
         };
-        let (p, t) = emit(gpu, field, &table, dims, bpl, &off_v, &off_t, &slab)?;
+        let (p, t, seconds) = emit(
+            gpu,
+            field,
+            resident.as_ref(),
+            &table,
+            dims,
+            bpl,
+            &off_v,
+            &off_t,
+            &slab,
+        )?;
         out.positions.extend(p);
         out.triangles.extend(t);
+        add_time(seconds);
         a = b;
     }
+    out.kernel_seconds = kernel_seconds;
     Ok(out)
+}
+
+/// A samples buffer holding global layers `z_first..`.
+#[derive(Clone, Copy)]
+struct Samples<'a> {
+    buffer: &'a GpuArray<f32>,
+    z_first: usize,
 }
 
 /// Point layers `a..b` of one emission slab and its output ranges.
@@ -225,13 +273,13 @@ struct Slab {
     n_t: usize,
 }
 
-/// Samples of layers `z0..z1` as one storage buffer.
+/// Samples of layers `z0..z1` as one storage buffer (converted in parallel).
 fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<GpuArray<f32>> {
     let layer = field.dims[0] * field.dims[1];
     let mut data = vec![0.0f32; (z1 - z0) * layer];
-    for (k, z) in (z0..z1).enumerate() {
-        field.layer(z, &mut data[k * layer..(k + 1) * layer]);
-    }
+    data.par_chunks_mut(layer)
+        .enumerate()
+        .for_each(|(k, out)| field.layer(z0 + k, out));
     GpuArray::from_slice(gpu, "mc.samples", &data)
 }
 
@@ -255,13 +303,13 @@ fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<(Vec<u32>, u32)> 
 fn classify(
     gpu: &Gpu,
     table: &GpuArray<u32>,
-    samples: &GpuArray<f32>,
+    samples: Samples<'_>,
     dims: [u32; 3],
     z_begin: usize,
     n_layers: usize,
     bpl: usize,
     level: f32,
-) -> Result<Vec<[u32; 2]>> {
+) -> Result<(Vec<[u32; 2]>, Option<f64>)> {
     let kernel = Kernel::McClassify;
     let n_blocks = n_layers * bpl;
     let params = UniformBuffer::new(
@@ -271,7 +319,7 @@ fn classify(
             nx: dims[0],
             ny: dims[1],
             nz: dims[2],
-            z_first: z_begin as u32,
+            z_first: samples.z_first as u32,
             z_begin: z_begin as u32,
             n_layers: n_layers as u32,
             blocks_per_layer: bpl as u32,
@@ -285,16 +333,17 @@ fn classify(
         &pipeline,
         &[
             params.binding(),
-            samples.binding(),
+            samples.buffer.binding(),
             table.binding(),
             counts.binding(),
         ],
     )?;
+    let timer = gpu.pass_timer(1);
     let mut encoder = gpu.encoder("mc_classify");
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&kernel.label()),
-            timestamp_writes: None,
+            timestamp_writes: timer.as_ref().map(|t| t.writes(0)),
         });
         gpu.dispatch(
             &mut pass,
@@ -304,12 +353,14 @@ fn classify(
             WG_SIZE,
         );
     }
+    let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
+    let staged = counts.stage(gpu, &mut encoder)?;
     gpu.submit_and_wait(encoder)?;
-    let out = counts.read(gpu)?;
+    let out = staged.finish(gpu)?;
     if let Some(i) = find_sentinel(&out, [u32::MAX; 2]) {
         return Err(sentinel(kernel, i));
     }
-    Ok(out)
+    Ok((out, times.map(|t| t.finish(gpu)).transpose()?))
 }
 
 fn sentinel(kernel: Kernel, index: usize) -> Error {
@@ -319,7 +370,8 @@ fn sentinel(kernel: Kernel, index: usize) -> Error {
     }
 }
 
-type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>);
+/// Positions, triangles and the kernels' GPU seconds of one slab.
+type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, Option<f64>);
 
 #[expect(
     clippy::too_many_arguments,
@@ -328,6 +380,7 @@ type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>);
 fn emit(
     gpu: &Gpu,
     field: &Field<'_>,
+    resident: Option<&GpuArray<f32>>,
     table: &GpuArray<u32>,
     dims: [u32; 3],
     bpl: usize,
@@ -339,7 +392,20 @@ fn emit(
     let (a, b) = (slab.a, slab.b);
     let vb_layers = (b + 1).min(nz) - a;
     let cell_layers = b.min(nz - 1).saturating_sub(a);
-    let samples = upload_layers(gpu, field, a, (b + 2).min(nz))?;
+    let slab_samples;
+    let samples = match resident {
+        Some(all) => Samples {
+            buffer: all,
+            z_first: 0,
+        },
+        None => {
+            slab_samples = upload_layers(gpu, field, a, (b + 2).min(nz))?;
+            Samples {
+                buffer: &slab_samples,
+                z_first: a,
+            }
+        }
+    };
     let layer = (dims[0] * dims[1]) as usize;
     let offsets_v = GpuArray::from_slice(
         gpu,
@@ -351,7 +417,7 @@ fn emit(
         "mc_triangles.block_offsets",
         &off_t[a * bpl..(a + cell_layers.max(1)) * bpl],
     )?;
-    let vert_base = GpuArray::filled(gpu, "mc_vertices.vert_base", vb_layers * layer, u32::MAX)?;
+    let vert_base = GpuArray::<u32>::zeroed(gpu, "mc_vertices.vert_base", vb_layers * layer)?;
     let positions = GpuArray::filled(gpu, "mc_vertices.positions", slab.n_v, [f32::NAN; 4])?;
     let triangles = GpuArray::filled(gpu, "mc_triangles.triangles", slab.n_t, [u32::MAX; 4])?;
     let vparams = UniformBuffer::new(
@@ -361,7 +427,7 @@ fn emit(
             nx: dims[0],
             ny: dims[1],
             nz: dims[2],
-            z_first: a as u32,
+            z_first: samples.z_first as u32,
             z_begin: a as u32,
             n_layers: vb_layers as u32,
             n_owned: (b - a) as u32,
@@ -377,7 +443,7 @@ fn emit(
             nx: dims[0],
             ny: dims[1],
             nz: dims[2],
-            z_first: a as u32,
+            z_first: samples.z_first as u32,
             z_begin: a as u32,
             n_layers: cell_layers as u32,
             blocks_per_layer: bpl as u32,
@@ -395,7 +461,7 @@ fn emit(
         &vpipe,
         &[
             vparams.binding(),
-            samples.binding(),
+            samples.buffer.binding(),
             offsets_v.binding(),
             vert_base.binding(),
             positions.binding(),
@@ -406,18 +472,19 @@ fn emit(
         &tpipe,
         &[
             tparams.binding(),
-            samples.binding(),
+            samples.buffer.binding(),
             table.binding(),
             offsets_t.binding(),
             vert_base.binding(),
             triangles.binding(),
         ],
     )?;
+    let timer = gpu.pass_timer(2);
     let mut encoder = gpu.encoder("mc_emit");
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&vk.label()),
-            timestamp_writes: None,
+            timestamp_writes: timer.as_ref().map(|t| t.writes(0)),
         });
         gpu.dispatch(
             &mut pass,
@@ -430,7 +497,7 @@ fn emit(
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&tk.label()),
-            timestamp_writes: None,
+            timestamp_writes: timer.as_ref().map(|t| t.writes(1)),
         });
         gpu.dispatch(
             &mut pass,
@@ -442,6 +509,7 @@ fn emit(
     }
     let staged_p = positions.stage(gpu, &mut encoder)?;
     let staged_t = triangles.stage(gpu, &mut encoder)?;
+    let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
     gpu.submit_and_wait(encoder)?;
     let p = staged_p.finish(gpu)?;
     let t = staged_t.finish(gpu)?;
@@ -451,5 +519,5 @@ fn emit(
     if let Some(i) = find_sentinel(&t, [u32::MAX; 4]) {
         return Err(sentinel(tk, i));
     }
-    Ok((p, t))
+    Ok((p, t, times.map(|t| t.finish(gpu)).transpose()?))
 }

@@ -207,6 +207,11 @@ fn mc_sentinels_and_negative_control() {
     let field = Field::new(&vol, iso, true).unwrap();
     let raw = surface::gpu::marching_cubes_raw(gpu, &field).unwrap();
     assert!(!raw.triangles.is_empty());
+    // Kernel time on the GPU clock exactly when the device has timestamps.
+    match raw.kernel_seconds {
+        Some(t) => assert!(gpu.features.timestamps && t > 0.0 && t.is_finite(), "{t}"),
+        None => assert!(!gpu.features.timestamps),
+    }
     assert_eq!(find_sentinel(&raw.triangles, [u32::MAX; 4]), None);
     assert!(
         raw.positions

@@ -172,20 +172,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     let mut a = 0;
     while a < nz {
         let b = (a + classify_layers).min(nz);
-        let slab_samples;
-        let samples = match &resident {
-            Some(all) => Samples {
-                buffer: all,
-                z_first: 0,
-            },
-            None => {
-                slab_samples = upload_layers(gpu, field, a, (b + 1).min(nz))?;
-                Samples {
-                    buffer: &slab_samples,
-                    z_first: a,
-                }
-            }
-        };
+        let mut slot = None;
+        let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 1).min(nz))?;
         let (c, t) = classify(gpu, &table, samples, dims, a, b - a, bpl, field.level)?;
         counts.extend(c);
         add_time(t);
@@ -261,6 +249,29 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
 struct Samples<'a> {
     buffer: &'a GpuArray<f32>,
     z_first: usize,
+}
+
+impl<'a> Samples<'a> {
+    /// The resident grid, or else layers `z0..z1` uploaded into `slot`.
+    fn get(
+        resident: Option<&'a GpuArray<f32>>,
+        slot: &'a mut Option<GpuArray<f32>>,
+        gpu: &Gpu,
+        field: &Field<'_>,
+        z0: usize,
+        z1: usize,
+    ) -> Result<Self> {
+        Ok(match resident {
+            Some(all) => Samples {
+                buffer: all,
+                z_first: 0,
+            },
+            None => Samples {
+                buffer: slot.insert(upload_layers(gpu, field, z0, z1)?),
+                z_first: z0,
+            },
+        })
+    }
 }
 
 /// Point layers `a..b` of one emission slab and its output ranges.
@@ -392,20 +403,8 @@ fn emit(
     let (a, b) = (slab.a, slab.b);
     let vb_layers = (b + 1).min(nz) - a;
     let cell_layers = b.min(nz - 1).saturating_sub(a);
-    let slab_samples;
-    let samples = match resident {
-        Some(all) => Samples {
-            buffer: all,
-            z_first: 0,
-        },
-        None => {
-            slab_samples = upload_layers(gpu, field, a, (b + 2).min(nz))?;
-            Samples {
-                buffer: &slab_samples,
-                z_first: a,
-            }
-        }
-    };
+    let mut slot = None;
+    let samples = Samples::get(resident, &mut slot, gpu, field, a, (b + 2).min(nz))?;
     let layer = (dims[0] * dims[1]) as usize;
     let offsets_v = GpuArray::from_slice(
         gpu,

@@ -7,7 +7,7 @@
 //! engine's generic scan kernels.
 //!
 //! Samples: when the whole (padded) grid fits one storage binding
-//! ([`Gpu::max_binding_bytes`]; 2 GiB on an H200, a 800³ f32 grid) it is
+//! ([`Gpu::max_binding_bytes`]; 2 GiB on an H200: about 810³ f32 samples) it is
 //! converted and uploaded once and stays resident for both passes;
 //! otherwise each slab uploads its own layers. Pass 1 classifies slabs whose
 //! samples fit one binding; pass 2 re-slabs knowing the exact per-layer

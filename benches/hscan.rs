@@ -112,9 +112,7 @@ fn bench(c: &mut Criterion) {
         Some((gpu, _)) => eprintln!("adapter: {}", gpu.describe()),
         None => eprintln!("no adapter: CPU only"),
     }
-    let software = gpus
-        .first()
-        .is_some_and(|(g, _)| g.info.device_type == wgpu::DeviceType::Cpu);
+    let software = gpus.first().is_some_and(|(g, _)| g.is_software());
     for (label, n, faces, extents) in cases() {
         let bbox = VoxelBox {
             origin: [0; 3],

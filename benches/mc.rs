@@ -73,9 +73,7 @@ fn main() {
         Some(g) => eprintln!("adapter: {}", g.describe()),
         None => eprintln!("adapter: none (GPU benches skipped)"),
     }
-    let software = gpu
-        .as_ref()
-        .is_some_and(|g| g.info.device_type == wgpu::DeviceType::Cpu);
+    let software = gpu.as_ref().is_some_and(|g| g.is_software());
     let mut cases: Vec<(String, Volume, f32)> = Vec::new();
     let head =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/headsq/quarter.nhdr");

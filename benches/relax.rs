@@ -186,9 +186,7 @@ fn main() {
     let all = tte == "all";
     // `within`: only the time to within 1 % of the equilibrium.
     let within_only = tte == "within";
-    let software = gpu
-        .as_ref()
-        .is_some_and(|g| g.info.device_type == wgpu::DeviceType::Cpu);
+    let software = gpu.as_ref().is_some_and(|g| g.is_software());
     eprintln!(
         "\ntime to equilibrium after one 0.5 mm chin increment (default ε = 1e-5 · diagonal):"
     );

@@ -130,6 +130,12 @@ impl Gpu {
         })
     }
 
+    /// Whether the adapter is a software rasteriser on the CPU (lavapipe):
+    /// correctly rounded division, no fused multiply-adds, slow kernels.
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// One line naming the adapter: `name (backend, type, driver)`.
     pub fn describe(&self) -> String {
         adapter::describe(&self.info)

@@ -76,7 +76,7 @@ fn position_tolerance(vol: &Volume) -> Tolerance {
 
 /// The tolerance [`check`] applies on `gpu`: exact on a software adapter.
 fn tolerance_on(gpu: &Gpu, vol: &Volume) -> Tolerance {
-    if gpu.info.device_type == wgpu::DeviceType::Cpu {
+    if gpu.is_software() {
         Tolerance::EXACT
     } else {
         position_tolerance(vol)

@@ -7,9 +7,10 @@
 //! `hull_scan/cpu_rows` (row spans), `hull_scan/cpu_classify` (spans + side
 //! codes: the "512³ in under 1 s" target), `hull_scan/cpu_rows_culled`
 //! (blobs: each layer scans only the faces meeting it), `hull_scan/cpu_brute` (every
-//! voxel × every face; 128³ and below), `hull_scan/gpu_rows_{int64,i32x2}`
-//! and `hull_scan/gpu_brute_{int64,i32x2}` (upload + dispatch + readback;
-//! brute force only up to 64³ on software adapters).
+//! voxel × every face; 128³ and below), `hull_scan/gpu_rows_{int64,i32x2}`,
+//! `hull_scan/gpu_rows_culled_{int64,i32x2}` (blobs: per layer the list of
+//! faces meeting it) and `hull_scan/gpu_brute_{int64,i32x2}` (upload +
+//! dispatch + readback; brute force only up to 64³ on software adapters).
 //! `CHISEL_BENCH_QUICK=1`: 64³ and 128³ boxes, few samples.
 
 use std::hint::black_box;
@@ -154,6 +155,20 @@ fn bench(c: &mut Criterion) {
                     })
                 },
             );
+            if let Some(extents) = &extents {
+                g.bench_with_input(
+                    BenchmarkId::new(format!("gpu_rows_culled_{name}"), &label),
+                    &n,
+                    |b, _| {
+                        b.iter(|| {
+                            HullScanInput::upload(gpu, black_box(&faces), &bbox)
+                                .and_then(|i| i.culled(extents))
+                                .and_then(|i| i.rows(gpu, arith))
+                                .unwrap()
+                        })
+                    },
+                );
+            }
             if !software || n <= 64 {
                 g.bench_with_input(
                     BenchmarkId::new(format!("gpu_brute_{name}"), &label),

@@ -12,12 +12,18 @@
 // Dispatch: one invocation per row of the slab (row = y + ny·(z − z0)),
 // WG_SIZE per workgroup, 2-D grid past the per-dimension limit.
 // Buffers:
-//   params: n_faces, n_items = rows in the slab, nx, ny, z0, origin
+//   params: n_items = rows in the slab, nx, ny, z0, origin
 //   faces:  #F Face (shared/hull_face.wgsl)
 //   spans:  n_items vec4<i32> out: local x of (closed lo, closed hi, open
 //           lo, open hi), inclusive; empty = (0, −1)
+//   layers: the faces each z layer of the slab uses: layers[2k],
+//           layers[2k + 1] = start, end (in `layers`) of the ids of the
+//           faces local layer k tests, or LAYER_MISSES when the polyhedron
+//           misses the layer (every row empty). Every face for every layer,
+//           or only those whose z range holds it (hscan::row_spans_culled).
 // Range (hscan::check_range): |r| < 2^61, 2a < 2^32, no overflow.
-// Mirror: hscan::cpu::hull_rows.
+// Mirror: hscan::cpu::hull_rows (every face per layer) and
+// hull_rows_culled (the faces meeting the layer).
 
 #import dispatch
 #import hull_face
@@ -25,6 +31,7 @@
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> faces: array<Face>;
 @group(0) @binding(2) var<storage, read_write> spans: array<vec4<i32>>;
+@group(0) @binding(3) var<storage, read> layers: array<u32>;
 
 const EMPTY = vec4<i32>(0, -1, 0, -1);
 
@@ -38,16 +45,17 @@ fn floor_div(a: i64, b: i64) -> i64 {
     return select(q, q - 1li, q * b != a && a < 0li);
 }
 
-// The span of the row at combinatorial (y, z), global voxel indices.
-fn row_span(y: i64, z: i64) -> vec4<i32> {
+// The span of the row at combinatorial (y, z) of local layer k, global
+// voxel indices.
+fn row_span(y: i64, z: i64, k: u32) -> vec4<i32> {
     let ox = params.origin_x;
     var lo_c = ox;
     var hi_c = ox + i32(params.nx) - 1;
     var lo_o = lo_c;
     var hi_o = hi_c;
     var open = true;
-    for (var f = 0u; f < params.n_faces; f++) {
-        let face = faces[f];
+    for (var i = layers[2u * k]; i < layers[2u * k + 1u]; i++) {
+        let face = faces[layers[i]];
         // Sign tests on the i32 component: with naga 30 on Mesa 22.3 lavapipe,
         // ordered comparisons of `i64(n)` (n: i32) with a literal come out
         // constant (`> 0li` always true, `< 0li` always false, even for
@@ -113,7 +121,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         spans[ix] = EMPTY;
         return;
     }
+    let k = ix / params.ny;
+    if layers[2u * k] == LAYER_MISSES {
+        spans[ix] = EMPTY;
+        return;
+    }
     let y = 2 * (params.origin_y + i32(ix % params.ny)) + 1;
-    let z = 2 * (params.origin_z + i32(params.z0 + ix / params.ny)) + 1;
-    spans[ix] = row_span(i64(y), i64(z));
+    let z = 2 * (params.origin_z + i32(params.z0 + k)) + 1;
+    spans[ix] = row_span(i64(y), i64(z), k);
 }

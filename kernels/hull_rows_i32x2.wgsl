@@ -12,12 +12,18 @@
 // Dispatch: one invocation per row of the slab (row = y + ny·(z − z0)),
 // WG_SIZE per workgroup, 2-D grid past the per-dimension limit.
 // Buffers:
-//   params: n_faces, n_items = rows in the slab, nx, ny, z0, origin
+//   params: n_items = rows in the slab, nx, ny, z0, origin
 //   faces:  #F Face (shared/hull_face.wgsl)
 //   spans:  n_items vec4<i32> out: local x of (closed lo, closed hi, open
 //           lo, open hi), inclusive; empty = (0, −1)
+//   layers: the faces each z layer of the slab uses: layers[2k],
+//           layers[2k + 1] = start, end (in `layers`) of the ids of the
+//           faces local layer k tests, or LAYER_MISSES when the polyhedron
+//           misses the layer (every row empty). Every face for every layer,
+//           or only those whose z range holds it (hscan::row_spans_culled).
 // Range (hscan::check_range): |r| < 2^61, products i32 × i32, exact.
-// Mirror: hscan::cpu::hull_rows_i32x2 (and hull_rows: same spans).
+// Mirror: hscan::cpu::hull_rows_i32x2 (and hull_rows / hull_rows_culled:
+// same spans).
 
 #import dispatch
 #import hull_face
@@ -26,11 +32,13 @@
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> faces: array<Face>;
 @group(0) @binding(2) var<storage, read_write> spans: array<vec4<i32>>;
+@group(0) @binding(3) var<storage, read> layers: array<u32>;
 
 const EMPTY = vec4<i32>(0, -1, 0, -1);
 
-// The span of the row at combinatorial (y, z), global voxel indices.
-fn row_span(y: i32, z: i32) -> vec4<i32> {
+// The span of the row at combinatorial (y, z) of local layer k, global
+// voxel indices.
+fn row_span(y: i32, z: i32, k: u32) -> vec4<i32> {
     let ox = params.origin_x;
     var lo_c = ox;
     var hi_c = ox + i32(params.nx) - 1;
@@ -38,8 +46,8 @@ fn row_span(y: i32, z: i32) -> vec4<i32> {
     var hi_o = hi_c;
     var open = true;
     let zero = vec2<u32>(0u, 0u);
-    for (var f = 0u; f < params.n_faces; f++) {
-        let face = faces[f];
+    for (var i = layers[2u * k]; i < layers[2u * k + 1u]; i++) {
+        let face = faces[layers[i]];
         let a = face.normal.x;
         let r = w_sub(w_sub(face.offset.xy, w_mul(face.normal.y, y)), w_mul(face.normal.z, z));
         if a == 0 {
@@ -116,7 +124,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         spans[ix] = EMPTY;
         return;
     }
+    let k = ix / params.ny;
+    if layers[2u * k] == LAYER_MISSES {
+        spans[ix] = EMPTY;
+        return;
+    }
     let y = 2 * (params.origin_y + i32(ix % params.ny)) + 1;
-    let z = 2 * (params.origin_z + i32(params.z0 + ix / params.ny)) + 1;
-    spans[ix] = row_span(y, z);
+    let z = 2 * (params.origin_z + i32(params.z0 + k)) + 1;
+    spans[ix] = row_span(y, z, k);
 }

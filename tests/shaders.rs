@@ -278,7 +278,11 @@ fn host(kernel: Kernel) -> Host {
         },
         Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => {
             Host {
-                bindings: hscan::gpu::BINDINGS,
+                bindings: if matches!(kernel, Kernel::HullRows | Kernel::HullRowsI32x2) {
+                    hscan::gpu::ROWS_BINDINGS
+                } else {
+                    hscan::gpu::SCAN_BINDINGS
+                },
                 wg_size: hscan::gpu::WG_SIZE,
                 consts: &[],
                 params: (

@@ -3,7 +3,7 @@
 // Host side: hscan::gpu::{Params, GpuFace}.
 
 struct Params {
-    // Faces in `faces`.
+    // Faces in `faces` (hull_scan*; hull_rows* read theirs from `layers`).
     n_faces: u32,
     // Items of this slab: voxels (hull_scan*) or rows (hull_rows*).
     n_items: u32,
@@ -26,3 +26,7 @@ struct Face {
 }
 
 const WG_SIZE: u32 = 256u;
+
+// hull_rows*: the start of a layer's face list when the polyhedron misses
+// the layer.
+const LAYER_MISSES: u32 = 0xffffffffu;

@@ -271,9 +271,9 @@ pub fn row_spans(
 
 /// [`row_spans`] of a convex polytope whose face `f` (half-space `f`)
 /// spans the combinatorial z range `z_extents[f]` (inclusive; e.g.
-/// [`crate::hull::ConvexHull::face_z_extents`]). CPU: each layer uses only
-/// the faces meeting it ([`cpu::hull_rows_culled`], the same spans); GPU:
-/// every face, as [`row_spans`].
+/// [`crate::hull::ConvexHull::face_z_extents`]): each layer tests only the
+/// faces meeting it, the same spans. CPU: [`cpu::hull_rows_culled`]; GPU:
+/// [`gpu::hull_rows_culled`], per layer a list of those faces.
 ///
 /// Errors: as [`row_spans`]; `z_extents` not one range per half-space.
 pub fn row_spans_culled(
@@ -292,7 +292,7 @@ pub fn row_spans_culled(
     check_range(half_spaces, bbox)?;
     match backend {
         Backend::Cpu => Ok(cpu::hull_rows_culled(half_spaces, z_extents, bbox)),
-        Backend::Gpu(g) => gpu::hull_rows(g, half_spaces, bbox),
+        Backend::Gpu(g) => gpu::hull_rows_culled(g, half_spaces, z_extents, bbox),
     }
 }
 

@@ -3,14 +3,18 @@
 //! i128 oracle `hscan::brute`: bit for bit, with native i64 (lavapipe has
 //! `SHADER_INT64`) and with the exact emulated fallback (device opened
 //! `portable`), in one binding and in z slabs, on synthetic polytopes and
-//! the thresholded CT head; sentinel-filled outputs; negative controls.
+//! the thresholded CT head; the row kernels also with per-layer face lists
+//! culled by the faces' z ranges, on exact hulls of random lattice points
+//! and of the CT head's bone; sentinel-filled outputs; negative controls.
 
 use chisel::Backend;
 use chisel::gpu::{Gpu, GpuOptions};
 use chisel::hscan::gpu::{Arithmetic, HullScanInput, ROWS_SENTINEL};
 use chisel::hscan::{self, HalfSpace, RowSpans, Side, VoxelBox, brute, cpu, zkh};
+use chisel::hull::{ConvexHull, HullOptions};
 use chisel::parity::{compare_exact, find_sentinel};
 use chisel::volume::analysis::label_6_connected;
+use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection};
 
 use crate::common;
 #[path = "../hscan_fixtures/mod.rs"]
@@ -249,5 +253,192 @@ fn real_ct_head_bone() {
     };
     for gpu in &capped {
         check(gpu, "headsq bone, slabs", &poly.faces, &bbox);
+    }
+}
+
+/// GPU rows with face lists culled by `z_extents` on `gpu` against the CPU's
+/// culled rows and the full CPU rows, exactly, with no surviving sentinel.
+fn check_culled(
+    gpu: &Gpu,
+    what: &str,
+    faces: &[HalfSpace],
+    z_extents: &[[i64; 2]],
+    bbox: &VoxelBox,
+) {
+    let arith = Arithmetic::of(gpu);
+    let what = format!("{what} ({arith:?}, culled)");
+    let spans = HullScanInput::upload(gpu, faces, bbox)
+        .and_then(|i| i.culled(z_extents))
+        .and_then(|i| i.rows(gpu, arith))
+        .unwrap();
+    assert_eq!(
+        find_sentinel(&spans.spans, ROWS_SENTINEL),
+        None,
+        "{what}: row sentinel survived"
+    );
+    let want = cpu::hull_rows_culled(faces, z_extents, bbox);
+    compare_exact(&format!("hull_rows/{what}"), &want.spans, &spans.spans)
+        .unwrap_or_else(|m| panic!("{m}"));
+    compare_exact(
+        &format!("hull_rows/{what} vs every face"),
+        &cpu::hull_rows(faces, bbox).spans,
+        &spans.spans,
+    )
+    .unwrap_or_else(|m| panic!("{m}"));
+}
+
+/// A named hull: its half-spaces, their faces' z ranges and a box.
+type HullCase = (String, Vec<HalfSpace>, Vec<[i64; 2]>, VoxelBox);
+
+/// Exact hulls of random lattice points (some flat) with their faces' z
+/// ranges, in boxes reaching beyond them on every side.
+fn hull_cases() -> Vec<HullCase> {
+    let mut rng = Rng::new(77);
+    let mut cases = Vec::new();
+    for case in 0..12 {
+        let spread = rng.range(2, 14);
+        let flat = case % 4 == 3;
+        let points: Vec<[i64; 3]> = (0..rng.range(4, 60))
+            .map(|_| {
+                let z = if flat {
+                    2 * spread + 1
+                } else {
+                    rng.range(0, 4 * spread)
+                };
+                [rng.range(0, 4 * spread), rng.range(0, 4 * spread), z]
+            })
+            .collect();
+        let Ok(hull) = ConvexHull::build(&points, Default::default()) else {
+            continue;
+        };
+        let faces = hull
+            .half_spaces()
+            .into_iter()
+            .map(HalfSpace::from)
+            .collect();
+        let bbox = VoxelBox {
+            origin: [-2, -1, rng.range(-3, 2)],
+            dims: [
+                2 * spread as usize + 5,
+                2 * spread as usize + 3,
+                2 * spread as usize + 4,
+            ],
+        };
+        cases.push((format!("hull {case}"), faces, hull.face_z_extents(), bbox));
+    }
+    assert!(cases.len() >= 10, "{} hulls", cases.len());
+    cases
+}
+
+#[test]
+fn culled_rows_on_lattice_hulls() {
+    let Some(gpus) = devices(None) else { return };
+    for gpu in &gpus {
+        for (what, faces, extents, bbox) in hull_cases() {
+            check_culled(gpu, &what, &faces, &extents, &bbox);
+        }
+    }
+    // In slabs: 2 KiB bindings hold the spans of 4 layers of 30 rows.
+    let Some(capped) = devices(Some(2048)) else {
+        return;
+    };
+    for gpu in &capped {
+        for (what, faces, extents, bbox) in hull_cases() {
+            check_culled(gpu, &format!("{what}, slabs"), &faces, &extents, &bbox);
+        }
+    }
+}
+
+#[test]
+fn culled_face_lists_split_slabs() {
+    // 400 half-spaces, each said to span every layer: a layer's list takes
+    // 402 words (1,608 bytes), so 16 KiB bindings hold 10 layers per slab
+    // although their spans (8 rows, 128 bytes per layer) would allow 128.
+    let Some(gpus) = devices(Some(16 << 10)) else {
+        return;
+    };
+    let bbox = VoxelBox {
+        origin: [-4, 0, -2],
+        dims: [20, 8, 25],
+    };
+    let mut rng = Rng::new(9);
+    let faces = random_half_spaces(&mut rng, 400, &bbox, 5);
+    let everywhere = vec![[i64::MIN, i64::MAX]; faces.len()];
+    for gpu in &gpus {
+        check_culled(gpu, "400 faces, every layer", &faces, &everywhere, &bbox);
+        // One range per face, or an error.
+        assert!(
+            HullScanInput::upload(gpu, &faces, &bbox)
+                .and_then(|i| i.culled(&everywhere[1..]))
+                .is_err()
+        );
+    }
+}
+
+#[test]
+fn culled_rows_negative_control() {
+    // The cube's +x face said to span one layer only is missing from the
+    // other layers' lists, whose rows then run to the box's end: the GPU
+    // agrees with the CPU on those wrong spans, so the lists are read.
+    let points: Vec<[i64; 3]> = (0..8)
+        .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { 9 } else { 1 }))
+        .collect();
+    let hull = ConvexHull::build(&points, Default::default()).unwrap();
+    let faces: Vec<HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
+    let bbox = VoxelBox {
+        origin: [0; 3],
+        dims: [6; 3],
+    };
+    let mut extents = hull.face_z_extents();
+    let side = faces.iter().position(|f| f.normal == [1, 0, 0]).unwrap();
+    extents[side] = [9, 9];
+    let Some(gpus) = devices(None) else { return };
+    for gpu in &gpus {
+        let got = HullScanInput::upload(gpu, &faces, &bbox)
+            .and_then(|i| i.culled(&extents))
+            .and_then(|i| i.rows(gpu, Arithmetic::of(gpu)))
+            .unwrap();
+        compare_exact(
+            "culled, wrong range",
+            &cpu::hull_rows_culled(&faces, &extents, &bbox).spans,
+            &got.spans,
+        )
+        .unwrap();
+        let m = compare_exact(
+            "culled vs every face",
+            &cpu::hull_rows(&faces, &bbox).spans,
+            &got.spans,
+        )
+        .unwrap_err();
+        assert!(m.count > 0);
+    }
+}
+
+#[test]
+fn culled_rows_real_ct_head_bone() {
+    // The exact hull of the CT head's bone (≥ 1150, largest component):
+    // every layer tests only the faces meeting it.
+    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+        return;
+    };
+    let o =
+        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
+    let hull = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default()).unwrap();
+    let faces: Vec<HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
+    let extents = hull.face_z_extents();
+    assert!(faces.len() > 100, "{} faces", faces.len());
+    let bbox = VoxelBox {
+        origin: [0; 3],
+        dims: v.dims,
+    };
+    let Some(gpus) = devices(None) else { return };
+    for gpu in &gpus {
+        check_culled(gpu, "headsq bone hull", &faces, &extents, &bbox);
+    }
+    let Some(capped) = devices(Some(64 * 64 * 16)) else {
+        return;
+    };
+    for gpu in &capped {
+        check_culled(gpu, "headsq bone hull, slabs", &faces, &extents, &bbox);
     }
 }

@@ -451,6 +451,9 @@ const U8_444: &str = "type: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n";
 fn nrrd_bad_inputs() {
     let m = expect("t.nrrd", &nrrd(U8_444, &[1; 63]), Kind::Size, "byte 62");
     assert!(m.contains("64 samples"), "{m}");
+    // Oversized: data past what the header describes, at its first byte.
+    let m = expect("l.nrrd", &nrrd(U8_444, &[1; 65]), Kind::Format, "byte 126");
+    assert!(m.contains("1 more bytes"), "{m}");
     let huge =
         "type: float\ndimension: 3\nsizes: 100000 100000 100000\nendian: little\nencoding: raw\n";
     expect("h.nrrd", &nrrd(huge, &[0; 8]), Kind::Size, "line 4");
@@ -738,6 +741,25 @@ fn raw_bad_inputs() {
     assert_eq!(kind(&e), Kind::Size, "{e}");
     assert!(
         e.to_string().contains("r.bin") && e.to_string().contains("byte 0"),
+        "{e}"
+    );
+    // 100 bytes hold 4 × 5 × 5 samples exactly, not 4 × 4 × 5 ones.
+    let exact = RawSpec {
+        dims: [4, 5, 5],
+        ..spec.clone()
+    };
+    assert_eq!(read_raw_volume(&path, &exact).unwrap().len(), 100);
+    let e = read_raw_volume(
+        &path,
+        &RawSpec {
+            dims: [4, 4, 5],
+            ..spec.clone()
+        },
+    )
+    .unwrap_err();
+    assert_eq!(kind(&e), Kind::Format, "{e}");
+    assert!(
+        e.to_string().contains("byte 80") && e.to_string().contains("20 more bytes"),
         "{e}"
     );
     let huge = RawSpec {

@@ -315,6 +315,24 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
                     limit: len.saturating_sub(start),
                 });
             }
+            // More bytes than the header accounts for: its sizes or type do
+            // not describe this file (compressed streams are checked alike).
+            let end = start + per_bytes;
+            if len > end {
+                return Err(Error::format(
+                    &piece.path,
+                    Position::Byte(end),
+                    format!(
+                        "the end of the file after {per} samples of {} ({per_bytes} bytes \
+                         from byte {start})",
+                        p.ty.name()
+                    ),
+                    format!(
+                        "{} more bytes (do the header's sizes, type and byte skip match the data?)",
+                        len - end
+                    ),
+                ));
+            }
             starts.push(start);
         }
         data = empty(p.ty, n);

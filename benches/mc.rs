@@ -10,7 +10,9 @@
 //! readbacks): the kernels themselves, next to `gpu_end_to_end`.
 //!
 //! `forest/*` times [`Forest::build`] alone (the tree that
-//! `marching_cubes` builds beside the group figures).
+//! `marching_cubes` builds beside the group figures), and
+//! `vertex_components/*` the grouping that finishes the GPU path on the
+//! host (vertex-connected components of the triangles).
 //!
 //! `CHISEL_BENCH_QUICK=1`: few samples, phantoms of 64³/128³ (CI smoke run).
 
@@ -18,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use chisel::Backend;
 use chisel::gpu::Gpu;
-use chisel::surface::tree::LEAF_BLOCK;
+use chisel::surface::tree::{LEAF_BLOCK, vertex_components};
 use chisel::surface::{Field, Forest, IsoSpec, McOptions, Surface, gpu, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
@@ -118,6 +120,9 @@ fn main() {
             } else {
                 eprintln!("mc/{name}: forest skipped (leaf keys differ from marching_cubes')");
             }
+            group.bench_function(format!("vertex_components/{name}"), |b| {
+                b.iter(|| vertex_components(s.mesh.n_vertices(), &s.mesh.triangles))
+            });
         }
         if software && voxels > 1 << 22 {
             eprintln!("mc/{name}: gpu skipped on a software adapter");

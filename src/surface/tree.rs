@@ -12,10 +12,11 @@
 //! blocks of [`LEAF_BLOCK`]³ cells; any other mesh (a file, a triangulated
 //! knife) gets a virtual grid over its bounding box.
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
-use super::cpu::UnionFind;
 use crate::TriMesh;
 
 /// Edge of a leaf block in marching-cubes cells. The seed's leaf is one
@@ -763,24 +764,187 @@ fn layer_runs(order: &[u32], group_starts: &[u32], cells: &[u32], layer: usize) 
 /// Vertex-connected components of triangles: per-triangle group ids
 /// numbered by first triangle, and their count (the same joining rule as
 /// the one-pass grouping of marching cubes).
+///
+/// In parallel, with the same result on any number of threads: a
+/// concurrent union-find links a root only by compare-and-swap of the
+/// larger-index root under the smaller, so every component ends up rooted
+/// at its smallest vertex whatever the schedule; then each root's first
+/// triangle is found (atomic minimum) and the groups are numbered in the
+/// order of those first triangles (a chunked prefix count).
 pub fn vertex_components(n_vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
-    let mut uf = UnionFind::with_len(n_vertices);
-    for t in triangles {
-        uf.union(t[0], t[1]);
-        uf.union(t[0], t[2]);
-    }
-    let mut canonical = vec![u32::MAX; n_vertices];
-    let mut n = 0usize;
-    let groups = triangles
-        .iter()
-        .map(|t| {
-            let r = uf.find(t[0]) as usize;
-            if canonical[r] == u32::MAX {
-                canonical[r] = n as u32;
-                n += 1;
-            }
-            canonical[r]
+    let parent: Vec<AtomicU32> = (0..n_vertices as u32)
+        .into_par_iter()
+        .map(AtomicU32::new)
+        .collect();
+    triangles.par_iter().with_min_len(1 << 12).for_each(|t| {
+        link(&parent, t[0], t[1]);
+        link(&parent, t[0], t[2]);
+    });
+    let roots: Vec<u32> = (triangles.par_iter().with_min_len(1 << 12))
+        .map(|t| root(&parent, t[0]))
+        .collect();
+    // First triangle of each root (u32::MAX: not a root of any triangle).
+    let first = parent;
+    first
+        .par_iter()
+        .for_each(|f| f.store(u32::MAX, Ordering::Relaxed));
+    // Within a task triangles ascend, so after a root's first one there the
+    // plain load already says "not smaller" (few read-modify-writes).
+    (roots.par_iter().enumerate().with_min_len(1 << 12)).for_each(|(t, &r)| {
+        let f = &first[r as usize];
+        if f.load(Ordering::Relaxed) > t as u32 {
+            f.fetch_min(t as u32, Ordering::Relaxed);
+        }
+    });
+    let is_first = |t: usize, r: u32| first[r as usize].load(Ordering::Relaxed) == t as u32;
+    const CHUNK: usize = 1 << 14;
+    let counts: Vec<u32> = roots
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(c, rs)| {
+            (rs.iter().enumerate())
+                .filter(|&(i, &r)| is_first(c * CHUNK + i, r))
+                .count() as u32
         })
         .collect();
-    (groups, n)
+    let mut n_groups = 0u32;
+    let starts: Vec<u32> = counts
+        .iter()
+        .map(|&n| {
+            n_groups += n;
+            n_groups - n
+        })
+        .collect();
+    // Group id of each root, set by its first triangle (one writer each).
+    let id: Vec<AtomicU32> = (0..n_vertices)
+        .into_par_iter()
+        .map(|_| AtomicU32::new(u32::MAX))
+        .collect();
+    roots
+        .par_chunks(CHUNK)
+        .zip(&starts)
+        .enumerate()
+        .for_each(|(c, (rs, &start))| {
+            let mut next = start;
+            for (i, &r) in rs.iter().enumerate() {
+                if is_first(c * CHUNK + i, r) {
+                    id[r as usize].store(next, Ordering::Relaxed);
+                    next += 1;
+                }
+            }
+        });
+    let groups = (roots.par_iter().with_min_len(1 << 12))
+        .map(|&r| id[r as usize].load(Ordering::Relaxed))
+        .collect();
+    (groups, n_groups as usize)
+}
+
+/// Root of `x` in the concurrent union-find `parent`, halving the path:
+/// each step points a non-root at its grandparent with a plain store. Only
+/// roots are ever linked (by [`link`]'s compare-and-swap), and an ancestor
+/// stays an ancestor, so a store racing another halving or a link still
+/// leaves every node under an ancestor.
+fn root(parent: &[AtomicU32], mut x: u32) -> u32 {
+    loop {
+        let p = parent[x as usize].load(Ordering::Acquire);
+        if p == x {
+            return x;
+        }
+        let g = parent[p as usize].load(Ordering::Acquire);
+        if g != p {
+            parent[x as usize].store(g, Ordering::Release);
+        }
+        x = g;
+    }
+}
+
+/// Joins the sets of `a` and `b`: the larger root is linked under the
+/// smaller one only while it is still a root (compare-and-swap), else the
+/// roots are looked up again. Roots are always their set's smallest index.
+fn link(parent: &[AtomicU32], a: u32, b: u32) {
+    loop {
+        let (ra, rb) = (root(parent, a), root(parent, b));
+        if ra == rb {
+            return;
+        }
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        if parent[hi as usize]
+            .compare_exchange(hi, lo, Ordering::AcqRel, Ordering::Acquire)
+            .is_ok()
+        {
+            return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::cpu::UnionFind;
+
+    /// The serial definition: union-find, groups numbered by first triangle.
+    fn reference(n_vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
+        let mut uf = UnionFind::with_len(n_vertices);
+        for t in triangles {
+            uf.union(t[0], t[1]);
+            uf.union(t[0], t[2]);
+        }
+        let mut id = vec![u32::MAX; n_vertices];
+        let mut n = 0;
+        let groups = triangles
+            .iter()
+            .map(|t| {
+                let r = uf.find(t[0]) as usize;
+                if id[r] == u32::MAX {
+                    id[r] = n;
+                    n += 1;
+                }
+                id[r]
+            })
+            .collect();
+        (groups, n as usize)
+    }
+
+    #[test]
+    fn vertex_components_numbers_groups_by_first_triangle() {
+        let tris = [[5, 4, 3], [0, 1, 2], [2, 6, 7], [8, 9, 3], [10, 11, 12]];
+        assert_eq!(vertex_components(13, &tris), (vec![0, 1, 1, 0, 2], 3));
+        assert_eq!(vertex_components(4, &[]), (vec![], 0));
+    }
+
+    #[test]
+    fn vertex_components_equal_the_serial_union_find_on_any_pool() {
+        // Random triangles over few vertices (long chains, many unions per
+        // root) and over many (thousands of small groups).
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % u64::from(n)) as u32
+        };
+        for (n_vertices, n_triangles, spread) in [(60_000, 40_000, 60_000), (300_000, 150_000, 40)]
+        {
+            let tris: Vec<[u32; 3]> = (0..n_triangles)
+                .map(|_| {
+                    let a = next(n_vertices);
+                    [
+                        a,
+                        (a + next(spread)) % n_vertices,
+                        (a + next(spread)) % n_vertices,
+                    ]
+                })
+                .collect();
+            let want = reference(n_vertices as usize, &tris);
+            assert!(want.1 > 10, "{} groups", want.1);
+            for threads in [1, 2, 8] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let got = pool.install(|| vertex_components(n_vertices as usize, &tris));
+                assert_eq!(got, want, "{threads} threads");
+            }
+        }
+    }
 }

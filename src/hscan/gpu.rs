@@ -188,9 +188,8 @@ pub struct HullScanInput {
     faces: GpuArray<GpuFace>,
     n_faces: u32,
     bbox: VoxelBox,
-    /// With [`HullScanInput::culled`]: per z layer of the box, the
-    /// inclusive range of local layers each face meets (`None`: none), and
-    /// whether the polytope misses the layer.
+    /// With [`HullScanInput::culled`]: the local z layers each face meets,
+    /// and the layers the polytope misses.
     culling: Option<Culling>,
 }
 

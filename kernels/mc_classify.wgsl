@@ -1,6 +1,8 @@
 // mc_classify: marching-cubes classification — per sample point, how many
 // vertices (crossing +x/+y/+z grid edges) and triangles (table entry of the
-// cell whose origin it is) it produces; one sum per workgroup block.
+// cell whose origin it is) it produces; one sum per workgroup block (added
+// up by workgroup atomics from the few points that produce anything: one
+// barrier, where a tree reduction takes eight).
 //
 // Dispatch: one invocation per point of `n_layers` point layers starting at
 // global layer `z_begin`; each layer is cut into `blocks_per_layer` blocks
@@ -35,15 +37,15 @@ const WG_SIZE: u32 = 256u;
 @group(0) @binding(2) var<storage, read> table: array<u32>;
 @group(0) @binding(3) var<storage, read_write> block_counts: array<vec2<u32>>;
 
-var<workgroup> sh_v: array<u32, 256>;
-var<workgroup> sh_t: array<u32, 256>;
+// Block sums (vertices, triangles); workgroup memory starts zeroed.
+var<workgroup> sh_sum: array<atomic<u32>, 2>;
 
 fn inside(x: u32, y: u32, z: u32) -> u32 {
     let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
     return select(0u, 1u, v >= params.level);
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
@@ -70,17 +72,14 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
             nt = table[case_ix + 1u] - table[case_ix];
         }
     }
-    sh_v[lid.x] = nv;
-    sh_t[lid.x] = nt;
-    workgroupBarrier();
-    for (var stride = WG_SIZE / 2u; stride > 0u; stride >>= 1u) {
-        if lid.x < stride {
-            sh_v[lid.x] += sh_v[lid.x + stride];
-            sh_t[lid.x] += sh_t[lid.x + stride];
-        }
-        workgroupBarrier();
+    if nv != 0u {
+        atomicAdd(&sh_sum[0], nv);
     }
+    if nt != 0u {
+        atomicAdd(&sh_sum[1], nt);
+    }
+    workgroupBarrier();
     if lid.x == 0u && layer < params.n_layers {
-        block_counts[w] = vec2<u32>(sh_v[0], sh_t[0]);
+        block_counts[w] = vec2<u32>(atomicLoad(&sh_sum[0]), atomicLoad(&sh_sum[1]));
     }
 }

@@ -10,7 +10,9 @@
 //   params:        grid dims, slab position, level, t_start (see Params)
 //   samples:       f32 samples of global layers z_first..
 //   table:         257 case offsets, then 3 local edges per triangle
-//   block_offsets: per block, exclusive scan of mc_classify's triangle counts
+//   block_offsets: per block and one more, exclusive scan of mc_classify's
+//                  triangle counts (block w holds the difference of
+//                  entries w + 1 and w)
 //   vert_base:     first vertex id of each point of global layers
 //                  vb_first.. (mc_vertices output)
 //   triangles:     vec4<u32> out: xyz = vertex ids, w = linear cell index
@@ -18,6 +20,8 @@
 // Vertex of local edge e: owner point o (EDGE_OWNER[e] offset), axis e / 4,
 // id = vert_base[o] + number of crossing edges of o with a smaller axis.
 // Mirror: surface::cpu::emit_cells.
+
+#import block_scan
 
 struct Params {
     nx: u32,
@@ -32,7 +36,7 @@ struct Params {
     level: f32,
 }
 
-const WG_SIZE: u32 = 256u;
+const WG_SIZE: u32 = SCAN_WG;
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> samples: array<f32>;
@@ -41,7 +45,8 @@ const WG_SIZE: u32 = 256u;
 @group(0) @binding(4) var<storage, read> vert_base: array<u32>;
 @group(0) @binding(5) var<storage, read_write> triangles: array<vec4<u32>>;
 
-var<workgroup> sh_scan: array<u32, 256>;
+// The block's count (from block_offsets), read by all as a uniform value.
+var<workgroup> sh_count: u32;
 
 fn inside(x: u32, y: u32, z: u32) -> u32 {
     let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
@@ -62,7 +67,7 @@ fn vertex(o: vec3<u32>, axis: u32) -> u32 {
     return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.nx + o.x] + rank;
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
@@ -70,6 +75,13 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let w = wid.x + wid.y * n_groups.x;
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
+    // A block without a triangle writes nothing.
+    if lid.x == 0u && layer < params.n_layers {
+        sh_count = block_offsets[w + 1u] - block_offsets[w];
+    }
+    if workgroupUniformLoad(&sh_count) == 0u {
+        return;
+    }
     let n_layer = params.nx * params.ny;
     let x = q % params.nx;
     let y = q / params.nx;
@@ -84,21 +96,11 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         }
         nt = table[case_ix + 1u] - table[case_ix];
     }
-    sh_scan[lid.x] = nt;
-    workgroupBarrier();
-    for (var stride = 1u; stride < WG_SIZE; stride <<= 1u) {
-        var add = 0u;
-        if lid.x >= stride {
-            add = sh_scan[lid.x - stride];
-        }
-        workgroupBarrier();
-        sh_scan[lid.x] += add;
-        workgroupBarrier();
-    }
+    let inclusive = block_scan(lid.x, nt);
     if nt == 0u {
         return;
     }
-    let out0 = block_offsets[w] + sh_scan[lid.x] - nt - params.t_start;
+    let out0 = block_offsets[w] + inclusive - nt - params.t_start;
     let cell = x + (params.nx - 1u) * (y + (params.ny - 1u) * z);
     let first = table[case_ix];
     for (var k = 0u; k < nt; k++) {

@@ -9,8 +9,9 @@
 // Buffers:
 //   params:        grid dims, slab position, level, v_start (see Params)
 //   samples:       f32 samples of global layers z_first.. (nx·ny per layer)
-//   block_offsets: per block, exclusive scan of mc_classify's vertex counts
-//                  over the whole grid (host scan)
+//   block_offsets: per block and one more, exclusive scan of mc_classify's
+//                  vertex counts over the whole grid (host scan), so block
+//                  w holds block_offsets[w + 1] − block_offsets[w] vertices
 //   vert_base:     n_layers·nx·ny u32 out, first vertex id of each point
 //   positions:     vec4<f32> out for the first `n_owned` layers:
 //                  xyz = position in grid index space, w = bitcast edge id
@@ -20,6 +21,8 @@
 //   p + e_axis; u[axis] = f32(p[axis]) + t. T_MIN = 2⁻¹⁰ keeps vertices
 //   inside their edges (no zero-area triangles; surface::cpu::T_MIN).
 // Mirror: surface::cpu::number_points.
+
+#import block_scan
 
 struct Params {
     nx: u32,
@@ -34,7 +37,7 @@ struct Params {
     level: f32,
 }
 
-const WG_SIZE: u32 = 256u;
+const WG_SIZE: u32 = SCAN_WG;
 const T_MIN: f32 = 0.0009765625;
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -43,19 +46,28 @@ const T_MIN: f32 = 0.0009765625;
 @group(0) @binding(3) var<storage, read_write> vert_base: array<u32>;
 @group(0) @binding(4) var<storage, read_write> positions: array<vec4<f32>>;
 
-var<workgroup> sh_scan: array<u32, 256>;
+// The block's count (from block_offsets), read by all as a uniform value.
+var<workgroup> sh_count: u32;
 
 fn sample(x: u32, y: u32, z: u32) -> f32 {
     return samples[x + params.nx * (y + params.ny * (z - params.z_first))];
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     let w = wid.x + wid.y * n_groups.x;
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
+    // A block without a vertex writes nothing (no triangle refers to a
+    // point without a crossing edge, so its vert_base is never read).
+    if lid.x == 0u && layer < params.n_layers {
+        sh_count = block_offsets[w + 1u] - block_offsets[w];
+    }
+    if workgroupUniformLoad(&sh_count) == 0u {
+        return;
+    }
     let n_layer = params.nx * params.ny;
     let in_range = layer < params.n_layers && q < n_layer;
     let x = q % params.nx;
@@ -82,22 +94,11 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         }
     }
     let nv = countOneBits(crossing);
-    // Hillis–Steele inclusive scan over the block.
-    sh_scan[lid.x] = nv;
-    workgroupBarrier();
-    for (var stride = 1u; stride < WG_SIZE; stride <<= 1u) {
-        var add = 0u;
-        if lid.x >= stride {
-            add = sh_scan[lid.x - stride];
-        }
-        workgroupBarrier();
-        sh_scan[lid.x] += add;
-        workgroupBarrier();
-    }
+    let inclusive = block_scan(lid.x, nv);
     if !in_range {
         return;
     }
-    let base = block_offsets[w] + sh_scan[lid.x] - nv;
+    let base = block_offsets[w] + inclusive - nv;
     vert_base[layer * n_layer + q] = base;
     if layer >= params.n_owned {
         return;

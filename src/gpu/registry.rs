@@ -118,6 +118,10 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../kernels/shared/hull_face.wgsl"),
     ),
     ("i32x2", include_str!("../../kernels/shared/i32x2.wgsl")),
+    (
+        "block_scan",
+        include_str!("../../kernels/shared/block_scan.wgsl"),
+    ),
 ];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`

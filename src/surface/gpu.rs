@@ -294,7 +294,8 @@ fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<G
     GpuArray::from_slice(gpu, "mc.samples", &data)
 }
 
-/// Exclusive scan in u32; errors when the total overflows.
+/// Exclusive scan in u32 with the total appended (one entry more than
+/// `values`); errors when the total overflows.
 fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<(Vec<u32>, u32)> {
     let mut sum = 0u32;
     let mut out = Vec::new();
@@ -304,6 +305,7 @@ fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<(Vec<u32>, u32)> 
             Error::InvalidInput("marching cubes: more than 2^32 vertices or triangles".into())
         })?;
     }
+    out.push(sum);
     Ok((out, sum))
 }
 
@@ -406,15 +408,17 @@ fn emit(
     let mut slot = None;
     let samples = Samples::get(resident, &mut slot, gpu, field, a, (b + 2).min(nz))?;
     let layer = (dims[0] * dims[1]) as usize;
+    // Each slab's offsets and the next one (the kernels take a block's
+    // count as the difference).
     let offsets_v = GpuArray::from_slice(
         gpu,
         "mc_vertices.block_offsets",
-        &off_v[a * bpl..(a + vb_layers) * bpl],
+        &off_v[a * bpl..=(a + vb_layers) * bpl],
     )?;
     let offsets_t = GpuArray::from_slice(
         gpu,
         "mc_triangles.block_offsets",
-        &off_t[a * bpl..(a + cell_layers.max(1)) * bpl],
+        &off_t[a * bpl..=(a + cell_layers.max(1)) * bpl],
     )?;
     let vert_base = GpuArray::<u32>::zeroed(gpu, "mc_vertices.vert_base", vb_layers * layer)?;
     let positions = GpuArray::filled(gpu, "mc_vertices.positions", slab.n_v, [f32::NAN; 4])?;

@@ -7,7 +7,8 @@
 //!
 //! `gpu_kernels` (printed, median of 5 runs) is the three kernels' time on
 //! the GPU clock (timestamp queries; samples resident, no uploads or
-//! readbacks): the kernels themselves, next to `gpu_end_to_end`.
+//! readbacks), in total and per kernel: the kernels themselves, next to
+//! `gpu_end_to_end`.
 //!
 //! `forest/*` times [`Forest::build`] alone (the tree that
 //! `marching_cubes` builds beside the group figures), and
@@ -146,15 +147,20 @@ fn main() {
             // every few milliseconds of kernel time).
             if let Ok(field) = Field::new(vol, iso, opts.close_border) {
                 let runs = if quick() { 3 } else { 5 };
-                let mut k: Vec<f64> = (0..runs)
+                let mut k: Vec<[f64; 3]> = (0..runs)
                     .filter_map(|_| gpu::marching_cubes_raw(g, &field).ok()?.kernel_seconds)
                     .collect();
-                k.sort_by(f64::total_cmp);
-                if let Some(&k) = k.get(k.len() / 2) {
+                k.sort_by(|a, b| a.iter().sum::<f64>().total_cmp(&b.iter().sum()));
+                if let Some(&[c, v, t]) = k.get(k.len() / 2) {
+                    let total = c + v + t;
                     eprintln!(
-                        "mc/{name}: gpu_kernels {:.3} ms = {:.1} M voxels/s (GPU clock, median of {runs})",
-                        k * 1e3,
-                        voxels as f64 / k / 1e6
+                        "mc/{name}: gpu_kernels {:.3} ms = {:.1} M voxels/s (GPU clock, median of \
+                         {runs}): classify {:.3}, vertices {:.3}, triangles {:.3} ms",
+                        total * 1e3,
+                        voxels as f64 / total / 1e6,
+                        c * 1e3,
+                        v * 1e3,
+                        t * 1e3
                     );
                 }
             }

@@ -7,7 +7,7 @@
 //! pass 1: timestamp_writes: timer.as_ref().map(|t| t.writes(1))
 //! let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
 //! gpu.submit_and_wait(encoder)?;
-//! let seconds = times.map(|t| t.finish(gpu)).transpose()?;  // Σ (end − begin)
+//! let seconds = times.map(|t| t.finish(gpu)).transpose()?;  // per pass: end − begin
 //! ```
 
 use super::{Gpu, GpuArray, Staged};
@@ -71,11 +71,13 @@ impl PassTimer {
 }
 
 impl PassTimes {
-    /// Seconds of all timed passes together on the GPU clock, Σ (end − begin).
-    pub fn finish(self, gpu: &Gpu) -> Result<f64> {
+    /// Seconds of each timed pass on the GPU clock (end − begin), in pass
+    /// order.
+    pub fn finish(self, gpu: &Gpu) -> Result<Vec<f64>> {
         let t = self.ticks.finish(gpu)?;
         let period = f64::from(gpu.queue.get_timestamp_period());
-        let ticks: u64 = t.chunks(2).map(|p| p[1].saturating_sub(p[0])).sum();
-        Ok(ticks as f64 * period * 1e-9)
+        Ok(t.chunks(2)
+            .map(|p| p[1].saturating_sub(p[0]) as f64 * period * 1e-9)
+            .collect())
     }
 }

@@ -93,10 +93,10 @@ pub struct GpuRaw {
     pub positions: Vec<[f32; 4]>,
     /// #F `[v0, v1, v2, cell]`.
     pub triangles: Vec<[u32; 4]>,
-    /// GPU-clock seconds of the three kernels over all slabs (timestamp
-    /// queries; `None` when the device has none). Excludes uploads,
-    /// readbacks and the host scan.
-    pub kernel_seconds: Option<f64>,
+    /// GPU-clock seconds of `mc_classify`, `mc_vertices` and
+    /// `mc_triangles`, each over all slabs (timestamp queries; `None` when
+    /// the device has none). Excludes uploads, readbacks and the host scan.
+    pub kernel_seconds: Option<[f64; 3]>,
 }
 
 /// Marching cubes of `field` on the GPU, grouping finished on the host.
@@ -160,10 +160,13 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     } else {
         None
     };
-    let mut kernel_seconds = gpu.features.timestamps.then_some(0.0);
-    let mut add_time = |t: Option<f64>| {
-        if let (Some(sum), Some(t)) = (kernel_seconds.as_mut(), t) {
-            *sum += t;
+    let mut kernel_seconds = gpu.features.timestamps.then_some([0.0; 3]);
+    // Pass times of kernels `first..`, added to their sums.
+    let mut add_time = |first: usize, t: Option<Vec<f64>>| {
+        if let (Some(sums), Some(t)) = (kernel_seconds.as_mut(), t) {
+            for (sum, t) in sums[first..].iter_mut().zip(t) {
+                *sum += t;
+            }
         }
     };
 
@@ -176,7 +179,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 1).min(nz))?;
         let (c, t) = classify(gpu, &table, samples, dims, a, b - a, bpl, field.level)?;
         counts.extend(c);
-        add_time(t);
+        add_time(0, t);
         a = b;
     }
 
@@ -237,7 +240,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         )?;
         out.positions.extend(p);
         out.triangles.extend(t);
-        add_time(seconds);
+        add_time(1, seconds);
         a = b;
     }
     out.kernel_seconds = kernel_seconds;
@@ -322,7 +325,7 @@ fn classify(
     n_layers: usize,
     bpl: usize,
     level: f32,
-) -> Result<(Vec<[u32; 2]>, Option<f64>)> {
+) -> Result<(Vec<[u32; 2]>, PassSeconds)> {
     let kernel = Kernel::McClassify;
     let n_blocks = n_layers * bpl;
     let params = UniformBuffer::new(
@@ -383,8 +386,11 @@ fn sentinel(kernel: Kernel, index: usize) -> Error {
     }
 }
 
-/// Positions, triangles and the kernels' GPU seconds of one slab.
-type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, Option<f64>);
+/// GPU seconds of each pass of one submission (with timestamp queries).
+type PassSeconds = Option<Vec<f64>>;
+
+/// Positions, triangles and the two kernels' GPU seconds of one slab.
+type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, PassSeconds);
 
 #[expect(
     clippy::too_many_arguments,

@@ -291,7 +291,8 @@ fn check_culled(
 type HullCase = (String, Vec<HalfSpace>, Vec<[i64; 2]>, VoxelBox);
 
 /// Exact hulls of random lattice points (some flat) with their faces' z
-/// ranges, in boxes reaching beyond them on every side.
+/// ranges, in boxes reaching past them in x, y and at the top, and past or
+/// into them at the bottom (layers the hull misses, layers it fills).
 fn hull_cases() -> Vec<HullCase> {
     let mut rng = Rng::new(77);
     let mut cases = Vec::new();

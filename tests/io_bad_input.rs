@@ -454,6 +454,15 @@ fn nrrd_bad_inputs() {
     // Oversized: data past what the header describes, at its first byte.
     let m = expect("l.nrrd", &nrrd(U8_444, &[1; 65]), Kind::Format, "byte 126");
     assert!(m.contains("1 more bytes"), "{m}");
+    // ... unless a byte skip picks the samples out of a larger file.
+    let dir = tempfile::tempdir().unwrap();
+    put(dir.path(), "big.raw", &[7u8; 100]);
+    let p = put(
+        dir.path(),
+        "k.nhdr",
+        &nrrd(&format!("{U8_444}byte skip: 8\ndata file: big.raw\n"), &[]),
+    );
+    assert_eq!(read_volume(&p).unwrap().len(), 64);
     let huge =
         "type: float\ndimension: 3\nsizes: 100000 100000 100000\nendian: little\nencoding: raw\n";
     expect("h.nrrd", &nrrd(huge, &[0; 8]), Kind::Size, "line 4");
@@ -762,6 +771,13 @@ fn raw_bad_inputs() {
         e.to_string().contains("byte 80") && e.to_string().contains("20 more bytes"),
         "{e}"
     );
+    // A header skip picks a region of a larger file: bytes after it are fine.
+    let region = RawSpec {
+        dims: [4, 4, 5],
+        header_bytes: 4,
+        ..spec.clone()
+    };
+    assert_eq!(read_raw_volume(&path, &region).unwrap().len(), 80);
     let huge = RawSpec {
         dims: [usize::MAX, 2, 2],
         ..spec.clone()

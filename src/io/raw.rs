@@ -36,8 +36,9 @@ pub struct RawSpec {
     pub header_bytes: u64,
 }
 
-/// Reads `nx·ny·nz` samples at `spec.header_bytes` of `path`; the file must
-/// hold at least that many bytes after the header (extra bytes are ignored).
+/// Reads `nx·ny·nz` samples at `spec.header_bytes` of `path`. Without
+/// header bytes the file must hold exactly the samples; with them it holds
+/// at least that many bytes after the skip (a region of a larger file).
 pub fn read_raw_volume(path: &Path, spec: &RawSpec) -> Result<Volume> {
     let data = read_samples(&Payload {
         header: path,
@@ -315,10 +316,12 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
                     limit: len.saturating_sub(start),
                 });
             }
-            // More bytes than the header accounts for: its sizes or type do
-            // not describe this file (compressed streams are checked alike).
+            // More bytes than the header accounts for, where no skip picks a
+            // region of a larger file: its sizes or type do not describe
+            // this file (compressed streams are checked alike).
             let end = start + per_bytes;
-            if len > end {
+            let region = piece.line_skip > 0 || matches!(piece.skip, Skip::Bytes(b) if b > 0);
+            if len > end && !region {
                 return Err(Error::format(
                     &piece.path,
                     Position::Byte(end),

@@ -184,8 +184,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     }
 
     // Host exclusive scan of the block sums.
-    let (off_v, total_v) = exclusive_scan(counts.iter().map(|c| c[0]))?;
-    let (off_t, total_t) = exclusive_scan(counts.iter().map(|c| c[1]))?;
+    let off_v = exclusive_scan(counts.iter().map(|c| c[0]))?;
+    let off_t = exclusive_scan(counts.iter().map(|c| c[1]))?;
     let per_layer = |z: usize, k: usize| -> u64 {
         counts[z * bpl..(z + 1) * bpl]
             .iter()
@@ -197,8 +197,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
 
     // Pass 2: emission slabs [a, b) of point layers.
     let mut out = GpuRaw {
-        positions: Vec::with_capacity(total_v as usize),
-        triangles: Vec::with_capacity(total_t as usize),
+        positions: Vec::with_capacity(off_v[nz * bpl] as usize),
+        triangles: Vec::with_capacity(off_t[nz * bpl] as usize),
         kernel_seconds: None,
     };
     let fits = |a: usize, b: usize| -> bool {
@@ -299,7 +299,7 @@ fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<G
 
 /// Exclusive scan in u32 with the total appended (one entry more than
 /// `values`); errors when the total overflows.
-fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<(Vec<u32>, u32)> {
+fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<Vec<u32>> {
     let mut sum = 0u32;
     let mut out = Vec::new();
     for v in values {
@@ -309,7 +309,7 @@ fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<(Vec<u32>, u32)> 
         })?;
     }
     out.push(sum);
-    Ok((out, sum))
+    Ok(out)
 }
 
 #[expect(

@@ -570,17 +570,8 @@ proptest! {
 fn culling_with_wrong_ranges_is_detected() {
     // Negative control: the cube's +x face said to span one layer only is
     // missing from the other layers, whose rows then run to the box's end.
-    let points: Vec<[i64; 3]> = (0..8)
-        .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { 9 } else { 1 }))
-        .collect();
-    let hull = chisel::hull::ConvexHull::build(&points, Default::default()).unwrap();
-    let faces: Vec<HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
-    let bbox = VoxelBox {
-        origin: [0; 3],
-        dims: [6; 3],
-    };
+    let (faces, mut extents, bbox) = hscan_fixtures::cube_hull();
     let full = cpu::hull_rows(&faces, &bbox);
-    let mut extents = hull.face_z_extents();
     assert_eq!(cpu::hull_rows_culled(&faces, &extents, &bbox), full);
     let side = faces.iter().position(|f| f.normal == [1, 0, 0]).unwrap();
     extents[side] = [9, 9];

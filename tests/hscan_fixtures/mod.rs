@@ -308,3 +308,20 @@ pub fn digital_ball(n: usize, r: i64) -> (Vec<bool>, VoxelBox) {
     }
     (obj, bbox)
 }
+
+/// The exact hull of the cube with corners at combinatorial 1 and 9: its
+/// half-spaces, their faces' z ranges (`ConvexHull::face_z_extents`), and
+/// the 6³ voxel box at the origin around it — the culling negative
+/// controls' case.
+pub fn cube_hull() -> (Vec<HalfSpace>, Vec<[i64; 2]>, VoxelBox) {
+    let points: Vec<[i64; 3]> = (0..8)
+        .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { 9 } else { 1 }))
+        .collect();
+    let hull = chisel::hull::ConvexHull::build(&points, Default::default()).unwrap();
+    let faces = hull.half_spaces().into_iter().map(Into::into).collect();
+    let bbox = VoxelBox {
+        origin: [0; 3],
+        dims: [6; 3],
+    };
+    (faces, hull.face_z_extents(), bbox)
+}

@@ -381,16 +381,7 @@ fn culled_rows_negative_control() {
     // The cube's +x face said to span one layer only is missing from the
     // other layers' lists, whose rows then run to the box's end: the GPU
     // agrees with the CPU on those wrong spans, so the lists are read.
-    let points: Vec<[i64; 3]> = (0..8)
-        .map(|k| std::array::from_fn(|a| if k >> a & 1 == 1 { 9 } else { 1 }))
-        .collect();
-    let hull = ConvexHull::build(&points, Default::default()).unwrap();
-    let faces: Vec<HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
-    let bbox = VoxelBox {
-        origin: [0; 3],
-        dims: [6; 3],
-    };
-    let mut extents = hull.face_z_extents();
+    let (faces, mut extents, bbox) = hscan_fixtures::cube_hull();
     let side = faces.iter().position(|f| f.normal == [1, 0, 0]).unwrap();
     extents[side] = [9, 9];
     let Some(gpus) = devices(None) else { return };

@@ -261,11 +261,134 @@ fn cylinders_torus_and_dent_split_into_convex_faces() {
     }
 }
 
+/// Planes `(normal, offset)` with canonical sign: first non-zero normal
+/// component positive.
+type Planes = std::collections::HashSet<([i64; 3], i64)>;
+
+/// Per 3-D shell, its depth and the unoriented planes of its hull's faces.
+fn shell_planes(p: &Polyhedron) -> Vec<(u32, Planes)> {
+    let canon = |n: [i64; 3], d: i64| {
+        let s = if n.iter().find(|&&c| c != 0).is_some_and(|&c| c > 0) {
+            1
+        } else {
+            -1
+        };
+        (n.map(|c| c * s), d * s)
+    };
+    (p.shells.iter())
+        .filter_map(|s| {
+            let h = s.geometry.polytope().filter(|h| !h.is_planar())?;
+            let planes = (h.faces().iter())
+                .map(|f| canon(f.plane.normal, f.plane.offset))
+                .collect();
+            Some((s.depth, planes))
+        })
+        .collect()
+}
+
+/// Checks `face_depth` and `triangle_faces` against the shells: every
+/// triangle lies on its face's plane, and a face's depth is that of a
+/// shell with a hull face on the same plane.
+fn assert_face_depths(p: &Polyhedron, m: &MergedSurface, what: &str) {
+    assert_eq!(m.face_depth.len(), m.faces.len(), "{what}");
+    assert_eq!(m.triangle_faces.len(), m.triangles.len(), "{what}");
+    for (t, &f) in m.triangles.iter().zip(&m.triangle_faces) {
+        let face = &m.faces[f as usize];
+        for &v in t {
+            let q = m.vertices[v as usize];
+            let dot: i64 = (0..3).map(|k| face.normal[k] * q[k]).sum();
+            assert_eq!(dot, face.offset, "{what}: triangle {t:?} off face {f}");
+        }
+    }
+    let planes = shell_planes(p);
+    for (f, face) in m.faces.iter().enumerate() {
+        let s = if face
+            .normal
+            .iter()
+            .find(|&&c| c != 0)
+            .is_some_and(|&c| c > 0)
+        {
+            1
+        } else {
+            -1
+        };
+        let key = (face.normal.map(|c| c * s), face.offset * s);
+        let depth = m.face_depth[f];
+        assert!(
+            planes
+                .iter()
+                .any(|(d, ps)| *d == depth && ps.contains(&key)),
+            "{what}: face {f} has depth {depth} but no shell of that depth has a face on its plane"
+        );
+    }
+}
+
+#[test]
+fn merged_faces_carry_the_depth_of_the_shell_covering_them() {
+    for (d_o, d_i) in [(25, 10), (50, 35)] {
+        let what = format!("cylinder {d_o}/{d_i}");
+        let o = object(&cylinder_tunnel(d_o, d_i, 15).unwrap());
+        let p = run(&o);
+        let m = p.merged_surface().unwrap();
+        assert_face_depths(&p, &m, &what);
+        // Combinatorial coordinates: the axis at the centre of the
+        // vertices' box; tunnel walls within the inner radius (d_i voxels
+        // across = d_i units of radius), outer walls at d_o.
+        let (lo, hi) = m
+            .vertices
+            .iter()
+            .fold(([i64::MAX; 2], [i64::MIN; 2]), |(lo, hi), v| {
+                (
+                    [lo[0].min(v[0]), lo[1].min(v[1])],
+                    [hi[0].max(v[0]), hi[1].max(v[1])],
+                )
+            });
+        let mid = (d_i + d_o) as i64 / 2;
+        let (mut caps_with_deep_vertices, mut tunnel_faces) = (0, 0);
+        for (f, face) in m.faces.iter().enumerate() {
+            let vs: Vec<u32> = face.loops.iter().flatten().copied().collect();
+            let depth = m.face_depth[f];
+            if face.normal[0] == 0 && face.normal[1] == 0 {
+                // A cap: the hull's ring around the tunnel, depth 0, even
+                // though its inner loop runs through the tunnel's vertices.
+                assert_eq!(depth, 0, "{what}: cap {f}");
+                caps_with_deep_vertices +=
+                    usize::from(vs.iter().any(|&v| m.vertex_depth[v as usize] == 1));
+            } else {
+                let inner = vs.iter().all(|&v| {
+                    let q = m.vertices[v as usize];
+                    let (x, y) = (2 * q[0] - lo[0] - hi[0], 2 * q[1] - lo[1] - hi[1]);
+                    x * x + y * y < 4 * mid * mid
+                });
+                assert_eq!(depth, u32::from(inner), "{what}: side face {f}");
+                tunnel_faces += usize::from(inner);
+            }
+        }
+        assert_eq!(caps_with_deep_vertices, 2, "{what}");
+        assert!(tunnel_faces >= 8, "{what}: {tunnel_faces} tunnel faces");
+        // The picture mesh: three own vertices per triangle, its face's depth.
+        let mesh = m.to_face_mesh(&p.frame).unwrap();
+        assert_eq!(mesh.positions.len(), 3 * m.triangles.len());
+        let depth = mesh.scalar("depth").unwrap();
+        for (t, &f) in m.triangle_faces.iter().enumerate() {
+            let want = m.face_depth[f as usize] as f32;
+            assert_eq!(
+                depth.values[3 * t..3 * t + 3],
+                [want; 3],
+                "{what}: triangle {t}"
+            );
+        }
+    }
+}
+
 #[test]
 fn convex_faces_of_random_carvings_and_a_cavity_tile_their_faces() {
     let o = common::carved(11, |x, y, z| [x, y, z].iter().all(|c| (5..=7).contains(c)));
-    let m = run(&o).merged_surface().unwrap();
+    let p = run(&o);
+    let m = p.merged_surface().unwrap();
     assert_convex_tiling(&m, "cube with cavity");
+    assert_face_depths(&p, &m, "cube with cavity");
+    assert_eq!(m.face_depth.iter().filter(|&&d| d == 1).count(), 6);
     // Every face of a box and of its cavity is a rectangle: one piece each.
     assert_eq!(m.n_convex_faces(), 12);
     let mut checked = 0;
@@ -273,6 +396,7 @@ fn convex_faces_of_random_carvings_and_a_cavity_tile_their_faces() {
         for (name, p) in [("recursion", run(&o)), ("balls", run_balls(&o))] {
             if let Ok(m) = p.merged_surface() {
                 assert_convex_tiling(&m, &format!("random carving {round}, {name}"));
+                assert_face_depths(&p, &m, &format!("random carving {round}, {name}"));
                 checked += 1;
             }
         }
@@ -422,6 +546,7 @@ fn real_ct_bone_convex_faces_and_ray_parity() {
     let p = run(&o);
     let m = p.merged_surface().unwrap();
     assert_convex_tiling(&m, "headsq bone");
+    assert_face_depths(&p, &m, "headsq bone");
     eprintln!(
         "headsq bone: {} merged faces ({} split), {} convex, {} triangles",
         m.n_faces(),

@@ -4,7 +4,7 @@
 //! eq. 8.2 encoding) and/or readable JSON, with a triangle mesh of the
 //! merged surface (§4.4.1; of the separate shells when siblings overlap,
 //! reported as `"mesh": "shells"` with the reason in `merge_refused`), a
-//! preview coloured by depth, `--verify` (the written cell list is
+//! preview coloured face by face by depth, `--verify` (the written cell list is
 //! read back and voxelized against S, by the nested shells and, when the
 //! merged surface exists, by ray parity, §4.4.3) and a JSON report.
 //! `--slice Z` gives the 2-D analogue (ch. 9): nested convex polygons for
@@ -64,7 +64,8 @@ pub struct Args {
     /// siblings), as the report's `mesh` field says.
     #[arg(long)]
     mesh: Option<PathBuf>,
-    /// Preview PNG of the mesh of `--mesh`, coloured by depth.
+    /// Preview PNG of the mesh of `--mesh`, flat, each face coloured by its
+    /// depth.
     #[arg(long)]
     preview: Option<PathBuf>,
     #[command(flatten)]
@@ -254,7 +255,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             facing,
             ..Default::default()
         };
-        crate::render::render_png(gpu, mesh, &opts, path)?;
+        // The merged surface drawn face by face: flat, one depth per face.
+        let faces = merged
+            .as_ref()
+            .map(|m| m.to_face_mesh(&poly.frame))
+            .transpose()?;
+        crate::render::render_png(gpu, faces.as_ref().unwrap_or(mesh), &opts, path)?;
     }
     let mc_triangles = 2 * object.n_boundary_facets();
     let value = json!({

@@ -70,6 +70,13 @@ pub struct MergedSurface {
     /// Per vertex, the smallest depth of a shell having it as a hull vertex
     /// (every merged vertex is one).
     pub vertex_depth: Vec<u32>,
+    /// Per triangle, the face it triangulates (index into
+    /// [`MergedSurface::faces`]).
+    pub triangle_faces: Vec<u32>,
+    /// Per face, the smallest depth of a shell whose faces cover it (a face
+    /// of a pressed-in shell that shares vertices with the hull keeps the
+    /// shell's depth, which per-vertex depths cannot show).
+    pub face_depth: Vec<u32>,
     /// Every face split into convex faces (Theorem KE, §4.5.6), ordered by
     /// face: starting from the face's triangles, two pieces sharing a
     /// diagonal are merged when [`theorem_ke`] says the union stays convex.
@@ -154,6 +161,28 @@ impl MergedSurface {
         mesh.validate()?;
         Ok(mesh)
     }
+
+    /// The triangles as a mesh for pictures: each with its own three
+    /// vertices and the scalar `depth` of its face
+    /// ([`MergedSurface::face_depth`]), so colours do not blend across
+    /// faces. Not welded: write [`MergedSurface::to_mesh`] instead.
+    pub fn to_face_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
+        let positions = (self.triangles.iter())
+            .flat_map(|t| t.map(|v| frame.world_f32(self.vertices[v as usize])))
+            .collect();
+        let triangles = (0..self.triangles.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        let mut mesh = TriMesh::new(positions, triangles)?;
+        mesh.scalars.push(ScalarField {
+            name: "depth".into(),
+            values: (self.triangle_faces.iter())
+                .flat_map(|&f| [self.face_depth[f as usize] as f32; 3])
+                .collect(),
+        });
+        mesh.validate()?;
+        Ok(mesh)
+    }
 }
 
 impl Polyhedron {
@@ -172,8 +201,9 @@ impl Polyhedron {
                     .into(),
             ));
         }
-        // Effective faces by canonical plane: (sign relative to it, cycle).
-        type Planes = BTreeMap<([i64; 3], i64), Vec<(i64, Vec<[i64; 3]>)>>;
+        // Effective faces by canonical plane: (sign relative to it, cycle),
+        // and the depth of the shell each comes from.
+        type Planes = BTreeMap<([i64; 3], i64), (Vec<(i64, Vec<[i64; 3]>)>, Vec<u32>)>;
         let mut planes: Planes = BTreeMap::new();
         let mut depth_of: HashMap<[i64; 3], u32> = HashMap::new();
         for s in &self.shells {
@@ -201,24 +231,31 @@ impl Polyhedron {
                 } else {
                     -1
                 };
-                planes
-                    .entry((n.map(|c| c * sigma), d * sigma))
-                    .or_default()
-                    .push((sigma, cycle));
+                let (polys, depths) = planes.entry((n.map(|c| c * sigma), d * sigma)).or_default();
+                polys.push((sigma, cycle));
+                depths.push(s.depth);
             }
         }
         let mut table = VertexTable::default();
         let mut faces = Vec::new();
-        for (&(n, d), polys) in &planes {
+        // Per face, the plane it lies in.
+        let mut plane_of = Vec::new();
+        for (&(n, d), (polys, depths)) in &planes {
             merge_plane(n, d, polys, &mut table, &mut faces)?;
+            plane_of.resize(faces.len(), (n, polys, depths));
         }
         let vertices = table.points;
         split_t_junctions(&vertices, &mut faces);
         check_closed(&faces, &vertices)?;
         let (mut triangles, mut convex_faces) = (Vec::new(), Vec::new());
+        let mut face_depth = Vec::with_capacity(faces.len());
+        let mut triangle_faces = Vec::new();
         for (fi, f) in faces.iter().enumerate() {
             let tris = triangulate(f, &vertices)?;
+            let (n, polys, depths) = plane_of[fi];
+            face_depth.push(covering_depth(n, polys, depths, &tris, &vertices));
             convex_faces.extend(convex_faces_of(fi as u32, f.normal, &tris, &vertices));
+            triangle_faces.resize(triangle_faces.len() + tris.len(), fi as u32);
             triangles.extend(tris);
         }
         let vertex_depth = vertices
@@ -230,6 +267,8 @@ impl Polyhedron {
             faces,
             triangles,
             vertex_depth,
+            triangle_faces,
+            face_depth,
             convex_faces,
         })
     }
@@ -237,6 +276,42 @@ impl Polyhedron {
 
 fn invalid(msg: String) -> crate::Error {
     crate::Error::InvalidInput(msg)
+}
+
+/// The smallest of `depths` whose convex cycle in `polys` (on the plane of
+/// canonical normal `n`, oriented by its sign) holds the centroid of the
+/// face's first triangle, boundary included: exact, on tripled
+/// coordinates. A face's triangles are non-degenerate, so the centroid is
+/// inside the face, where some contributing cycle lies (0 if none does,
+/// which a valid chain never gives).
+fn covering_depth(
+    n: [i64; 3],
+    polys: &[(i64, Vec<[i64; 3]>)],
+    depths: &[u32],
+    tris: &[[u32; 3]],
+    vertices: &[[i64; 3]],
+) -> u32 {
+    let Some(t) = tris.first() else {
+        return 0;
+    };
+    let c = t.iter().fold([0i64; 2], |acc, &v| {
+        let p = project(vertices[v as usize], n);
+        [acc[0] + p[0], acc[1] + p[1]]
+    });
+    let holds = |sigma: i64, cycle: &[[i64; 3]]| {
+        (0..cycle.len()).all(|k| {
+            let (a, b) = (
+                project(cycle[k], n).map(|x| 3 * x),
+                project(cycle[(k + 1) % cycle.len()], n).map(|x| 3 * x),
+            );
+            orient(a, b, c) * i128::from(sigma) >= 0
+        })
+    };
+    (polys.iter().zip(depths))
+        .filter(|((sigma, cycle), _)| holds(*sigma, cycle))
+        .map(|(_, &d)| d)
+        .min()
+        .unwrap_or(0)
 }
 
 /// Surface vertices, numbered in order of first use.

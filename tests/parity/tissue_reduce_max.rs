@@ -1,16 +1,19 @@
 //! Parity of `kernels/tissue_reduce_max.wgsl` with
-//! `tissue::cpu::tissue_reduce_max`.
+//! `tissue::cpu::tissue_reduce_max`, on seeded random inputs and on the
+//! states of the tissue fixtures (fran_cut included) after a bone move.
 //!
 //! Tolerance: the keys are f32 bit patterns of squared lengths; max is
 //! exact, only the rounding of one squared length may differ (FMA), so the
 //! decoded values agree within 2 ulp (rel 2.4e-7). A non-finite input must
 //! give a non-finite key on both.
 
+use chisel::Backend;
 use chisel::parity::{Tolerance, compare_f32, find_sentinel};
-use chisel::tissue::cpu;
 use chisel::tissue::gpu as tissue_gpu;
+use chisel::tissue::{RelaxOptions, cpu, iterate};
 
 use crate::common;
+use crate::spring_step::{moved_bone, networks};
 
 const TOL: Tolerance = Tolerance {
     abs: 0.0,
@@ -57,6 +60,43 @@ fn tissue_reduce_max_matches() {
         compare_f32(&what, &decode(a), &decode(b), TOL).unwrap_or_else(|m| panic!("{m}"));
         // Negative control: a key off by 8 ulp is caught.
         let bad = [b[0] + 8, b[1]];
+        assert!(compare_f32(&what, &decode(a), &decode(bad), TOL).is_err());
+    }
+}
+
+/// Real network states: on every tissue fixture (fran_cut included) after
+/// a bone move, the positions after 30 explicit iterations against those
+/// after 20 (the window change), and the last step's change as velocities.
+#[test]
+fn tissue_reduce_max_matches_on_network_states() {
+    let Some(gpu) = common::gpu() else { return };
+    let opts = RelaxOptions::default();
+    for (name, net) in networks() {
+        let bone = moved_bone(&net, 0.03);
+        let at = |n| iterate(&net, &bone, &opts, n, Backend::Cpu).unwrap();
+        let (s, p29, p) = (at(20), at(29), at(30));
+        let v: Vec<[f32; 4]> = (p.iter().zip(&p29))
+            .map(|(a, b)| {
+                [
+                    1e3 * (a[0] - b[0]),
+                    1e3 * (a[1] - b[1]),
+                    1e3 * (a[2] - b[2]),
+                    0.0,
+                ]
+            })
+            .collect();
+        let n = net.n_free;
+        let a = cpu::tissue_reduce_max(n, &v, &p, &s);
+        let b = tissue_gpu::tissue_reduce_max(gpu, &v[..n], &p[..n], &s[..n]).unwrap();
+        assert_eq!(
+            find_sentinel(&b, u32::MAX),
+            None,
+            "{name}: result not written"
+        );
+        let what = format!("tissue_reduce_max on {name}");
+        assert!(a[0] > 0 && a[1] > 0, "{what}: the network moved");
+        compare_f32(&what, &decode(a), &decode(b), TOL).unwrap_or_else(|m| panic!("{m}"));
+        let bad = [b[0], b[1] - 8];
         assert!(compare_f32(&what, &decode(a), &decode(bad), TOL).is_err());
     }
 }

@@ -73,9 +73,11 @@ pub struct MergedSurface {
     /// Per triangle, the face it triangulates (index into
     /// [`MergedSurface::faces`]).
     pub triangle_faces: Vec<u32>,
-    /// Per face, the smallest depth of a shell whose faces cover it (a face
-    /// of a pressed-in shell that shares vertices with the hull keeps the
-    /// shell's depth, which per-vertex depths cannot show).
+    /// Per face, the smallest depth of a shell with a face covering the
+    /// centroid of the face's first triangle: the depth of the shell the
+    /// face comes from, also where it shares vertices with shells of other
+    /// depths (per-vertex depths blend there). Where coplanar faces of
+    /// shells of different depths join into one face, that point decides.
     pub face_depth: Vec<u32>,
     /// Every face split into convex faces (Theorem KE, §4.5.6), ordered by
     /// face: starting from the face's triangles, two pieces sharing a

@@ -403,11 +403,9 @@ fn flat_and_degenerate_inputs() {
 
 #[test]
 fn real_ct_bone_hull() {
-    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+    let Some(o) = common::ct_bone() else {
         return;
     };
-    let o =
-        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
     let h = ConvexHull::of_object(&o, CandidateKind::Local26, HullOptions::default()).unwrap();
     eprintln!(
         "headsq ≥ 1150 largest: {} voxels, {} candidates, hull {} faces {} vertices, {:?}",

@@ -265,16 +265,18 @@ fn cylinders_torus_and_dent_split_into_convex_faces() {
 /// component positive.
 type Planes = std::collections::HashSet<([i64; 3], i64)>;
 
+/// The plane `normal · x = offset` with canonical sign.
+fn canon(n: [i64; 3], d: i64) -> ([i64; 3], i64) {
+    let s = if n.iter().find(|&&c| c != 0).is_some_and(|&c| c > 0) {
+        1
+    } else {
+        -1
+    };
+    (n.map(|c| c * s), d * s)
+}
+
 /// Per 3-D shell, its depth and the unoriented planes of its hull's faces.
 fn shell_planes(p: &Polyhedron) -> Vec<(u32, Planes)> {
-    let canon = |n: [i64; 3], d: i64| {
-        let s = if n.iter().find(|&&c| c != 0).is_some_and(|&c| c > 0) {
-            1
-        } else {
-            -1
-        };
-        (n.map(|c| c * s), d * s)
-    };
     (p.shells.iter())
         .filter_map(|s| {
             let h = s.geometry.polytope().filter(|h| !h.is_planar())?;
@@ -302,17 +304,7 @@ fn assert_face_depths(p: &Polyhedron, m: &MergedSurface, what: &str) {
     }
     let planes = shell_planes(p);
     for (f, face) in m.faces.iter().enumerate() {
-        let s = if face
-            .normal
-            .iter()
-            .find(|&&c| c != 0)
-            .is_some_and(|&c| c > 0)
-        {
-            1
-        } else {
-            -1
-        };
-        let key = (face.normal.map(|c| c * s), face.offset * s);
+        let key = canon(face.normal, face.offset);
         let depth = m.face_depth[f];
         assert!(
             planes
@@ -538,11 +530,9 @@ fn ray_parity_refuses_out_of_range_input() {
 
 #[test]
 fn real_ct_bone_convex_faces_and_ray_parity() {
-    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+    let Some(o) = common::ct_bone() else {
         return;
     };
-    let o =
-        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
     let p = run(&o);
     let m = p.merged_surface().unwrap();
     assert_convex_tiling(&m, "headsq bone");

@@ -213,11 +213,9 @@ fn bad_cell_files_are_refused() {
 
 #[test]
 fn real_ct_bone_is_lossless() {
-    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+    let Some(o) = common::ct_bone() else {
         return;
     };
-    let o =
-        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
     for (name, (p, z)) in [
         ("recursion", run(&o)),
         ("balls", run_balls(&o)),

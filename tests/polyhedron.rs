@@ -150,11 +150,9 @@ fn flat_hull_has_no_inside() {
 
 #[test]
 fn real_ct_bone_components() {
-    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+    let Some(o) = common::ct_bone() else {
         return;
     };
-    let o =
-        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
     let h = hull(&o);
     let z = background_components(&o, &h).unwrap();
     let count = |k| z.iter().filter(|c| c.class == k).count();

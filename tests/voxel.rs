@@ -207,11 +207,9 @@ fn phantoms_reject_bad_sizes() {
 
 #[test]
 fn real_ct_bone_topology() {
-    let Some(v) = common::real_volume("headsq/quarter.nhdr") else {
+    let Some(o) = common::ct_bone() else {
         return;
     };
-    let o =
-        DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap();
     let t = o.topology().unwrap();
     eprintln!("headsq ≥ 1150 largest: {} voxels, {t:?}", o.n_voxels());
     assert_eq!(t.euler, t.n0 as i64 - t.n1 as i64 + t.n2 as i64);

@@ -77,6 +77,14 @@ pub fn real_volume(rel: &str) -> Option<Volume> {
     data(rel).map(|p| chisel::io::read_volume(&p).unwrap_or_else(|e| panic!("{e}")))
 }
 
+/// The CT head's bone (headsq ≥ 1150, largest 6-connected component),
+/// when the data is there (see [`real_volume`]).
+pub fn ct_bone() -> Option<chisel::voxel::DigitalObject> {
+    use chisel::voxel::{Component, DigitalObject, Selection};
+    let v = real_volume("headsq/quarter.nhdr")?;
+    Some(DigitalObject::from_volume(&v, Selection::Threshold(1150.0), Component::Largest).unwrap())
+}
+
 /// The GPU for parity tests, one device per test process shared by all its
 /// tests (as an application shares one): `None` (skip, with a note) when no
 /// adapter exists on a developer machine; a panic under `CI=true`.

@@ -482,6 +482,7 @@ pub fn refine_on_sphere(
     max_triangles: usize,
 ) {
     let mut max_edge = max_edge;
+    delaunay_flips(tris, pts);
     for _ in 0..MAX_PASSES {
         let uses = edge_uses(tris);
         let longest_loop_edge = uses
@@ -502,6 +503,63 @@ pub fn refine_on_sphere(
         if bisect(tris, pts, pos, proj, long, max_triangles).is_empty() {
             return;
         }
+        delaunay_flips(tris, pts);
+    }
+}
+
+/// Makes the interior edges of `tris` locally Delaunay in the plane of
+/// `pts` (Lawson flips, exact incircle test; edges used once are kept):
+/// after a bisection pass this replaces the slivers between loop points and
+/// the new midpoints by well-shaped triangles, so the next pass splits far
+/// fewer edges. The projection is conformal, so shapes in the plane are
+/// shapes on the sphere; each flip keeps both triangles' orientation (an
+/// edge that fails the test has a convex quadrilateral).
+fn delaunay_flips(tris: &mut [[usize; 3]], pts: &[DVec2]) {
+    let c2 = |p: DVec2| robust::Coord { x: p.x, y: p.y };
+    let mut uses = edge_uses(tris);
+    let mut stack: Vec<(usize, usize)> = uses
+        .iter()
+        .filter(|(_, (_, n))| *n == 2)
+        .map(|(&k, _)| k)
+        .collect();
+    stack.sort_unstable();
+    // (p, q, c): the edge as it runs in triangle t and t's third corner.
+    let around = |tri: [usize; 3], k: (usize, usize)| {
+        (0..3)
+            .map(|e| (tri[e], tri[(e + 1) % 3], tri[(e + 2) % 3]))
+            .find(|&(p, q, _)| edge_key(p, q) == k)
+    };
+    while let Some(k) = stack.pop() {
+        let Some(&([t0, t1], 2)) = uses.get(&k) else {
+            continue;
+        };
+        let (Some((p, q, c)), Some((q1, p1, d))) = (around(tris[t0], k), around(tris[t1], k))
+        else {
+            continue;
+        };
+        if (p1, q1) != (p, q) || c == d {
+            continue;
+        }
+        let turn = robust::orient2d(c2(pts[p]), c2(pts[q]), c2(pts[c]));
+        let inside = robust::incircle(c2(pts[p]), c2(pts[q]), c2(pts[c]), c2(pts[d]));
+        if turn == 0.0 || inside * turn <= 0.0 || uses.contains_key(&edge_key(c, d)) {
+            continue;
+        }
+        tris[t0] = [c, p, d];
+        tris[t1] = [d, q, c];
+        uses.remove(&k);
+        uses.insert(edge_key(c, d), ([t0, t1], 2));
+        for (e, from, to) in [(edge_key(q, c), t0, t1), (edge_key(p, d), t1, t0)] {
+            if let Some((ts, _)) = uses.get_mut(&e) {
+                ts.iter_mut().filter(|t| **t == from).for_each(|t| *t = to);
+            }
+        }
+        stack.extend([
+            edge_key(c, p),
+            edge_key(p, d),
+            edge_key(d, q),
+            edge_key(q, c),
+        ]);
     }
 }
 
@@ -619,4 +677,83 @@ fn bisect(
         }
     }
     changed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn signed_area(t: [usize; 3], p: &[DVec2]) -> f64 {
+        robust::orient2d(
+            robust::Coord {
+                x: p[t[0]].x,
+                y: p[t[0]].y,
+            },
+            robust::Coord {
+                x: p[t[1]].x,
+                y: p[t[1]].y,
+            },
+            robust::Coord {
+                x: p[t[2]].x,
+                y: p[t[2]].y,
+            },
+        )
+    }
+
+    /// A band 40 long and 1 wide with 0.25 spacing along its long sides:
+    /// ear clipping fans it into slivers; the flips leave a triangulation of
+    /// the same region and boundary, every triangle still counter-clockwise,
+    /// every interior edge locally Delaunay and no sliver spanning the band
+    /// lengthwise.
+    #[test]
+    fn delaunay_flips_keep_the_region_and_make_edges_delaunay() {
+        let mut pts: Vec<DVec2> = (0..=160)
+            .map(|i| DVec2::new(i as f64 * 0.25, 0.0))
+            .collect();
+        pts.extend((0..=160).rev().map(|i| DVec2::new(i as f64 * 0.25, 1.0)));
+        let lp: Vec<usize> = (0..pts.len()).collect();
+        let mut tris = triangulate(&pts, &[lp]);
+        let boundary = |tris: &[[usize; 3]]| {
+            let mut b: Vec<(usize, usize)> = edge_uses(tris)
+                .into_iter()
+                .filter(|(_, (_, n))| *n == 1)
+                .map(|(k, _)| k)
+                .collect();
+            b.sort_unstable();
+            b
+        };
+        let area = |tris: &[[usize; 3]]| tris.iter().map(|&t| signed_area(t, &pts)).sum::<f64>();
+        let pts_ref = &pts;
+        let longest = |tris: &[[usize; 3]]| {
+            tris.iter()
+                .flat_map(|t| {
+                    (0..3).map(move |e| (pts_ref[t[e]] - pts_ref[t[(e + 1) % 3]]).length())
+                })
+                .fold(0.0, f64::max)
+        };
+        let (b0, a0, n0) = (boundary(&tris), area(&tris), tris.len());
+        assert!(
+            longest(&tris) > 5.0,
+            "the fan has no sliver: the test shows nothing"
+        );
+        delaunay_flips(&mut tris, &pts);
+        assert_eq!(tris.len(), n0);
+        assert_eq!(boundary(&tris), b0);
+        assert!((area(&tris) - a0).abs() < 1e-9 * a0.abs());
+        assert!(tris.iter().all(|&t| signed_area(t, &pts) > 0.0));
+        assert!(longest(&tris) < 1.1, "a sliver is left: {}", longest(&tris));
+        let c2 = |p: DVec2| robust::Coord { x: p.x, y: p.y };
+        for (&(a, b), &([t0, t1], n)) in &edge_uses(&tris) {
+            if n != 2 {
+                continue;
+            }
+            let third = |t: [usize; 3]| t.into_iter().find(|&v| v != a && v != b).unwrap();
+            let (c, d) = (third(tris[t0]), third(tris[t1]));
+            let [p, q, r] = tris[t0];
+            assert!(
+                robust::incircle(c2(pts[p]), c2(pts[q]), c2(pts[r]), c2(pts[d])) <= 0.0,
+                "edge ({a}, {b}) with opposite corners {c} and {d} is not Delaunay"
+            );
+        }
+    }
 }

@@ -15,7 +15,8 @@
 //! planar midpoint until each is shorter than [`sphere_max_edge`] (chord
 //! error below [`SPHERE_CHORD_ERROR`]·r) or than 1.2 times the longest
 //! loop edge, whichever is longer; loop edges are never split, so both sides
-//! still share them. Where the surface meets the sphere at a grazing angle,
+//! still share them. Lawson flips before and after every pass keep the
+//! interior edges Delaunay in that plane, so no slivers are refined. Where the surface meets the sphere at a grazing angle,
 //! the cap triangles that cross it (exact test) are bisected further
 //! ([`repair_on_sphere`]).
 
@@ -471,7 +472,8 @@ fn edge_uses(tris: &[[usize; 3]]) -> EdgeUses {
 /// and than [`LOOP_EDGE_FACTOR`] times the longest edge used once, is
 /// bisected, longest first, at the point of the sphere over its planar
 /// midpoint (appended to both); edges used once (the cut loops) are kept.
-/// The projection is conformal and keeps orientation, so the refined
+/// Before the first pass and after each, [`delaunay_flips`] makes the
+/// interior edges Delaunay in the plane. The projection is conformal and keeps orientation, so the refined
 /// triangles keep theirs. Stops after `max_triangles` or [`MAX_PASSES`].
 pub fn refine_on_sphere(
     tris: &mut Vec<[usize; 3]>,

@@ -472,7 +472,7 @@ fn edge_uses(tris: &[[usize; 3]]) -> EdgeUses {
 /// and than [`LOOP_EDGE_FACTOR`] times the longest edge used once, is
 /// bisected, longest first, at the point of the sphere over its planar
 /// midpoint (appended to both); edges used once (the cut loops) are kept.
-/// Before the first pass and after each, [`delaunay_flips`] makes the
+/// Before the first pass and after each, `delaunay_flips` makes the
 /// interior edges Delaunay in the plane. The projection is conformal and keeps orientation, so the refined
 /// triangles keep theirs. Stops after `max_triangles` or [`MAX_PASSES`].
 pub fn refine_on_sphere(

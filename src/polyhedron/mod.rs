@@ -3,7 +3,7 @@
 //! - [`zkh`]: the background components inside the convex hull (ZKH,
 //!   §4.2.1) and their classes by the hull faces they touch (Def. CO/CA/TU,
 //!   §4.2.3).
-//! - [`polyhedrize`]: the lossless representation — the recursion with
+//! - [`polyhedrize()`]: the lossless representation — the recursion with
 //!   swapped roles of §4.4 as a tree of convex shells, cavities as reversed
 //!   shells, genus > 0 components as maximal digital balls ([`balls`],
 //!   §4.5.4), exact voxelization, storage (eq. 8.2) and `.cells` files.

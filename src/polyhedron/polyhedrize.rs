@@ -172,7 +172,7 @@ impl ShellGeometry {
     /// The voxels whose centres lie in the closed shell: the box of the
     /// shell's vertices and one flag per voxel (x fastest).
     ///
-    /// Errors: hull-scan range limits ([`hscan::check_range`]).
+    /// Errors: hull-scan range limits ([`crate::hscan::check_range`]).
     pub fn closed_voxels(&self, backend: Backend<'_>) -> crate::Result<(VoxelBox, Vec<bool>)> {
         match self {
             ShellGeometry::Point(p) => Ok((unit_box(voxel_of(*p)), vec![true])),

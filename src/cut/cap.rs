@@ -16,9 +16,9 @@
 //! error below [`SPHERE_CHORD_ERROR`]·r) or than 1.2 times the longest
 //! loop edge, whichever is longer; loop edges are never split, so both sides
 //! still share them. Lawson flips before and after every pass keep the
-//! interior edges Delaunay in that plane, so no slivers are refined. Where the surface meets the sphere at a grazing angle,
-//! the cap triangles that cross it (exact test) are bisected further
-//! ([`repair_on_sphere`]).
+//! interior edges Delaunay in that plane, so no slivers are refined. Where
+//! the surface meets the sphere at a grazing angle, the cap triangles that
+//! cross it (exact test) are bisected further ([`repair_on_sphere`]).
 
 use std::collections::HashMap;
 
@@ -473,8 +473,8 @@ fn edge_uses(tris: &[[usize; 3]]) -> EdgeUses {
 /// bisected, longest first, at the point of the sphere over its planar
 /// midpoint (appended to both); edges used once (the cut loops) are kept.
 /// Before the first pass and after each, `delaunay_flips` makes the
-/// interior edges Delaunay in the plane. The projection is conformal and keeps orientation, so the refined
-/// triangles keep theirs. Stops after `max_triangles` or [`MAX_PASSES`].
+/// interior edges Delaunay in the plane. The projection is conformal and
+/// keeps orientation, so the refined triangles keep theirs. Stops after `max_triangles` or [`MAX_PASSES`].
 pub fn refine_on_sphere(
     tris: &mut Vec<[usize; 3]>,
     pts: &mut Vec<DVec2>,
@@ -509,6 +509,11 @@ pub fn refine_on_sphere(
     }
 }
 
+/// A plane point for the exact predicates of `robust`.
+fn coord(p: DVec2) -> robust::Coord<f64> {
+    robust::Coord { x: p.x, y: p.y }
+}
+
 /// Makes the interior edges of `tris` locally Delaunay in the plane of
 /// `pts` (Lawson flips, exact incircle test; edges used once are kept):
 /// after a bisection pass this replaces the slivers between loop points and
@@ -517,7 +522,6 @@ pub fn refine_on_sphere(
 /// shapes on the sphere; each flip keeps both triangles' orientation (an
 /// edge that fails the test has a convex quadrilateral).
 fn delaunay_flips(tris: &mut [[usize; 3]], pts: &[DVec2]) {
-    let c2 = |p: DVec2| robust::Coord { x: p.x, y: p.y };
     let mut uses = edge_uses(tris);
     let mut stack: Vec<(usize, usize)> = uses
         .iter()
@@ -542,8 +546,8 @@ fn delaunay_flips(tris: &mut [[usize; 3]], pts: &[DVec2]) {
         if (p1, q1) != (p, q) || c == d {
             continue;
         }
-        let turn = robust::orient2d(c2(pts[p]), c2(pts[q]), c2(pts[c]));
-        let inside = robust::incircle(c2(pts[p]), c2(pts[q]), c2(pts[c]), c2(pts[d]));
+        let turn = robust::orient2d(coord(pts[p]), coord(pts[q]), coord(pts[c]));
+        let inside = robust::incircle(coord(pts[p]), coord(pts[q]), coord(pts[c]), coord(pts[d]));
         if turn == 0.0 || inside * turn <= 0.0 || uses.contains_key(&edge_key(c, d)) {
             continue;
         }
@@ -686,20 +690,7 @@ mod tests {
     use super::*;
 
     fn signed_area(t: [usize; 3], p: &[DVec2]) -> f64 {
-        robust::orient2d(
-            robust::Coord {
-                x: p[t[0]].x,
-                y: p[t[0]].y,
-            },
-            robust::Coord {
-                x: p[t[1]].x,
-                y: p[t[1]].y,
-            },
-            robust::Coord {
-                x: p[t[2]].x,
-                y: p[t[2]].y,
-            },
-        )
+        robust::orient2d(coord(p[t[0]]), coord(p[t[1]]), coord(p[t[2]]))
     }
 
     /// A band 40 long and 1 wide with 0.25 spacing along its long sides:
@@ -744,7 +735,6 @@ mod tests {
         assert!((area(&tris) - a0).abs() < 1e-9 * a0.abs());
         assert!(tris.iter().all(|&t| signed_area(t, &pts) > 0.0));
         assert!(longest(&tris) < 1.1, "a sliver is left: {}", longest(&tris));
-        let c2 = |p: DVec2| robust::Coord { x: p.x, y: p.y };
         for (&(a, b), &([t0, t1], n)) in &edge_uses(&tris) {
             if n != 2 {
                 continue;
@@ -753,7 +743,7 @@ mod tests {
             let (c, d) = (third(tris[t0]), third(tris[t1]));
             let [p, q, r] = tris[t0];
             assert!(
-                robust::incircle(c2(pts[p]), c2(pts[q]), c2(pts[r]), c2(pts[d])) <= 0.0,
+                robust::incircle(coord(pts[p]), coord(pts[q]), coord(pts[r]), coord(pts[d])) <= 0.0,
                 "edge ({a}, {b}) with opposite corners {c} and {d} is not Delaunay"
             );
         }

@@ -96,10 +96,12 @@ fn main() {
             None
         }
     };
+    let machine = Machine::now();
     eprintln!(
-        "cpu: {} rayon threads; load average {}",
-        rayon::current_num_threads(),
-        Machine::now().load_text()
+        "cpu: {} rayon threads, gather {}; load average {}",
+        machine.threads,
+        machine.cpu_lanes.name(),
+        machine.load_text()
     );
     let nets = networks();
     let mut rates: Vec<(String, &'static str, &'static str, f64, f64, u64)> = Vec::new();

@@ -791,38 +791,61 @@ fn block_solve_inverts_the_preconditioner_block() {
     assert_eq!(block_solve([0.0; 6], [1.0, 2.0, 3.0]), [0.0; 3]);
 }
 
-/// The step mirrors equal the plain per-node loop bit for bit, for free
+/// The step mirrors equal the plain per-node loop bit for bit at every
+/// gather width this CPU has (in CI on x86-64 at least 4 and 8), for free
 /// node counts that fill no whole lane group, rows of 0 to many springs
-/// (lanes ending at different k), a zero-length spring, both materials
-/// and external forces.
+/// (lanes ending at different k, inside and past the interleaved steps of
+/// a wide group), a zero-length spring, three materials (one of them id
+/// 15, the last of the table) and external forces.
 #[test]
 fn mirror_lanes_equal_the_scalar_loop() {
-    use chisel::tissue::cpu::{self, StepParams, VELOCITY_FLUSH};
+    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams, VELOCITY_FLUSH};
+    let widths: Vec<Lanes> = Lanes::ALL
+        .into_iter()
+        .filter(|l| l.is_available())
+        .collect();
+    if cfg!(target_arch = "x86_64") && common::is_ci() {
+        assert!(widths.contains(&Lanes::Eight), "CI machines have AVX2");
+    }
+    for l in Lanes::ALL.into_iter().filter(|l| !l.is_available()) {
+        eprintln!("this CPU lacks {}: not tested here", l.name());
+    }
     let mut bits = common::xorshift(0x2545_f491_4f6c_dd1d);
     let mut next = move || (bits() >> 40) as f32 / (1u64 << 24) as f32;
-    let materials = [
-        Material::linear(1.3),
-        Material {
-            c1: 0.7,
-            c2: 4.0,
-            knee: 0.05,
-        },
-    ];
+    let mut materials = vec![Material::linear(0.1); 16];
+    materials[0] = Material::linear(1.3);
+    materials[1] = Material {
+        c1: 0.7,
+        c2: 4.0,
+        knee: 0.05,
+    };
+    materials[15] = Material {
+        c1: 2.0,
+        c2: 0.5,
+        knee: 0.02,
+    };
     let mut mats = [[0.0f32; 4]; 16];
     for (row, m) in mats.iter_mut().zip(&materials) {
         *row = m.table_row();
     }
-    for n_free in [1usize, 2, 3, 5, 6, 7, 9, 13] {
+    for n_free in [1usize, 2, 3, 5, 6, 7, 9, 13, 16, 17, 24, 31, 40, 53, 70] {
         let n = n_free + 4;
         let mut p: Vec<Vec3> = (0..n).map(|_| Vec3::new(next(), next(), next())).collect();
         // Nodes 0 and 1 coincide: a spring of rest length 0.
         p[1] = p[0];
         let mut springs = vec![(0u32, 1u32, 0u8)];
         for a in 0..n as u32 {
-            // Rows of 0 to 4 own springs (plus those of other nodes).
-            for k in 0..(a as usize % 5) {
+            // Rows of 0 to 4 own springs (plus those of other nodes), and
+            // beyond 16 nodes 6 to 9 more (every lane of a wide group has
+            // springs, its rows end at different k).
+            let own = if n_free > 16 {
+                6 + a as usize % 4
+            } else {
+                a as usize % 5
+            };
+            for k in 0..own {
                 let b = (a as usize + 1 + 2 * k) % n;
-                springs.push((a, b as u32, (k % 2) as u8));
+                springs.push((a, b as u32, [0, 1, 15][k % 3]));
             }
         }
         springs.retain(|&(a, b, _)| a != b);
@@ -847,7 +870,10 @@ fn mirror_lanes_equal_the_scalar_loop() {
         let forces: Vec<[f32; 4]> = (0..n_free)
             .map(|_| [next() - 0.5, 0.0, next(), 0.0])
             .collect();
-        for chebyshev in [false, true] {
+        for (chebyshev, &lanes) in [false, true]
+            .into_iter()
+            .flat_map(|c| widths.iter().map(move |l| (c, l)))
+        {
             let params = StepParams {
                 n_free: n_free as u32,
                 use_forces: true,
@@ -858,19 +884,21 @@ fn mirror_lanes_equal_the_scalar_loop() {
                 materials: mats,
             };
             let (mut out, mut v_out) = (pos.clone(), vel.clone());
+            let gather = SpringGather::new(&net.csr, n_free, lanes).unwrap();
+            assert_eq!(gather.lanes(), lanes);
             let kernel = if chebyshev {
-                cpu::spring_chebyshev
+                SpringGather::spring_chebyshev
             } else {
-                cpu::spring_step
+                SpringGather::spring_step
             };
             kernel(
-                &params, &net.csr, &net.rest, &forces, &pos, &mut out, &mut v_out,
+                &gather, &params, &net.rest, &forces, &pos, &mut out, &mut v_out,
             );
             let mut loaded = false;
             for i in 0..n_free {
                 let (g, b) = scalar_gather(&net, &pos, &mats, i, params.isotropy);
                 let d: [f32; 3] = std::array::from_fn(|c| forces[i][c] - g[c]);
-                let r = cpu::block_solve(b, d);
+                let r = chisel::tissue::cpu::block_solve(b, d);
                 loaded |= g.iter().any(|&c| c != 0.0);
                 for c in 0..3 {
                     let v = vel[i][c];
@@ -881,8 +909,10 @@ fn mirror_lanes_equal_the_scalar_loop() {
                     };
                     let v2 = if raw.abs() < VELOCITY_FLUSH { 0.0 } else { raw };
                     let u2 = pos[i][c] + params.dt * v2;
-                    let what =
-                        format!("n_free {n_free}, chebyshev {chebyshev}, node {i}, axis {c}");
+                    let what = format!(
+                        "{}: n_free {n_free}, chebyshev {chebyshev}, node {i}, axis {c}",
+                        lanes.name()
+                    );
                     assert_eq!(v_out[i][c].to_bits(), v2.to_bits(), "velocity: {what}");
                     assert_eq!(out[i][c].to_bits(), u2.to_bits(), "position: {what}");
                 }
@@ -1082,6 +1112,78 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_fran_cut() {
     assert!(disp > 0.002, "{disp}");
     assert!(dist < 2.5e-3 * disp, "{dist} vs {disp}");
     assert!(it_c < it_e);
+}
+
+/// On fran_cut's network (real data) with the bone advanced 2 mm, every
+/// gather width this CPU has gives the same bits through 30 iterations of
+/// each solver (the interleaved rows of 8 and 16 nodes, the tails past them
+/// and the four-lane rest of each rayon task all take part).
+#[test]
+fn mirror_widths_agree_on_fran_cut() {
+    use chisel::tissue::chebyshev::BLOCK_ISOTROPY;
+    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams};
+    let Some(face) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let net = SpringNetwork::build(&face, None, &NetworkParams::default()).unwrap();
+    let nf = net.n_free;
+    let mut mats = [[0.0f32; 4]; 16];
+    for (row, m) in mats.iter_mut().zip(&net.materials) {
+        *row = m.table_row();
+    }
+    let mut start = vec![[0.0f32, 0.0, 0.0, 1.0 / net.params.mass]; net.n_nodes()];
+    for u in &mut start[nf..] {
+        *u = [0.0, 0.002, 0.001, 0.0];
+    }
+    let widths: Vec<Lanes> = Lanes::ALL
+        .into_iter()
+        .filter(|l| l.is_available())
+        .collect();
+    for chebyshev in [false, true] {
+        let params = StepParams {
+            n_free: nf as u32,
+            use_forces: false,
+            dt: explicit::choose_dt(&net, None, false).unwrap(),
+            damping: if chebyshev { 0.9 } else { net.params.damping },
+            gain: 0.5,
+            isotropy: BLOCK_ISOTROPY,
+            materials: mats,
+        };
+        let states: Vec<_> = widths
+            .iter()
+            .map(|&lanes| {
+                let gather = SpringGather::new(&net.csr, nf, lanes).unwrap();
+                let (mut a, mut b) = (start.clone(), start.clone());
+                let mut vel = vec![[0.0f32; 4]; nf];
+                for _ in 0..30 {
+                    if chebyshev {
+                        gather.spring_chebyshev(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                    } else {
+                        gather.spring_step(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                    }
+                    std::mem::swap(&mut a, &mut b);
+                }
+                (a, vel)
+            })
+            .collect();
+        let moved = states[0].0[..nf]
+            .iter()
+            .filter(|u| u[..3] != [0.0; 3])
+            .count();
+        assert!(
+            moved > nf / 4,
+            "the bone move must load the network: {moved} of {nf} moved"
+        );
+        for (lanes, (u, v)) in widths.iter().zip(&states).skip(1) {
+            let bits = |x: &[[f32; 4]]| x.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+            assert!(
+                bits(u) == bits(&states[0].0) && bits(v) == bits(&states[0].1),
+                "{} differs from {} (chebyshev {chebyshev})",
+                lanes.name(),
+                widths[0].name()
+            );
+        }
+    }
 }
 
 #[test]

@@ -175,10 +175,11 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         ..Default::default()
     };
     global.note(format!(
-        "machine: {} ({} CPUs, {} threads), load {}",
+        "machine: {} ({} CPUs, {} threads, CPU gather {}), load {}",
         machine.cpu.as_deref().unwrap_or("unknown CPU"),
         machine.cpus,
         machine.threads,
+        machine.cpu_lanes.name(),
         machine.load_text()
     ));
     let mut networks = Vec::new();

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::cpu::Lanes;
 use super::network::SpringNetwork;
 use super::plan::ResolvedPlan;
 use super::relax::{RelaxOptions, Simulation, Solver, Status, relax};
@@ -33,6 +34,8 @@ pub struct Machine {
     pub cpus: usize,
     /// Threads of the rayon pool the CPU mirrors run on.
     pub threads: usize,
+    /// Nodes the CPU mirrors gather side by side ([`Lanes::best`]).
+    pub cpu_lanes: Lanes,
     /// `/proc/loadavg`'s 1, 5 and 15 minute averages when the run started
     /// (a shared machine's figures are pessimistic when these exceed `cpus`).
     pub load_average: Option<[f64; 3]>,
@@ -59,6 +62,7 @@ impl Machine {
             cpu,
             cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
             threads: rayon::current_num_threads(),
+            cpu_lanes: Lanes::best(),
             load_average,
         }
     }

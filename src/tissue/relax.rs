@@ -361,6 +361,7 @@ impl Setup {
 #[derive(Debug)]
 pub(crate) struct CpuStepper<'a> {
     net: &'a SpringNetwork,
+    gather: cpu::SpringGather<'a>,
     setup: Setup,
     pos: [Vec<[f32; 4]>; 2],
     cur: usize,
@@ -373,6 +374,7 @@ impl<'a> CpuStepper<'a> {
         let pos = [setup.positions.clone(), setup.positions.clone()];
         CpuStepper {
             net,
+            gather: cpu::SpringGather::best(&net.csr, net.n_free),
             vel: vec![[0.0; 4]; net.n_free],
             snap: setup.positions[..net.n_free].to_vec(),
             setup,
@@ -390,12 +392,12 @@ impl<'a> CpuStepper<'a> {
             (&b[0], &mut a[0])
         };
         let kernel = match self.setup.solver {
-            Solver::Explicit => cpu::spring_step,
-            Solver::Chebyshev => cpu::spring_chebyshev,
+            Solver::Explicit => cpu::SpringGather::spring_step,
+            Solver::Chebyshev => cpu::SpringGather::spring_chebyshev,
         };
         kernel(
+            &self.gather,
             &self.setup.params,
-            &self.net.csr,
             &self.net.rest,
             &self.setup.forces,
             src,

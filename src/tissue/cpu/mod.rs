@@ -5,30 +5,161 @@
 //! as its kernel (CSR order of the springs, the same parenthesisation), and
 //! runs the nodes in parallel with rayon (each node writes only its own
 //! outputs, so the result does not depend on scheduling). The step mirrors
-//! gather four nodes at once as the lanes of a `Vec4`, the way a GPU runs
-//! invocations side by side: the per-spring sqrt and division become
-//! vector instructions, each lane still computes its own node's sum in its
-//! own CSR order, and the results stay bit for bit those of the scalar loop
-//! (`tests/tissue.rs`). Lavapipe gives `spring_step` bit for bit;
-//! `spring_chebyshev` differs from it by a few ulp per step
+//! gather several nodes at once as the lanes of a SIMD register, the way a
+//! GPU runs invocations side by side ([`Lanes`]: four in a `Vec4`, eight
+//! with AVX2 or sixteen with AVX-512 in `wide.rs`, arranged once per
+//! network by [`SpringGather`]): the per-spring sqrt and division become vector
+//! instructions, each lane still computes its own node's sum in its own
+//! CSR order, and the results stay bit for bit those of the scalar loop
+//! whatever the width (`tests/tissue.rs`). Lavapipe gives `spring_step`
+//! bit for bit; `spring_chebyshev` differs from it by a few ulp per step
 //! (`tests/parity/spring_step.rs`).
 
 use glam::{Mat4, Vec4};
 use rayon::prelude::*;
 
+use serde::Serialize;
+
 use super::network::SpringCsr;
 use crate::parity::Tolerance;
+
+#[cfg(target_arch = "x86_64")]
+mod wide;
 
 /// Nodes per rayon task of the reduction mirror.
 const CHUNK: usize = 512;
 
 /// Nodes per rayon task of the step mirrors for `n` nodes: about eight
 /// tasks per thread (load balance on a shared machine), at least 64 and at
-/// most 2048 nodes (task overhead vs. cache-sized work), whole lane groups.
+/// most 2048 nodes (task overhead vs. cache-sized work), whole groups of
+/// the widest gather.
 fn grain(n: usize) -> usize {
     (n / (8 * rayon::current_num_threads()))
         .clamp(64, 2048)
-        .next_multiple_of(LANES)
+        .next_multiple_of(16)
+}
+
+/// How many nodes the step mirrors gather side by side. Every width gives
+/// the same bits (each lane performs one kernel invocation's operations);
+/// the widest this CPU has is the fastest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Lanes {
+    /// Four nodes, one `Vec4` lane each: SSE2 on every x86-64 CPU (glam's
+    /// portable scalar code on other architectures).
+    Four,
+    /// Eight nodes, one lane of a 256-bit register each: x86-64 CPUs with
+    /// AVX2 (detected at run time).
+    Eight,
+    /// Sixteen nodes, one lane of a 512-bit register each: x86-64 CPUs with
+    /// AVX-512 (F, BW, CD, DQ, VL).
+    Sixteen,
+}
+
+impl Lanes {
+    /// Every width, narrowest first.
+    pub const ALL: [Lanes; 3] = [Lanes::Four, Lanes::Eight, Lanes::Sixteen];
+
+    /// The widest width this CPU has; `CHISEL_CPU_LANES=4` or `8` asks for
+    /// at most that many (to compare them). Read once.
+    pub fn best() -> Lanes {
+        static BEST: std::sync::OnceLock<Lanes> = std::sync::OnceLock::new();
+        *BEST.get_or_init(|| {
+            let cap = std::env::var("CHISEL_CPU_LANES")
+                .ok()
+                .and_then(|v| v.trim().parse::<usize>().ok())
+                .unwrap_or(usize::MAX);
+            Lanes::ALL
+                .into_iter()
+                .rfind(|l| l.is_available() && l.count() <= cap)
+                .unwrap_or(Lanes::Four)
+        })
+    }
+
+    /// Whether this CPU runs this width.
+    pub fn is_available(self) -> bool {
+        match self {
+            Lanes::Four => true,
+            #[cfg(target_arch = "x86_64")]
+            Lanes::Eight => pulp::x86::V3::is_available(),
+            #[cfg(target_arch = "x86_64")]
+            Lanes::Sixteen => pulp::x86::V4::is_available(),
+            #[cfg(not(target_arch = "x86_64"))]
+            Lanes::Eight | Lanes::Sixteen => false,
+        }
+    }
+
+    /// Nodes per group.
+    pub fn count(self) -> usize {
+        match self {
+            Lanes::Four => 4,
+            Lanes::Eight => 8,
+            Lanes::Sixteen => 16,
+        }
+    }
+
+    /// What the CPU units are called, for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Lanes::Four => "4 lanes (SSE2)",
+            Lanes::Eight => "8 lanes (AVX2)",
+            Lanes::Sixteen => "16 lanes (AVX-512)",
+        }
+    }
+}
+
+/// The step mirrors for one network's CSR at one gather width: the CSR's
+/// first `n_free` rows arranged once for the wide gathers (a copy of the
+/// entries, interleaved by group of 8 or 16 nodes), then any number of
+/// steps. The free functions [`spring_step`] and [`spring_chebyshev`] build
+/// one per call.
+#[derive(Debug, Clone)]
+pub struct SpringGather<'a> {
+    csr: &'a SpringCsr,
+    lanes: Lanes,
+    #[cfg(target_arch = "x86_64")]
+    wide: Option<wide::WideRows>,
+}
+
+impl<'a> SpringGather<'a> {
+    /// The mirrors of `csr`'s first `n_free` rows gathering `lanes` nodes at
+    /// a time; an error where this CPU lacks that width.
+    pub fn new(csr: &'a SpringCsr, n_free: usize, lanes: Lanes) -> Result<Self, crate::Error> {
+        if !lanes.is_available() {
+            return Err(crate::Error::InvalidInput(format!(
+                "this CPU cannot gather {}",
+                lanes.name()
+            )));
+        }
+        let n_free = n_free.min(csr.offsets.len().saturating_sub(1));
+        #[cfg(target_arch = "x86_64")]
+        let wide = match lanes {
+            Lanes::Four => None,
+            Lanes::Eight => Some(wide::WideRows::Eight(wide::LaneRows::new(csr, n_free))),
+            Lanes::Sixteen => Some(wide::WideRows::Sixteen(wide::LaneRows::new(csr, n_free))),
+        };
+        Ok(SpringGather {
+            csr,
+            lanes,
+            #[cfg(target_arch = "x86_64")]
+            wide,
+        })
+    }
+
+    /// [`Lanes::best`] for `csr`.
+    pub fn best(csr: &'a SpringCsr, n_free: usize) -> Self {
+        Self::new(csr, n_free, Lanes::best()).unwrap_or(SpringGather {
+            csr,
+            lanes: Lanes::Four,
+            #[cfg(target_arch = "x86_64")]
+            wide: None,
+        })
+    }
+
+    /// The gather width.
+    pub fn lanes(&self) -> Lanes {
+        self.lanes
+    }
 }
 
 /// Velocity components below this magnitude are flushed to zero after each
@@ -77,7 +208,7 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
     }
 }
 
-/// Nodes the mirror gathers side by side, like a SIMD group of GPU
+/// Nodes the portable gather takes side by side, like a SIMD group of GPU
 /// invocations (one `Vec4` lane each; SSE2 on x86-64, scalar elsewhere).
 const LANES: usize = 4;
 
@@ -182,21 +313,69 @@ fn flush(v: f32) -> f32 {
     if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
 }
 
-/// Runs `update(u, w, g, b, v, f) -> (u', v')` over the free nodes, in
-/// groups of [`LANES`] nodes (b: the node's block from [`gather_group`]).
+/// The per-node update after the gather (u: displacement, w = B/m, g and
+/// b from [`gather_group`], v: velocity, f: external force).
+#[derive(Debug, Clone, Copy)]
+enum Update {
+    /// `spring_step`: eq. 4.5–4.7 with Δt and damping γ.
+    Explicit { dt: f32, gamma: f32 },
+    /// `spring_chebyshev`: pseudo-time step h, momentum β, gain α/h.
+    Chebyshev { h: f32, beta: f32, gain: f32 },
+}
+
+impl Update {
+    /// `(u', v')` of one node.
+    #[inline(always)]
+    fn apply(
+        self,
+        u: [f32; 3],
+        w: f32,
+        g: [f32; 3],
+        b: [f32; 6],
+        v: [f32; 3],
+        f: [f32; 3],
+    ) -> ([f32; 3], [f32; 3]) {
+        let mut u2 = [0.0f32; 3];
+        let mut v2 = [0.0f32; 3];
+        match self {
+            Update::Explicit { dt, gamma } => {
+                for k in 0..3 {
+                    // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; u += Δt v.
+                    let a = (f[k] - gamma * v[k] - g[k]) * w;
+                    v2[k] = flush(v[k] + dt * a);
+                    u2[k] = u[k] + dt * v2[k];
+                }
+            }
+            Update::Chebyshev { h, beta, gain } => {
+                let r = block_solve(b, [f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
+                for k in 0..3 {
+                    v2[k] = flush(beta * v[k] + gain * r[k]);
+                    u2[k] = u[k] + h * v2[k];
+                }
+            }
+        }
+        (u2, v2)
+    }
+}
+
+/// Runs one step of `update` over the free nodes, in groups of
+/// `gather`'s width (`BLOCKS`: the gather builds the preconditioner blocks);
+/// the nodes a rayon task holds past its last whole group, and those past
+/// the rows arranged for the wide gather, run four at a time (the same
+/// bits).
 #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
 #[inline(always)]
 fn for_free_nodes<const BLOCKS: bool>(
+    gather: &SpringGather<'_>,
     p: &StepParams,
-    csr: &SpringCsr,
+    update: Update,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
-    update: impl Fn([f32; 3], f32, [f32; 3], [f32; 6], [f32; 3], [f32; 3]) -> ([f32; 3], [f32; 3])
-    + Sync,
 ) {
+    let csr = gather.csr;
     let n = p.n_free as usize;
     let chunk = grain(n);
     pos_out[..n]
@@ -204,27 +383,43 @@ fn for_free_nodes<const BLOCKS: bool>(
         .zip(vel[..n].par_chunks_mut(chunk))
         .enumerate()
         .for_each(|(c, (po, ve))| {
-            for (b, (po, ve)) in po.chunks_mut(LANES).zip(ve.chunks_mut(LANES)).enumerate() {
-                let i0 = c * chunk + b * LANES;
-                let ([gx, gy, gz], blocks) = gather_group::<BLOCKS>(
-                    i0,
-                    po.len(),
+            let (first, len) = (c * chunk, po.len());
+            #[cfg_attr(not(target_arch = "x86_64"), expect(unused_mut))]
+            let mut done = 0;
+            #[cfg(target_arch = "x86_64")]
+            if let Some(rows) = &gather.wide {
+                // `chunk` is a multiple of every width: whole groups from `first`.
+                let l = rows.width();
+                let groups = first / l..((first + len) / l).min(rows.groups());
+                let b = wide::Bindings {
                     csr,
                     rest,
                     pos_in,
-                    &p.materials,
-                    p.isotropy,
-                );
-                for (t, (out, v)) in po.iter_mut().zip(ve.iter_mut()).enumerate() {
-                    let i = i0 + t;
-                    let p_i = pos_in[i];
+                    forces,
+                    use_forces: p.use_forces,
+                    materials: &p.materials,
+                    isotropy: p.isotropy,
+                    update,
+                };
+                let wide_nodes = groups.len() * l;
+                if rows.run::<BLOCKS>(groups, &b, &mut po[..wide_nodes], &mut ve[..wide_nodes]) {
+                    done = wide_nodes;
+                }
+            }
+            for i in (first + done..first + len).step_by(LANES) {
+                let lanes = LANES.min(first + len - i);
+                let ([gx, gy, gz], blocks) =
+                    gather_group::<BLOCKS>(i, lanes, csr, rest, pos_in, &p.materials, p.isotropy);
+                for t in 0..lanes {
+                    let p_i = pos_in[i + t];
                     let f = if p.use_forces {
-                        let f = forces[i];
+                        let f = forces[i + t];
                         [f[0], f[1], f[2]]
                     } else {
                         [0.0; 3]
                     };
-                    let (u2, v2) = update(
+                    let v = ve[i + t - first];
+                    let (u2, v2) = update.apply(
                         [p_i[0], p_i[1], p_i[2]],
                         p_i[3],
                         [gx[t], gy[t], gz[t]],
@@ -232,8 +427,8 @@ fn for_free_nodes<const BLOCKS: bool>(
                         [v[0], v[1], v[2]],
                         f,
                     );
-                    *out = [u2[0], u2[1], u2[2], p_i[3]];
-                    *v = [v2[0], v2[1], v2[2], 0.0];
+                    po[i + t - first] = [u2[0], u2[1], u2[2], p_i[3]];
+                    ve[i + t - first] = [v2[0], v2[1], v2[2], 0.0];
                 }
             }
         });
@@ -246,6 +441,8 @@ fn for_free_nodes<const BLOCKS: bool>(
 /// `n_free` of `pos_out` are written (the caller keeps the fixed nodes
 /// equal in both buffers). `vel`: #free `[vx, vy, vz, 0]`, updated in
 /// place. `forces`: #free external forces (read only when `use_forces`).
+/// Arranges `csr` for [`Lanes::best`] on every call: to step many times,
+/// build a [`SpringGather`] once.
 pub fn spring_step(
     p: &StepParams,
     csr: &SpringCsr,
@@ -255,34 +452,15 @@ pub fn spring_step(
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
-    let (dt, gamma) = (p.dt, p.damping);
-    for_free_nodes::<false>(
-        p,
-        csr,
-        rest,
-        forces,
-        pos_in,
-        pos_out,
-        vel,
-        |u, w, g, _, v, f| {
-            let mut u2 = [0.0f32; 3];
-            let mut v2 = [0.0f32; 3];
-            for k in 0..3 {
-                // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; u += Δt v.
-                let a = (f[k] - gamma * v[k] - g[k]) * w;
-                v2[k] = flush(v[k] + dt * a);
-                u2[k] = u[k] + dt * v2[k];
-            }
-            (u2, v2)
-        },
-    );
+    SpringGather::best(csr, p.n_free as usize).spring_step(p, rest, forces, pos_in, pos_out, vel);
 }
 
 /// Mirror of `spring_chebyshev.wgsl`: one stationary Chebyshev (second-order
 /// Richardson) step on the block-Jacobi-preconditioned equilibrium
 /// equations, the 3 × 3 block of each node built at the current state
 /// (η = `p.isotropy`). Same buffers as [`spring_step`] (the w lane is not
-/// read); `v` holds the last update divided by h.
+/// read); `v` holds the last update divided by h. Arranges `csr` on every
+/// call, as [`spring_step`].
 pub fn spring_chebyshev(
     p: &StepParams,
     csr: &SpringCsr,
@@ -292,26 +470,45 @@ pub fn spring_chebyshev(
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
-    let (h, beta, gain) = (p.dt, p.damping, p.gain);
-    for_free_nodes::<true>(
-        p,
-        csr,
-        rest,
-        forces,
-        pos_in,
-        pos_out,
-        vel,
-        |u, _, g, b, v, f| {
-            let r = block_solve(b, [f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
-            let mut u2 = [0.0f32; 3];
-            let mut v2 = [0.0f32; 3];
-            for k in 0..3 {
-                v2[k] = flush(beta * v[k] + gain * r[k]);
-                u2[k] = u[k] + h * v2[k];
-            }
-            (u2, v2)
-        },
-    );
+    SpringGather::best(csr, p.n_free as usize)
+        .spring_chebyshev(p, rest, forces, pos_in, pos_out, vel);
+}
+
+impl SpringGather<'_> {
+    /// [`spring_step`] on this gather's CSR.
+    pub fn spring_step(
+        &self,
+        p: &StepParams,
+        rest: &[[f32; 4]],
+        forces: &[[f32; 4]],
+        pos_in: &[[f32; 4]],
+        pos_out: &mut [[f32; 4]],
+        vel: &mut [[f32; 4]],
+    ) {
+        let update = Update::Explicit {
+            dt: p.dt,
+            gamma: p.damping,
+        };
+        for_free_nodes::<false>(self, p, update, rest, forces, pos_in, pos_out, vel);
+    }
+
+    /// [`spring_chebyshev`] on this gather's CSR.
+    pub fn spring_chebyshev(
+        &self,
+        p: &StepParams,
+        rest: &[[f32; 4]],
+        forces: &[[f32; 4]],
+        pos_in: &[[f32; 4]],
+        pos_out: &mut [[f32; 4]],
+        vel: &mut [[f32; 4]],
+    ) {
+        let update = Update::Chebyshev {
+            h: p.dt,
+            beta: p.damping,
+            gain: p.gain,
+        };
+        for_free_nodes::<true>(self, p, update, rest, forces, pos_in, pos_out, vel);
+    }
 }
 
 /// B⁻¹ d for the block `b = [b00, b11, b22, b01, b02, b12]` by cofactors of

@@ -1428,6 +1428,80 @@ fn bench_relax_refines_the_scan_grid() {
     }
 }
 
+/// `--export` writes the network the rates run on: the arrays equal the
+/// network built here, the bone carries the plan's first increment, and
+/// the header's counts match the files.
+#[test]
+fn bench_relax_exports_the_network() {
+    use chisel::tissue::{NetworkParams, SpringNetwork};
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let fran = dir.join("fran_cut.vtk");
+    let plan = plan_file("fran_chin_advance.toml");
+    let out = tmp.path().join("nets");
+    let v = ok_json(&[
+        "bench",
+        "relax",
+        path_str(&fran),
+        "--backend",
+        "cpu",
+        "--solver",
+        "explicit",
+        "--seconds",
+        "0.02",
+        "--plan",
+        &plan,
+        "--export",
+        path_str(&out),
+        "--json",
+    ]);
+    let lanes = v["machine"]["cpu_lanes"].as_str().unwrap();
+    assert!(["four", "eight", "sixteen"].contains(&lanes), "{lanes}");
+    let x1 = out.join("x1");
+    let words = |name: &str| -> Vec<u32> {
+        let b = std::fs::read(x1.join(name)).unwrap();
+        assert_eq!(b.len() % 4, 0, "{name}");
+        b.chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let mesh = chisel::io::read_mesh(&fran).unwrap();
+    let net = SpringNetwork::build(&mesh, None, &NetworkParams::default()).unwrap();
+    let bits =
+        |rows: &[[f32; 4]]| -> Vec<u32> { rows.iter().flatten().map(|x| x.to_bits()).collect() };
+    assert_eq!(words("rest.f32"), bits(&net.rest));
+    assert_eq!(words("offsets.u32"), net.csr.offsets);
+    assert_eq!(words("entries.u32"), net.csr.entries);
+    let mut table = vec![[0.0f32; 4]; 16];
+    for (row, m) in table.iter_mut().zip(&net.materials) {
+        *row = m.table_row();
+    }
+    assert_eq!(words("materials.f32"), bits(&table));
+    let u: Vec<f32> = words("displacement.f32")
+        .into_iter()
+        .map(f32::from_bits)
+        .collect();
+    assert_eq!(u.len(), 4 * net.n_nodes());
+    let (free, bone) = u.split_at(4 * net.n_free);
+    assert!(
+        free.chunks(4)
+            .all(|p| p == [0.0, 0.0, 0.0, 1.0 / net.params.mass])
+    );
+    let moved = bone.chunks(4).filter(|p| p[..3] != [0.0; 3]).count();
+    assert!(
+        moved > 10 && bone.chunks(4).all(|p| p[3] == 0.0),
+        "{moved} bone nodes moved"
+    );
+    let header: Value =
+        serde_json::from_slice(&std::fs::read(x1.join("network.json")).unwrap()).unwrap();
+    assert_eq!(header["nodes"], 6615);
+    assert_eq!(header["free"], 4410);
+    assert_eq!(header["entries"], net.csr.entries.len());
+    assert!(header["dt"].as_f64().unwrap() > 0.0);
+}
+
 #[test]
 fn bench_relax_arguments_are_checked() {
     let Some(dir) = common::data_dir() else {

@@ -12,7 +12,8 @@ use serde_json::json;
 use super::{Global, vec3_arg};
 use crate::parity::Backend;
 use crate::tissue::bench::{
-    Machine, approach_equilibrium, increment_bone, iteration_rate, time_to_equilibrium,
+    Machine, approach_equilibrium, export_network, increment_bone, iteration_rate,
+    time_to_equilibrium,
 };
 use crate::tissue::phantom::refine_grid;
 use crate::tissue::{Fragments, NetworkParams, Plan, ResolvedPlan, Solver, SpringNetwork};
@@ -87,6 +88,11 @@ pub struct RelaxArgs {
     /// Iteration cap of each relaxation.
     #[arg(long, default_value_t = 40_000)]
     max_iterations: u32,
+    /// Also write each network (with the bone as the rates see it) into
+    /// `DIR/x<factor>/` as raw little-endian arrays, for timing other
+    /// tools on the same network (`scripts/reference_spring_step.py`).
+    #[arg(long, value_name = "DIR")]
+    export: Option<PathBuf>,
     /// JSON report.
     #[arg(long)]
     report: Option<PathBuf>,
@@ -218,6 +224,11 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         let bone_now = increment
             .as_ref()
             .map_or_else(|| net.bone_rest().to_vec(), |i| increment_bone(&net, i));
+        if let Some(dir) = &args.export {
+            let dir = dir.join(format!("x{factor}"));
+            export_network(&dir, &net, &bone_now)?;
+            global.note(format!("  network written to {}", dir.display()));
+        }
         let runs: Vec<(Solver, Backend<'_>)> = (args.solver.iter())
             .flat_map(|&s| backends.iter().map(move |&b| (s, b)))
             .collect();

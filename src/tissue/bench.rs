@@ -151,6 +151,62 @@ pub fn increment_bone(net: &SpringNetwork, increment: &ResolvedPlan) -> Vec<[f32
     bone
 }
 
+/// Writes `net` with the bone at `bone` (#bone `[x, y, z, _]`) into the
+/// folder `dir` (created if missing) as little-endian raw arrays, for
+/// timing other tools on the very network the rates are measured on
+/// (`scripts/reference_spring_step.py`): `rest.f32` (#nodes × 4: x_rest,
+/// the w lane 0), `displacement.f32` (#nodes × 4: u = 0 and w = 1/m for
+/// the free nodes, the bone's u and w = 0 for the rest), `offsets.u32`
+/// (#free + 1 CSR row starts), `entries.u32` (neighbour in bits 0–27,
+/// material in bits 28–31), `materials.f32` (16 rows `[c1, c2 − c1,
+/// knee, c_max]`) and `network.json` (counts, Δt, damping, mass, the file
+/// list). Each file is written atomically.
+pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<()> {
+    use crate::io::write_atomic;
+    let u_bone = super::relax::bone_displacements(net, bone)?;
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let w = 1.0 / net.params.mass;
+    let mut u = vec![[0.0, 0.0, 0.0, w]; net.n_free];
+    u.extend(u_bone);
+    let mut materials = [[0.0f32; 4]; super::network::MAX_MATERIALS];
+    for (row, m) in materials.iter_mut().zip(&net.materials) {
+        *row = m.table_row();
+    }
+    let le = |words: &[u32]| -> Vec<u8> { words.iter().flat_map(|w| w.to_le_bytes()).collect() };
+    let f32s = |rows: &[[f32; 4]]| {
+        le(&rows
+            .iter()
+            .flatten()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>())
+    };
+    write_atomic(&dir.join("rest.f32"), &f32s(&net.rest))?;
+    write_atomic(&dir.join("displacement.f32"), &f32s(&u))?;
+    write_atomic(&dir.join("offsets.u32"), &le(&net.csr.offsets))?;
+    write_atomic(&dir.join("entries.u32"), &le(&net.csr.entries))?;
+    write_atomic(&dir.join("materials.f32"), &f32s(&materials))?;
+    let header = serde_json::json!({
+        "format": "chisel spring network, little-endian raw arrays",
+        "nodes": net.n_nodes(),
+        "free": net.n_free,
+        "entries": net.csr.entries.len(),
+        "dt": super::explicit::choose_dt(net, None, false).ok(),
+        "damping": net.params.damping,
+        "mass": net.params.mass,
+        "bytes_per_iteration": net.bytes_per_iteration(),
+        "files": {
+            "rest.f32": "nodes x [x, y, z, 0]",
+            "displacement.f32": "nodes x [ux, uy, uz, w]; w = 1/m on free nodes, 0 on bone",
+            "offsets.u32": "free + 1 CSR row starts",
+            "entries.u32": "neighbour (bits 0-27) | material (bits 28-31) << 28",
+            "materials.f32": "16 x [c1, c2 - c1, knee, c_max]",
+        },
+    });
+    let text = serde_json::to_string_pretty(&header)
+        .map_err(|e| crate::Error::InvalidInput(e.to_string()))?;
+    write_atomic(&dir.join("network.json"), text.as_bytes())
+}
+
 /// Largest distance between the xyz of two node lists.
 fn max_distance(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
     let d = |p: &[f32; 4], q: &[f32; 4]| {

@@ -168,10 +168,7 @@ pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 
     let w = 1.0 / net.params.mass;
     let mut u = vec![[0.0, 0.0, 0.0, w]; net.n_free];
     u.extend(u_bone);
-    let mut materials = [[0.0f32; 4]; super::network::MAX_MATERIALS];
-    for (row, m) in materials.iter_mut().zip(&net.materials) {
-        *row = m.table_row();
-    }
+    let materials = net.material_table();
     let le = |words: &[u32]| -> Vec<u8> { words.iter().flat_map(|w| w.to_le_bytes()).collect() };
     let f32s = |rows: &[[f32; 4]]| {
         le(&rows

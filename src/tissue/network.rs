@@ -778,6 +778,16 @@ impl SpringNetwork {
         SpringCsr { offsets, entries }
     }
 
+    /// The kernels' material table: row m is material m's
+    /// [`Material::table_row`], unused rows zero.
+    pub fn material_table(&self) -> [[f32; 4]; MAX_MATERIALS] {
+        let mut table = [[0.0f32; 4]; MAX_MATERIALS];
+        for (row, m) in table.iter_mut().zip(&self.materials) {
+            *row = m.table_row();
+        }
+        table
+    }
+
     /// Total number of nodes.
     pub fn n_nodes(&self) -> usize {
         self.rest.len()

@@ -29,7 +29,7 @@ use super::chebyshev::{self, ChebyshevCoefficients};
 use super::cpu::{self, StepParams};
 use super::explicit;
 use super::gpu::GpuStepper;
-use super::network::{MAX_MATERIALS, SpringNetwork};
+use super::network::SpringNetwork;
 use super::plan::{Iterations, ResolvedPlan};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::parity::Backend;
@@ -302,10 +302,7 @@ impl Setup {
                 )));
             }
         };
-        let mut materials = [[0.0f32; 4]; MAX_MATERIALS];
-        for (row, m) in materials.iter_mut().zip(&net.materials) {
-            *row = m.table_row();
-        }
+        let materials = net.material_table();
         let mut positions = vec![[0.0f32; 4]; net.n_nodes()];
         let (params, chebyshev) = match opts.solver {
             Solver::Explicit => {

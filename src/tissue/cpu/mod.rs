@@ -131,6 +131,16 @@ impl<'a> SpringGather<'a> {
                 lanes.name()
             )));
         }
+        Ok(Self::arrange(csr, n_free, lanes))
+    }
+
+    /// [`Lanes::best`] for `csr`.
+    pub fn best(csr: &'a SpringCsr, n_free: usize) -> Self {
+        Self::arrange(csr, n_free, Lanes::best())
+    }
+
+    /// [`SpringGather::new`] for a width this CPU has.
+    fn arrange(csr: &'a SpringCsr, n_free: usize, lanes: Lanes) -> Self {
         let n_free = n_free.min(csr.offsets.len().saturating_sub(1));
         #[cfg(target_arch = "x86_64")]
         let wide = match lanes {
@@ -138,22 +148,14 @@ impl<'a> SpringGather<'a> {
             Lanes::Eight => Some(wide::WideRows::Eight(wide::LaneRows::new(csr, n_free))),
             Lanes::Sixteen => Some(wide::WideRows::Sixteen(wide::LaneRows::new(csr, n_free))),
         };
-        Ok(SpringGather {
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = n_free;
+        SpringGather {
             csr,
             lanes,
             #[cfg(target_arch = "x86_64")]
             wide,
-        })
-    }
-
-    /// [`Lanes::best`] for `csr`.
-    pub fn best(csr: &'a SpringCsr, n_free: usize) -> Self {
-        Self::new(csr, n_free, Lanes::best()).unwrap_or(SpringGather {
-            csr,
-            lanes: Lanes::Four,
-            #[cfg(target_arch = "x86_64")]
-            wide: None,
-        })
+        }
     }
 
     /// The gather width.

@@ -633,7 +633,6 @@ fn run<W: Wide<L>, const L: usize, const BLOCKS: bool>(
             }
         }
     }
-    let (b, pos_out, vel) = (&b, pos_out, vel);
     w.vectorize(Run::<_, L, BLOCKS> {
         w,
         rows,

@@ -95,16 +95,32 @@ fn main() {
         t.sort_by(f64::total_cmp);
         t[2]
     };
-    let tree_locate = time(&|| {
-        for k in &knives {
-            let _ = locate(mesh, &surf.forest, k);
-        }
-    });
-    let scan_locate = time(&|| {
-        for k in &knives {
-            let _ = locate_full_scan(mesh, k);
-        }
-    });
+    // Tree and scan in turns, so that a shared machine's drift shows in
+    // both halves of each pair; each half is the best of 3 sweeps (the
+    // first after the other half runs with its caches and idle threads).
+    let sweep = |f: &dyn Fn(&Knife)| {
+        (0..3)
+            .map(|_| {
+                let s = Instant::now();
+                knives.iter().for_each(f);
+                s.elapsed().as_secs_f64()
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut pairs: Vec<(f64, f64)> = (0..9)
+        .map(|_| {
+            let tree = sweep(&|k| std::mem::drop(locate(mesh, &surf.forest, k)));
+            (tree, sweep(&|k| std::mem::drop(locate_full_scan(mesh, k))))
+        })
+        .collect();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let ratio = median(pairs.iter().map(|(t, s)| s / t).collect());
+    let scan_locate = median(pairs.iter().map(|p| p.1).collect());
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let tree_locate = pairs[pairs.len() / 2].0;
     // The tree walk is single-threaded; the same scan on one thread too.
     let scan_locate_1t = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -145,10 +161,10 @@ fn main() {
         }
     }
     eprintln!(
-        "cut/locate: tree {:.2} ms vs scan {:.2} ms per knife ({:.1}x); nodes {}/{} triangles {}/{}",
+        "cut/locate: tree {:.2} ms vs scan {:.2} ms per knife (medians of 9 turns, each the best of 3 sweeps; {:.1}x, median of the turns' ratios); nodes {}/{} triangles {}/{}",
         tree_locate * 1e3 / knives.len() as f64,
         scan_locate * 1e3 / knives.len() as f64,
-        scan_locate / tree_locate,
+        ratio,
         visited.0,
         visited.1,
         visited.2,

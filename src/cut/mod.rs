@@ -327,44 +327,50 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
     };
     // Analytic knife: per expanded leaf, each of its distinct vertices is
     // evaluated once (from the leaf's contiguous position table), then its
-    // triangles are tested from the contiguous corner table; a mixed one
-    // (a rectangle: one whose crossing the rectangle reaches) is kept with
-    // its vertices' ids, positions and side values, which the cut points
-    // are made from.
+    // triangles are tested from the contiguous corner table without a
+    // branch; a mixed one (for a rectangle: one whose crossing the
+    // rectangle reaches) is kept as the key `id << 32 | entry`, its place in
+    // the forest's tables, from which its cut points are made.
     let exact = k.sign_change_crosses();
-    let mut f: Vec<f64> = Vec::new();
-    let mut crossed: Vec<CrossedTriangle> = Vec::new();
+    let corner = |key: u64, c: usize| {
+        let i = forest.corners[key as u32 as usize][c] as usize;
+        (forest.leaf_vertices[i], forest.leaf_positions[i])
+    };
+    let mut neg: Vec<u8> = Vec::new();
+    let mut keys: Vec<u64> = Vec::new();
     let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
-        let vs = c.vertices.range();
-        let v0 = vs.start;
-        f.clear();
-        f.extend(
+        let (vs, tris) = (c.vertices.range(), c.triangles.range());
+        let v0 = c.vertices.start;
+        neg.clear();
+        neg.extend(
             forest.leaf_positions[vs]
                 .iter()
-                .map(|q| side.eval(q.as_dvec3())),
+                .map(|q| u8::from(side.eval(q.as_dvec3()) < 0.0)),
         );
-        let tris = c.triangles.range();
-        let before = crossed.len();
-        for (&t, corners) in forest.triangles[tris.clone()]
-            .iter()
-            .zip(&forest.corners[tris])
+        let before = keys.len();
+        keys.resize(before + tris.len(), 0);
+        let (neg, out) = (&neg[..], &mut keys[before..]);
+        let mut kept = 0;
+        for ((&t, corners), e) in (forest.triangles[tris.clone()].iter())
+            .zip(&forest.corners[tris.clone()])
+            .zip(tris.start as u64..)
         {
-            let fs = corners.map(|i| f[i as usize - v0]);
-            let neg = fs.map(|x| x < 0.0);
-            if neg[0] == neg[1] && neg[1] == neg[2] {
-                continue;
-            }
-            let c = CrossedTriangle {
-                id: t,
-                vertices: corners.map(|i| forest.leaf_vertices[i as usize]),
-                positions: corners.map(|i| forest.leaf_positions[i as usize]),
-                sides: fs,
-            };
-            if exact || knife_reaches(k, &c) {
-                crossed.push(c);
-            }
+            let [a, b, c] = corners.map(|i| neg[i.wrapping_sub(v0) as usize]);
+            out[kept] = u64::from(t) << 32 | e;
+            kept += usize::from((a ^ b) | (b ^ c) != 0);
         }
-        crossed.len() - before
+        keys.truncate(before + kept);
+        if !exact {
+            let mut i = before;
+            for j in before..keys.len() {
+                if knife_reaches(k, ends(corner, side, keys[j])) {
+                    keys[i] = keys[j];
+                    i += 1;
+                }
+            }
+            keys.truncate(i);
+        }
+        keys.len() - before
     });
     for &(s, e) in &expanded {
         if e > s {
@@ -373,13 +379,16 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
             stats.classes.separated += 1;
         }
     }
-    // Ascending ids: sorting `id << 32 | position` keys moves 8 bytes, not 80.
-    let mut order: Vec<u64> = (crossed.iter().enumerate())
-        .map(|(i, c)| u64::from(c.id) << 32 | i as u64)
-        .collect();
-    order.sort_unstable();
-    let crossed = order.iter().map(|&key| crossed[key as u32 as usize]);
-    Ok(finish_locate(crossed, k, stats))
+    // Ascending ids (unique, the high halves of the keys).
+    radsort::sort_by_key(&mut keys, |&key| (key >> 32) as u32);
+    Ok(finish_locate(
+        &keys,
+        |&key| (key >> 32) as u32,
+        corner,
+        side,
+        k,
+        stats,
+    ))
 }
 
 /// The tree query for a triangulated knife: candidate triangles from the
@@ -420,16 +429,6 @@ fn locate_mesh_knife(
         .collect();
     crossed.sort_unstable_by_key(|(t, _)| *t);
     Ok(finish_locate_mesh(&pair, crossed, stats))
-}
-
-/// A crossed triangle: its id, and its vertices' ids, positions and side
-/// values (the cut points are made from these alone).
-#[derive(Debug, Clone, Copy)]
-struct CrossedTriangle {
-    id: u32,
-    vertices: [u32; 3],
-    positions: [Vec3; 3],
-    sides: [f64; 3],
 }
 
 /// Walks the forest, expanding only nodes the knife may touch, and hands
@@ -570,45 +569,26 @@ fn finish_locate_mesh(
     out
 }
 
-/// Triangle `t` when an analytic knife crosses one of its edges: only
-/// where the side changes, and for a rectangle only where the crossing
-/// point lies inside it.
+/// One end of a triangle edge: vertex id, position, side value.
+type End = (u32, Vec3, f64);
+
+/// The corners of the triangle behind `item`, with their side values.
 #[inline(always)]
-fn crossed_triangle(
-    mesh: &TriMesh,
-    k: &PreparedKnife<'_>,
-    side: SideFn,
-    t: u32,
-) -> Option<CrossedTriangle> {
-    let vertices = mesh.triangles[t as usize];
-    let positions = vertices.map(|v| mesh.positions[v as usize]);
-    let sides = positions.map(|q| side.eval(q.as_dvec3()));
-    let neg = sides.map(|x| x < 0.0);
-    if neg[0] == neg[1] && neg[1] == neg[2] {
-        return None;
-    }
-    let c = CrossedTriangle {
-        id: t,
-        vertices,
-        positions,
-        sides,
-    };
-    (k.sign_change_crosses() || knife_reaches(k, &c)).then_some(c)
+fn ends<T: Copy>(corner: impl Fn(T, usize) -> (u32, Vec3), side: SideFn, item: T) -> [End; 3] {
+    std::array::from_fn(|c| {
+        let (v, q) = corner(item, c);
+        (v, q, side.eval(q.as_dvec3()))
+    })
 }
 
 /// Whether a bounded knife (a rectangle) reaches the crossing of one of
 /// the triangle's edges whose ends change side; tree and scan both decide
 /// here.
-fn knife_reaches(k: &PreparedKnife<'_>, c: &CrossedTriangle) -> bool {
+fn knife_reaches(k: &PreparedKnife<'_>, ends: [End; 3]) -> bool {
     (0..3).any(|e| {
-        let (i, j) = (e, (e + 1) % 3);
-        let (i, j) = if c.vertices[i] < c.vertices[j] {
-            (i, j)
-        } else {
-            (j, i)
-        };
-        k.crossing_from(c.positions[i], c.positions[j], c.sides[i], c.sides[j])
-            .is_some()
+        let (x, y) = (ends[e], ends[(e + 1) % 3]);
+        let ((_, a, fa), (_, b, fb)) = if x.0 < y.0 { (x, y) } else { (y, x) };
+        k.crossing_from(a, b, fa, fb).is_some()
     })
 }
 
@@ -636,14 +616,17 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
             na != nb || nb != nc
         })
         .collect();
-    let test = |&t: &u32| crossed_triangle(mesh, k, side, t);
-    // Small sets are not worth a fork.
-    let crossed: Vec<CrossedTriangle> = if mixed.len() < 1 << 14 {
-        mixed.iter().filter_map(test).collect()
-    } else {
-        mixed.par_iter().filter_map(test).collect()
+    let corner = |t: u32, c: usize| {
+        let v = mesh.triangles[t as usize][c];
+        (v, mesh.positions[v as usize])
     };
-    Ok(finish_locate(crossed.into_iter(), k, stats))
+    let crossed = if k.sign_change_crosses() {
+        mixed
+    } else {
+        let reaches = |&t: &u32| knife_reaches(k, ends(corner, side, t));
+        mixed.into_par_iter().filter(reaches).collect()
+    };
+    Ok(finish_locate(&crossed, |&t| t, corner, side, k, stats))
 }
 
 /// The scan for a triangulated knife: corefinement of every triangle.
@@ -673,64 +656,78 @@ fn scan_mesh_knife(mesh: &TriMesh, k: &PreparedKnife<'_>, stats: CutStats) -> Re
     Ok(finish_locate_mesh(&pair, crossed, stats))
 }
 
-/// Cut-vertex ids of crossed edges, keyed by `(lower id) << 32 | higher id`:
-/// open addressing with linear probing in one flat table of at least twice
-/// as many slots as edges can be inserted (so a probe always ends at the
-/// key or at an empty slot). Keys are vertex-id pairs, not attacker
-/// controlled; a multiplicative hash spreads them.
+/// Cut-vertex ids of crossed edges: open addressing with linear probing
+/// in one flat table of at least 1.5 times as many slots as edges can be
+/// inserted (so a probe always ends at the key or at an empty slot). A slot
+/// holds a cut-vertex id; its key is that vertex's edge in
+/// [`Located::edges`]. Keys are vertex-id pairs, not attacker controlled; a
+/// multiplicative hash spreads them.
 struct EdgeTable {
-    /// `(key, id)`; [`EdgeTable::EMPTY`] keys mark free slots.
-    slots: Vec<(u64, u32)>,
+    slots: Vec<u32>,
     shift: u32,
 }
 
 impl EdgeTable {
-    /// Never a key: the lower id of an edge is below its higher id, and a
-    /// vertex key `v << 32 | v` has `v < u32::MAX`.
-    const EMPTY: u64 = u64::MAX;
+    const EMPTY: u32 = u32::MAX;
 
     /// A table for up to `n` edges (load factor at most 2/3).
     fn with_capacity(n: usize) -> EdgeTable {
         let len = (n + n / 2 + 1).next_power_of_two().max(16);
         EdgeTable {
-            slots: vec![(Self::EMPTY, 0); len],
+            slots: vec![Self::EMPTY; len],
             shift: 64 - len.trailing_zeros(),
         }
     }
 
-    /// The id stored for `key`, or `make()`'s id stored for it (nothing
-    /// stored when `make` gives `None`).
-    #[inline]
-    fn get_or_insert(&mut self, key: u64, make: impl FnOnce() -> Option<u32>) -> Option<u32> {
+    /// The id stored for `edge` (`Ok`), or the free slot to store it in.
+    #[inline(always)]
+    fn find(&self, edge: (u32, u32), edges: &[(u32, u32)]) -> Result<u32, usize> {
         let mask = self.slots.len() - 1;
+        let key = (u64::from(edge.0) << 32) | u64::from(edge.1);
         let mut i = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> self.shift) as usize;
         loop {
-            let (k, id) = self.slots[i];
-            if k == key {
-                return Some(id);
+            let id = self.slots[i];
+            if id == Self::EMPTY {
+                return Err(i);
             }
-            if k == Self::EMPTY {
-                let id = make()?;
-                self.slots[i] = (key, id);
-                return Some(id);
+            if edges[id as usize] == edge {
+                return Ok(id);
             }
             i = (i + 1) & mask;
         }
     }
 }
 
-/// Cut vertices of the crossed triangles, given as `(triangle id, its
-/// vertex ids, their side values)` in ascending id order, numbered by first
-/// use in that order
-/// (so tree and scan number them identically). Only edges whose ends
-/// change side are looked up; a triangle none of whose edges the knife
-/// reaches (a rectangle's border) is dropped.
-fn finish_locate(
-    crossed: impl ExactSizeIterator<Item = CrossedTriangle>,
+/// The two edges a triangle's side signs change along, ascending (edge e
+/// joins corners e and e + 1), indexed by the corners' negative bits
+/// (`1 << c`); the other edge is opposite the corner on its own side.
+#[rustfmt::skip]
+const CROSSED_EDGES: [(usize, usize); 8] = [
+    (0, 0), // no corner negative: not crossed
+    (0, 2), // corner 0 alone
+    (0, 1), // corner 1 alone
+    (1, 2), // corner 2 alone (0 and 1 negative)
+    (1, 2), // corner 2 alone
+    (0, 1), // corner 1 alone (0 and 2 negative)
+    (0, 2), // corner 0 alone (1 and 2 negative)
+    (0, 0), // all negative: not crossed
+];
+
+/// Cut vertices of the crossed triangles `items`, in ascending id order,
+/// numbered by first use in that order (so tree and scan number them
+/// identically); `id` gives an item's triangle id, `corner` the vertex id
+/// and position of its corner `c` (in winding order). Only the two edges
+/// whose ends change side are looked up; a triangle none of whose edges the
+/// knife reaches (a rectangle's border) is dropped.
+fn finish_locate<T: Copy>(
+    items: &[T],
+    id: impl Fn(&T) -> u32,
+    corner: impl Fn(T, usize) -> (u32, Vec3),
+    side: SideFn,
     k: &PreparedKnife<'_>,
     mut stats: CutStats,
 ) -> Located {
-    let n = crossed.len();
+    let n = items.len();
     // A mixed triangle has exactly two edges whose ends change side.
     let mut ids = EdgeTable::with_capacity(2 * n);
     let mut coincident: Vec<(u32, u32)> = Vec::new();
@@ -742,65 +739,36 @@ fn finish_locate(
         edges: Vec::with_capacity(n),
         ..Located::default()
     };
-    for c in crossed {
-        let (t, tri, f) = (c.id, c.vertices, c.sides);
-        let mut cuts = [u32::MAX; 3];
-        for (e, cut) in cuts.iter_mut().enumerate() {
-            let (i, j) = (e, (e + 1) % 3);
-            if (f[i] < 0.0) == (f[j] < 0.0) {
-                continue;
-            }
-            let (i, j) = if tri[i] < tri[j] { (i, j) } else { (j, i) };
-            let (a, b) = (c.positions[i], c.positions[j]);
-            // A crossing that lands on an end (a vertex on the knife, or
-            // rounded onto it) is that vertex's cut, shared by all its
-            // crossed edges: no two cut vertices coincide, no piece gets a
-            // zero-area triangle. Recorded as the edge (v, v) with v's side
-            // under the vertex key `v << 32 | v` (not under the edge's).
-            let mut at_vertex = None;
-            let mut add = |q: Vec3, edge: (u32, u32), lower_negative: bool| {
-                out.points.push(q);
-                out.lower_negative.push(lower_negative);
-                out.edges.push(edge);
-                Some(out.points.len() as u32 - 1)
-            };
-            let key = (u64::from(tri[i]) << 32) | u64::from(tri[j]);
-            let mut made = ids.get_or_insert(key, || {
-                let x = k.crossing_from(a, b, f[i], f[j])?;
-                let q = x.point.as_vec3();
-                if q == a || q == b {
-                    at_vertex = Some(if q == a {
-                        (tri[i], a, f[i])
-                    } else {
-                        (tri[j], b, f[j])
-                    });
-                    return None;
-                }
-                add(q, (tri[i], tri[j]), x.first_negative)
-            });
-            if let Some((v, q, fv)) = at_vertex {
-                made = ids.get_or_insert((u64::from(v) << 32) | u64::from(v), || {
-                    add(q, (v, v), fv < 0.0)
-                });
-            }
-            *cut = made.unwrap_or(u32::MAX);
+    for item in items {
+        let f: [f64; 3] = std::array::from_fn(|c| side.eval(corner(*item, c).1.as_dvec3()));
+        let signs = (0..3).fold(0, |s, c| s | usize::from(f[c] < 0.0) << c);
+        if signs == 0 || signs == 7 {
+            continue;
         }
-        if cuts != [u32::MAX; 3] {
-            // Two crossings of one triangle that round to one f32 point (on
-            // a sliver, or near a corner) are one cut vertex.
-            for e in 0..3 {
-                let (x, y) = (cuts[e], cuts[(e + 1) % 3]);
-                if x != u32::MAX
-                    && y != u32::MAX
-                    && x != y
-                    && out.points[x as usize] == out.points[y as usize]
-                {
-                    coincident.push((x, y));
-                }
-            }
-            out.triangles.push(t);
-            out.edge_cuts.push(cuts);
+        let (e0, e1) = CROSSED_EDGES[signs];
+        let x = cut_edge(&mut ids, &mut out, k, &corner, *item, &f, e0);
+        let y = cut_edge(&mut ids, &mut out, k, &corner, *item, &f, e1);
+        if x & y == u32::MAX {
+            continue;
         }
+        // Two crossings of one triangle that round to one f32 point (on a
+        // sliver, or near a corner) are one cut vertex.
+        if x != u32::MAX
+            && y != u32::MAX
+            && x != y
+            && out.points[x as usize] == out.points[y as usize]
+        {
+            coincident.push(if e1 == 2 && e0 == 0 { (y, x) } else { (x, y) });
+        }
+        // Without a branch: which edges are crossed is data, not a pattern.
+        let pick = |c: bool, a: u32, b: u32| b ^ ((a ^ b) & u32::from(c).wrapping_neg());
+        let cuts = [
+            pick(e0 == 0, x, u32::MAX),
+            pick(e0 == 1, x, pick(e1 == 1, y, u32::MAX)),
+            pick(e1 == 2, y, u32::MAX),
+        ];
+        out.triangles.push(id(item));
+        out.edge_cuts.push(cuts);
     }
     if !coincident.is_empty() {
         merge_cut_vertices(&mut out, &coincident);
@@ -809,6 +777,60 @@ fn finish_locate(
     stats.cut_vertices = out.points.len();
     out.stats = stats;
     out
+}
+
+/// The cut vertex of edge `e` of `item` (corners e, e + 1), whose ends
+/// change side (made at its first use, from its lower-id end), or
+/// `u32::MAX` when the knife does not reach the crossing.
+///
+/// A crossing that lands on an end (a vertex on the knife, or rounded onto
+/// it) is that vertex's cut, shared by all its crossed edges: no two cut
+/// vertices coincide, no piece gets a zero-area triangle. It is recorded as
+/// the edge `(v, v)` with v's side (and found under that key, not under the
+/// edge's).
+#[inline(always)]
+fn cut_edge<T: Copy>(
+    ids: &mut EdgeTable,
+    out: &mut Located,
+    k: &PreparedKnife<'_>,
+    corner: impl Fn(T, usize) -> (u32, Vec3),
+    item: T,
+    f: &[f64; 3],
+    e: usize,
+) -> u32 {
+    let (c0, c1) = (e, if e == 2 { 0 } else { e + 1 });
+    // The lower-id end first, chosen by index (no branch on the data).
+    let lower = if corner(item, c0).0 < corner(item, c1).0 {
+        c0
+    } else {
+        c1
+    };
+    let upper = c0 + c1 - lower;
+    let ((i, a), (j, b)) = (corner(item, lower), corner(item, upper));
+    let (fa, fb) = (f[lower], f[upper]);
+    let slot = match ids.find((i, j), &out.edges) {
+        Ok(id) => return id,
+        Err(slot) => slot,
+    };
+    let Some(cross) = k.crossing_from(a, b, fa, fb) else {
+        return u32::MAX;
+    };
+    let q = cross.point.as_vec3();
+    let (edge, slot, lower_negative) = if q == a || q == b {
+        let (v, fv) = if q == a { (i, fa) } else { (j, fb) };
+        match ids.find((v, v), &out.edges) {
+            Ok(id) => return id,
+            Err(slot) => ((v, v), slot, fv < 0.0),
+        }
+    } else {
+        ((i, j), slot, cross.first_negative)
+    };
+    let id = out.points.len() as u32;
+    out.points.push(q);
+    out.lower_negative.push(lower_negative);
+    out.edges.push(edge);
+    ids.slots[slot] = id;
+    id
 }
 
 /// Joins the cut vertices of each pair in `pairs` (equal positions) into

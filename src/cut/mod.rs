@@ -1529,3 +1529,23 @@ fn make_caps(
     }
     Ok(tris.into_iter().map(|t| t.map(|i| ids[i])).collect())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::CROSSED_EDGES;
+
+    /// Each mixed sign pattern lists exactly the edges whose ends differ,
+    /// ascending; the two uniform patterns list none.
+    #[test]
+    fn crossed_edges_are_the_sign_changes() {
+        for signs in 0..8usize {
+            let neg = |c: usize| signs >> c & 1 == 1;
+            let changes: Vec<usize> = (0..3).filter(|&e| neg(e) != neg((e + 1) % 3)).collect();
+            match changes[..] {
+                [] => assert!(signs == 0 || signs == 7),
+                [e0, e1] => assert_eq!(CROSSED_EDGES[signs], (e0, e1), "signs {signs:03b}"),
+                _ => unreachable!("a triangle changes side along 0 or 2 edges"),
+            }
+        }
+    }
+}

@@ -326,6 +326,7 @@ impl PreparedKnife<'_> {
     /// vertex id first), if the analytic knife cuts it, given the ends'
     /// side values `fa`, `fb` from [`SideFn::eval`] (each vertex evaluated
     /// once per triangle, not once per edge; tree and scan decide here).
+    #[inline(always)]
     pub fn crossing_from(&self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
         if (fa < 0.0) == (fb < 0.0) {
             return None;

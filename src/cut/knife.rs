@@ -220,90 +220,46 @@ impl PreparedKnife<'_> {
     /// Signed side value of a point for the analytic knives (plane and
     /// rectangle: signed distance; sphere: |p − c|² − r²); `None` for mesh knives.
     pub fn side_value(&self, p: DVec3) -> Option<f64> {
-        self.side_fn().map(|f| f.eval(p))
+        self.analytic().map(|a| a.eval(p))
     }
 
-    /// The side function of an analytic knife, resolved once for a query's
-    /// hot loop; `None` for mesh knives.
-    pub fn side_fn(&self) -> Option<SideFn> {
+    /// The analytic knife, resolved once so that a query's loops are
+    /// compiled for its kind; `None` for mesh knives.
+    pub fn analytic(&self) -> Option<AnalyticKnife> {
+        let m = self.margin;
         match &self.kind {
-            Kind::Plane { p: o, n } | Kind::Rect { p: o, n, .. } => {
-                Some(SideFn::Plane { p: *o, n: *n })
-            }
-            Kind::Sphere { c, r } => Some(SideFn::Sphere { c: *c, r: *r }),
+            Kind::Plane { p, n } => Some(AnalyticKnife::Plane(PlaneSide { p: *p, n: *n, m })),
+            Kind::Rect { p, n, u, v, h } => Some(AnalyticKnife::Rect(RectSide {
+                plane: PlaneSide { p: *p, n: *n, m },
+                u: *u,
+                v: *v,
+                h: *h,
+            })),
+            Kind::Sphere { c, r } => Some(AnalyticKnife::Sphere(SphereSide { c: *c, r: *r, m })),
             Kind::Mesh { .. } => None,
         }
     }
 
-    /// Whether every edge whose ends have side values of opposite signs is
-    /// crossed (plane and sphere; a rectangle also needs the crossing point
-    /// inside it).
-    pub fn sign_change_crosses(&self) -> bool {
-        matches!(self.kind, Kind::Plane { .. } | Kind::Sphere { .. })
+    /// The box margin (world units).
+    pub fn margin(&self) -> f64 {
+        self.margin
     }
+}
 
-    /// Whether the knife surface certainly misses every edge inside `b`.
-    pub fn box_is_clear(&self, b: &Aabb) -> bool {
-        let lo = b.min.as_dvec3();
-        let hi = b.max.as_dvec3();
-        let m = self.margin;
-        match &self.kind {
-            Kind::Plane { p, n } => plane_clear(lo, hi, *p, *n, m),
-            Kind::Rect { p, n, u, v, h } => {
-                if plane_clear(lo, hi, *p, *n, m) {
-                    return true;
-                }
-                let (u0, u1) = project(lo, hi, *p, *u);
-                let (v0, v1) = project(lo, hi, *p, *v);
-                u1 < -h[0] - m || u0 > h[0] + m || v1 < -h[1] - m || v0 > h[1] + m
-            }
-            Kind::Sphere { c, r } => {
-                let near = c.clamp(lo, hi);
-                let far = DVec3::new(
-                    if c.x - lo.x > hi.x - c.x { lo.x } else { hi.x },
-                    if c.y - lo.y > hi.y - c.y { lo.y } else { hi.y },
-                    if c.z - lo.z > hi.z - c.z { lo.z } else { hi.z },
-                );
-                let rr = r * r;
-                let slack = m * (2.0 * r + m);
-                (near - *c).length_squared() > rr + slack
-                    || (far - *c).length_squared() < rr - slack
-            }
-            Kind::Mesh { forest, .. } => {
-                let grown = grow(b, m);
-                !forest_touches(forest, &grown)
-            }
+impl BoxQuery for PreparedKnife<'_> {
+    fn box_is_clear(&self, b: &Aabb) -> bool {
+        match (self.analytic(), &self.kind) {
+            (Some(a), _) => a.box_is_clear(b),
+            (None, Kind::Mesh { forest, .. }) => !forest_touches(forest, &grow(b, self.margin)),
+            (None, _) => false,
         }
     }
 
-    /// Conservative range of coordinate `axis` over the knife surface points
-    /// whose other two coordinates lie in `b`'s extent (the slab a sorted
-    /// level of the tree is searched in, seed §4.3); infinite when the
-    /// knife is parallel to the axis.
-    pub fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
-        let lo = b.min.as_dvec3();
-        let hi = b.max.as_dvec3();
-        let m = self.margin;
-        let others = [(axis + 1) % 3, (axis + 2) % 3];
-        match &self.kind {
-            Kind::Plane { p, n } => plane_interval(lo, hi, *p, *n, axis, others, m),
-            Kind::Rect { p, n, u, v, h } => {
-                let (a, b) = plane_interval(lo, hi, *p, *n, axis, others, m);
-                let ext = u[axis].abs() * h[0] + v[axis].abs() * h[1] + m;
-                (a.max(p[axis] - ext), b.min(p[axis] + ext))
-            }
-            Kind::Sphere { c, r } => {
-                let d2: f64 = others
-                    .iter()
-                    .map(|&j| (c[j] - c[j].clamp(lo[j], hi[j])).powi(2))
-                    .sum();
-                if d2 > r * r + m * (2.0 * r + m) {
-                    return (f64::INFINITY, f64::NEG_INFINITY);
-                }
-                let w = (r * r - d2).max(0.0).sqrt() + m;
-                (c[axis] - w, c[axis] + w)
-            }
-            Kind::Mesh { forest, .. } => {
+    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
+        match (self.analytic(), &self.kind) {
+            (Some(a), _) => a.axis_interval(b, axis),
+            (None, Kind::Mesh { forest, .. }) => {
+                let m = self.margin;
                 forest
                     .groups
                     .iter()
@@ -314,54 +270,221 @@ impl PreparedKnife<'_> {
                         )
                     })
             }
+            (None, _) => (f64::NEG_INFINITY, f64::INFINITY),
         }
     }
+}
 
-    /// The box margin (world units).
-    pub fn margin(&self) -> f64 {
-        self.margin
-    }
+/// The box tests of a tree query (seed 004 §3.1 node classification).
+pub(crate) trait BoxQuery {
+    /// Whether the knife surface certainly misses every edge inside `b`.
+    fn box_is_clear(&self, b: &Aabb) -> bool;
+
+    /// Conservative range of coordinate `axis` over the knife surface
+    /// points whose other two coordinates lie in `b`'s extent (the slab a
+    /// sorted level of the tree is searched in, seed §4.3); infinite when
+    /// the knife is parallel to the axis.
+    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64);
+}
+
+/// An analytic knife (plane, rectangle, sphere), one type per kind, so
+/// that a query's loops are compiled for their knife instead of
+/// dispatching per vertex and per box.
+pub(crate) trait Analytic: BoxQuery + Copy + Send + Sync {
+    /// Whether every edge whose ends have side values of opposite signs is
+    /// crossed (plane and sphere; a rectangle also needs the crossing point
+    /// inside it).
+    const SIGN_CHANGE_CROSSES: bool;
+
+    /// The side value of `q` (negative: the knife's negative side).
+    fn eval(self, q: DVec3) -> f64;
 
     /// The crossing of edge `a → b` (endpoints in canonical order: lower
-    /// vertex id first), if the analytic knife cuts it, given the ends'
-    /// side values `fa`, `fb` from [`SideFn::eval`] (each vertex evaluated
-    /// once per triangle, not once per edge; tree and scan decide here).
-    #[inline(always)]
-    pub fn crossing_from(&self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
-        if (fa < 0.0) == (fb < 0.0) {
-            return None;
+    /// vertex id first), if the knife cuts it, given the ends' side values
+    /// `fa`, `fb` from [`Analytic::eval`] (each vertex evaluated once per
+    /// triangle, not once per edge; tree and scan decide here).
+    fn crossing_from(self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing>;
+}
+
+/// An analytic knife of any kind (see [`PreparedKnife::analytic`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum AnalyticKnife {
+    Plane(PlaneSide),
+    Rect(RectSide),
+    Sphere(SphereSide),
+}
+
+impl AnalyticKnife {
+    /// The side value of `q` (negative: the knife's negative side).
+    pub fn eval(self, q: DVec3) -> f64 {
+        match self {
+            AnalyticKnife::Plane(a) => a.eval(q),
+            AnalyticKnife::Rect(a) => a.eval(q),
+            AnalyticKnife::Sphere(a) => a.eval(q),
         }
-        let (a, b) = (a.as_dvec3(), b.as_dvec3());
-        match &self.kind {
-            Kind::Plane { .. } => Some(plane_crossing(a, b, fa, fb)),
-            Kind::Rect { p, u, v, h, .. } => Some(plane_crossing(a, b, fa, fb)).filter(|c| {
-                let d = c.point - *p;
-                d.dot(*u).abs() <= h[0] && d.dot(*v).abs() <= h[1]
-            }),
-            Kind::Sphere { c, .. } => Some(sphere_crossing(a, b, *c, fa)),
-            // Triangulated knives are intersected triangle by triangle (corefine).
-            Kind::Mesh { .. } => None,
+    }
+
+    fn box_is_clear(self, b: &Aabb) -> bool {
+        match self {
+            AnalyticKnife::Plane(a) => a.box_is_clear(b),
+            AnalyticKnife::Rect(a) => a.box_is_clear(b),
+            AnalyticKnife::Sphere(a) => a.box_is_clear(b),
+        }
+    }
+
+    fn axis_interval(self, b: &Aabb, axis: usize) -> (f64, f64) {
+        match self {
+            AnalyticKnife::Plane(a) => a.axis_interval(b, axis),
+            AnalyticKnife::Rect(a) => a.axis_interval(b, axis),
+            AnalyticKnife::Sphere(a) => a.axis_interval(b, axis),
         }
     }
 }
 
-/// Side function of an analytic knife (see [`PreparedKnife::side_value`]).
+/// Infinite plane: side value the signed distance `n·(q − p)`, `n` unit;
+/// `m` the box margin.
 #[derive(Debug, Clone, Copy)]
-pub(crate) enum SideFn {
-    /// Signed distance `n·(q − p)`, `n` unit.
-    Plane { p: DVec3, n: DVec3 },
-    /// `|q − c|² − r²`.
-    Sphere { c: DVec3, r: f64 },
+pub(crate) struct PlaneSide {
+    p: DVec3,
+    n: DVec3,
+    m: f64,
 }
 
-impl SideFn {
-    /// The side value of `q` (negative: the knife's negative side).
-    #[inline]
-    pub fn eval(self, q: DVec3) -> f64 {
-        match self {
-            SideFn::Plane { p, n } => n.dot(q - p),
-            SideFn::Sphere { c, r } => (q - c).length_squared() - r * r,
+impl BoxQuery for PlaneSide {
+    #[inline(always)]
+    fn box_is_clear(&self, b: &Aabb) -> bool {
+        plane_clear(b.min.as_dvec3(), b.max.as_dvec3(), self.p, self.n, self.m)
+    }
+
+    #[inline(always)]
+    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
+        let others = [(axis + 1) % 3, (axis + 2) % 3];
+        plane_interval(
+            b.min.as_dvec3(),
+            b.max.as_dvec3(),
+            self.p,
+            self.n,
+            axis,
+            others,
+            self.m,
+        )
+    }
+}
+
+impl Analytic for PlaneSide {
+    const SIGN_CHANGE_CROSSES: bool = true;
+
+    #[inline(always)]
+    fn eval(self, q: DVec3) -> f64 {
+        self.n.dot(q - self.p)
+    }
+
+    #[inline(always)]
+    fn crossing_from(self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
+        ((fa < 0.0) != (fb < 0.0)).then(|| plane_crossing(a.as_dvec3(), b.as_dvec3(), fa, fb))
+    }
+}
+
+/// Bounded rectangle: the plane, its in-plane axes `u`, `v` and half
+/// extents `h` along them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RectSide {
+    plane: PlaneSide,
+    u: DVec3,
+    v: DVec3,
+    h: [f64; 2],
+}
+
+impl BoxQuery for RectSide {
+    #[inline(always)]
+    fn box_is_clear(&self, b: &Aabb) -> bool {
+        if self.plane.box_is_clear(b) {
+            return true;
         }
+        let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
+        let (p, m, h) = (self.plane.p, self.plane.m, self.h);
+        let (u0, u1) = project(lo, hi, p, self.u);
+        let (v0, v1) = project(lo, hi, p, self.v);
+        u1 < -h[0] - m || u0 > h[0] + m || v1 < -h[1] - m || v0 > h[1] + m
+    }
+
+    #[inline(always)]
+    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
+        let (a, z) = self.plane.axis_interval(b, axis);
+        let (p, m, h) = (self.plane.p, self.plane.m, self.h);
+        let ext = self.u[axis].abs() * h[0] + self.v[axis].abs() * h[1] + m;
+        (a.max(p[axis] - ext), z.min(p[axis] + ext))
+    }
+}
+
+impl Analytic for RectSide {
+    const SIGN_CHANGE_CROSSES: bool = false;
+
+    #[inline(always)]
+    fn eval(self, q: DVec3) -> f64 {
+        self.plane.eval(q)
+    }
+
+    #[inline(always)]
+    fn crossing_from(self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
+        self.plane.crossing_from(a, b, fa, fb).filter(|c| {
+            let d = c.point - self.plane.p;
+            d.dot(self.u).abs() <= self.h[0] && d.dot(self.v).abs() <= self.h[1]
+        })
+    }
+}
+
+/// Sphere: side value `|q − c|² − r²`; `m` the box margin.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SphereSide {
+    c: DVec3,
+    r: f64,
+    m: f64,
+}
+
+impl BoxQuery for SphereSide {
+    #[inline(always)]
+    fn box_is_clear(&self, b: &Aabb) -> bool {
+        let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
+        let (c, r, m) = (self.c, self.r, self.m);
+        let near = c.clamp(lo, hi);
+        let far = DVec3::new(
+            if c.x - lo.x > hi.x - c.x { lo.x } else { hi.x },
+            if c.y - lo.y > hi.y - c.y { lo.y } else { hi.y },
+            if c.z - lo.z > hi.z - c.z { lo.z } else { hi.z },
+        );
+        let rr = r * r;
+        let slack = m * (2.0 * r + m);
+        (near - c).length_squared() > rr + slack || (far - c).length_squared() < rr - slack
+    }
+
+    #[inline(always)]
+    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
+        let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
+        let (c, r, m) = (self.c, self.r, self.m);
+        let d2: f64 = [(axis + 1) % 3, (axis + 2) % 3]
+            .iter()
+            .map(|&j| (c[j] - c[j].clamp(lo[j], hi[j])).powi(2))
+            .sum();
+        if d2 > r * r + m * (2.0 * r + m) {
+            return (f64::INFINITY, f64::NEG_INFINITY);
+        }
+        let w = (r * r - d2).max(0.0).sqrt() + m;
+        (c[axis] - w, c[axis] + w)
+    }
+}
+
+impl Analytic for SphereSide {
+    const SIGN_CHANGE_CROSSES: bool = true;
+
+    #[inline(always)]
+    fn eval(self, q: DVec3) -> f64 {
+        (q - self.c).length_squared() - self.r * self.r
+    }
+
+    #[inline(always)]
+    fn crossing_from(self, a: Vec3, b: Vec3, fa: f64, fb: f64) -> Option<Crossing> {
+        ((fa < 0.0) != (fb < 0.0)).then(|| sphere_crossing(a.as_dvec3(), b.as_dvec3(), self.c, fa))
     }
 }
 
@@ -375,6 +498,7 @@ fn grow(b: &Aabb, m: f64) -> Aabb {
 
 /// Range of coordinate `axis` on the plane `n·(x − p) = 0` over the box's
 /// extent on the `others` axes, widened by the margin.
+#[inline(always)]
 fn plane_interval(
     lo: DVec3,
     hi: DVec3,
@@ -400,12 +524,14 @@ fn plane_interval(
     (a.min(b) - w, a.max(b) + w)
 }
 
+#[inline(always)]
 fn plane_clear(lo: DVec3, hi: DVec3, p: DVec3, n: DVec3, m: f64) -> bool {
     let (d0, d1) = project(lo, hi, p, n);
     d0 > m || d1 < -m
 }
 
 /// Range of `dir·(x − p)` over the box.
+#[inline(always)]
 fn project(lo: DVec3, hi: DVec3, p: DVec3, dir: DVec3) -> (f64, f64) {
     let c = (lo + hi) * 0.5 - p;
     let e = (hi - lo) * 0.5;

@@ -44,7 +44,7 @@ pub use knife::{Crossing, Knife, Side};
 use crate::surface::tree::sorted_overlap;
 use crate::surface::{Aabb, CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
-use knife::{Kind, PreparedKnife, SideFn};
+use knife::{Analytic, AnalyticKnife, BoxQuery, Kind, PreparedKnife};
 
 /// Options of [`cut`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -317,35 +317,41 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
             mesh.triangles.len()
         )));
     }
-    let mut stats = CutStats {
+    let stats = CutStats {
         nodes_total: forest.n_nodes(),
         triangles_total: mesh.triangles.len(),
         ..CutStats::default()
     };
-    let Some(side) = k.side_fn() else {
-        return locate_mesh_knife(mesh, forest, k, stats);
-    };
+    Ok(match k.analytic() {
+        None => return locate_mesh_knife(mesh, forest, k, stats),
+        Some(AnalyticKnife::Plane(a)) => locate_analytic(forest, a, stats),
+        Some(AnalyticKnife::Rect(a)) => locate_analytic(forest, a, stats),
+        Some(AnalyticKnife::Sphere(a)) => locate_analytic(forest, a, stats),
+    })
+}
+
+/// The tree query for an analytic knife (compiled per knife kind).
+fn locate_analytic<A: Analytic>(forest: &Forest, k: A, mut stats: CutStats) -> Located {
     // Analytic knife: per expanded leaf, each of its distinct vertices is
     // evaluated once (from the leaf's contiguous position table), then its
     // triangles are tested from the contiguous corner table without a
     // branch; a mixed one (for a rectangle: one whose crossing the
     // rectangle reaches) is kept as the key `id << 32 | entry`, its place in
     // the forest's tables, from which its cut points are made.
-    let exact = k.sign_change_crosses();
     let corner = |key: u64, c: usize| {
         let i = forest.corners[key as u32 as usize][c] as usize;
         (forest.leaf_vertices[i], forest.leaf_positions[i])
     };
     let mut neg: Vec<u8> = Vec::new();
     let mut keys: Vec<u64> = Vec::new();
-    let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
+    let expanded = walk(forest, &k, &mut stats, &mut |c: &CellNode| {
         let (vs, tris) = (c.vertices.range(), c.triangles.range());
         let v0 = c.vertices.start;
         neg.clear();
         neg.extend(
             forest.leaf_positions[vs]
                 .iter()
-                .map(|q| u8::from(side.eval(q.as_dvec3()) < 0.0)),
+                .map(|q| u8::from(k.eval(q.as_dvec3()) < 0.0)),
         );
         let before = keys.len();
         keys.resize(before + tris.len(), 0);
@@ -360,10 +366,10 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
             kept += usize::from((a ^ b) | (b ^ c) != 0);
         }
         keys.truncate(before + kept);
-        if !exact {
+        if !A::SIGN_CHANGE_CROSSES {
             let mut i = before;
             for j in before..keys.len() {
-                if knife_reaches(k, ends(corner, side, keys[j])) {
+                if knife_reaches(k, ends(corner, k, keys[j])) {
                     keys[i] = keys[j];
                     i += 1;
                 }
@@ -381,14 +387,7 @@ fn locate_prepared(mesh: &TriMesh, forest: &Forest, k: &PreparedKnife<'_>) -> Re
     }
     // Ascending ids (unique, the high halves of the keys).
     radsort::sort_by_key(&mut keys, |&key| (key >> 32) as u32);
-    Ok(finish_locate(
-        &keys,
-        |&key| (key >> 32) as u32,
-        corner,
-        side,
-        k,
-        stats,
-    ))
+    finish_locate(&keys, |&key| (key >> 32) as u32, corner, k, stats)
 }
 
 /// The tree query for a triangulated knife: candidate triangles from the
@@ -442,9 +441,9 @@ fn locate_mesh_knife(
 /// (independent loads, whose misses overlap instead of stalling each leaf
 /// in turn: the walk of the 1.6M-triangle bench surface takes 40–50 % less
 /// time); then the leaves are handed over.
-fn walk(
+fn walk<Q: BoxQuery>(
     forest: &Forest,
-    k: &PreparedKnife<'_>,
+    k: &Q,
     stats: &mut CutStats,
     leaf: &mut dyn FnMut(&CellNode) -> usize,
 ) -> Vec<(usize, usize)> {
@@ -574,17 +573,17 @@ type End = (u32, Vec3, f64);
 
 /// The corners of the triangle behind `item`, with their side values.
 #[inline(always)]
-fn ends<T: Copy>(corner: impl Fn(T, usize) -> (u32, Vec3), side: SideFn, item: T) -> [End; 3] {
+fn ends<T: Copy, A: Analytic>(corner: impl Fn(T, usize) -> (u32, Vec3), k: A, item: T) -> [End; 3] {
     std::array::from_fn(|c| {
         let (v, q) = corner(item, c);
-        (v, q, side.eval(q.as_dvec3()))
+        (v, q, k.eval(q.as_dvec3()))
     })
 }
 
 /// Whether a bounded knife (a rectangle) reaches the crossing of one of
 /// the triangle's edges whose ends change side; tree and scan both decide
 /// here.
-fn knife_reaches(k: &PreparedKnife<'_>, ends: [End; 3]) -> bool {
+fn knife_reaches<A: Analytic>(k: A, ends: [End; 3]) -> bool {
     (0..3).any(|e| {
         let (x, y) = (ends[e], ends[(e + 1) % 3]);
         let ((_, a, fa), (_, b, fb)) = if x.0 < y.0 { (x, y) } else { (y, x) };
@@ -598,35 +597,51 @@ fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located
         triangles_tested: mesh.triangles.len(),
         ..CutStats::default()
     };
-    let Some(side) = k.side_fn() else {
-        return scan_mesh_knife(mesh, k, stats);
-    };
+    Ok(match k.analytic() {
+        None => return scan_mesh_knife(mesh, k, stats),
+        Some(AnalyticKnife::Plane(a)) => scan_analytic(mesh, a, stats),
+        Some(AnalyticKnife::Rect(a)) => scan_analytic(mesh, a, stats),
+        Some(AnalyticKnife::Sphere(a)) => scan_analytic(mesh, a, stats),
+    })
+}
+
+/// The scan for an analytic knife (compiled per knife kind).
+fn scan_analytic<A: Analytic>(mesh: &TriMesh, k: A, stats: CutStats) -> Located {
     // Analytic knives: one side value per vertex, then only triangles with
     // mixed signs can hold a crossed edge.
     let neg: Vec<bool> = mesh
         .positions
         .par_iter()
-        .map(|q| side.eval(q.as_dvec3()) < 0.0)
+        .map(|q| k.eval(q.as_dvec3()) < 0.0)
         .collect();
-    let mixed: Vec<u32> = (0..mesh.triangles.len() as u32)
-        .into_par_iter()
-        .filter(|&t| {
-            let [a, b, c] = mesh.triangles[t as usize];
-            let (na, nb, nc) = (neg[a as usize], neg[b as usize], neg[c as usize]);
-            na != nb || nb != nc
+    // In chunks, each a plain loop that keeps its mixed ids without a
+    // branch (as the tree's leaf test does).
+    const CHUNK: usize = 1 << 15;
+    let mixed: Vec<u32> = (mesh.triangles.par_chunks(CHUNK).enumerate())
+        .map(|(i, tris)| {
+            let mut ids = vec![0; tris.len()];
+            let mut kept = 0;
+            for (tri, t) in tris.iter().zip((i * CHUNK) as u32..) {
+                let [a, b, c] = tri.map(|v| neg[v as usize]);
+                ids[kept] = t;
+                kept += usize::from((a != b) | (b != c));
+            }
+            ids.truncate(kept);
+            ids
         })
-        .collect();
+        .collect::<Vec<_>>()
+        .concat();
     let corner = |t: u32, c: usize| {
         let v = mesh.triangles[t as usize][c];
         (v, mesh.positions[v as usize])
     };
-    let crossed = if k.sign_change_crosses() {
+    let crossed = if A::SIGN_CHANGE_CROSSES {
         mixed
     } else {
-        let reaches = |&t: &u32| knife_reaches(k, ends(corner, side, t));
+        let reaches = |&t: &u32| knife_reaches(k, ends(corner, k, t));
         mixed.into_par_iter().filter(reaches).collect()
     };
-    Ok(finish_locate(&crossed, |&t| t, corner, side, k, stats))
+    finish_locate(&crossed, |&t| t, corner, k, stats)
 }
 
 /// The scan for a triangulated knife: corefinement of every triangle.
@@ -719,12 +734,11 @@ const CROSSED_EDGES: [(usize, usize); 8] = [
 /// and position of its corner `c` (in winding order). Only the two edges
 /// whose ends change side are looked up; a triangle none of whose edges the
 /// knife reaches (a rectangle's border) is dropped.
-fn finish_locate<T: Copy>(
+fn finish_locate<T: Copy, A: Analytic>(
     items: &[T],
     id: impl Fn(&T) -> u32,
     corner: impl Fn(T, usize) -> (u32, Vec3),
-    side: SideFn,
-    k: &PreparedKnife<'_>,
+    k: A,
     mut stats: CutStats,
 ) -> Located {
     let n = items.len();
@@ -740,7 +754,7 @@ fn finish_locate<T: Copy>(
         ..Located::default()
     };
     for item in items {
-        let f: [f64; 3] = std::array::from_fn(|c| side.eval(corner(*item, c).1.as_dvec3()));
+        let f: [f64; 3] = std::array::from_fn(|c| k.eval(corner(*item, c).1.as_dvec3()));
         let signs = (0..3).fold(0, |s, c| s | usize::from(f[c] < 0.0) << c);
         if signs == 0 || signs == 7 {
             continue;
@@ -756,7 +770,7 @@ fn finish_locate<T: Copy>(
         if x != u32::MAX
             && y != u32::MAX
             && x != y
-            && out.points[x as usize] == out.points[y as usize]
+            && same(out.points[x as usize], out.points[y as usize])
         {
             coincident.push(if e1 == 2 && e0 == 0 { (y, x) } else { (x, y) });
         }
@@ -789,10 +803,10 @@ fn finish_locate<T: Copy>(
 /// the edge `(v, v)` with v's side (and found under that key, not under the
 /// edge's).
 #[inline(always)]
-fn cut_edge<T: Copy>(
+fn cut_edge<T: Copy, A: Analytic>(
     ids: &mut EdgeTable,
     out: &mut Located,
-    k: &PreparedKnife<'_>,
+    k: A,
     corner: impl Fn(T, usize) -> (u32, Vec3),
     item: T,
     f: &[f64; 3],
@@ -816,8 +830,9 @@ fn cut_edge<T: Copy>(
         return u32::MAX;
     };
     let q = cross.point.as_vec3();
-    let (edge, slot, lower_negative) = if q == a || q == b {
-        let (v, fv) = if q == a { (i, fa) } else { (j, fb) };
+    let (at_a, at_b) = (same(q, a), same(q, b));
+    let (edge, slot, lower_negative) = if at_a | at_b {
+        let (v, fv) = if at_a { (i, fa) } else { (j, fb) };
         match ids.find((v, v), &out.edges) {
             Ok(id) => return id,
             Err(slot) => ((v, v), slot, fv < 0.0),
@@ -831,6 +846,14 @@ fn cut_edge<T: Copy>(
     out.edges.push(edge);
     ids.slots[slot] = id;
     id
+}
+
+/// Whether two points are equal (`==` on each coordinate), without a
+/// branch per coordinate: on a cut along a grid plane, one coordinate of a
+/// crossing often equals its end's and the next decides.
+#[inline(always)]
+fn same(p: Vec3, q: Vec3) -> bool {
+    (p.x == q.x) & (p.y == q.y) & (p.z == q.z)
 }
 
 /// Joins the cut vertices of each pair in `pairs` (equal positions) into
@@ -1134,7 +1157,7 @@ fn split_analytic(
 ) -> Result<Split> {
     let n_v = mesh.positions.len() as u32;
     let n_c = located.points.len() as u32;
-    let side = k.side_fn().expect("an analytic knife");
+    let side = k.analytic().expect("an analytic knife");
     // Sub-triangles of each crossed triangle.
     let mut subs: Vec<Vec<Sub>> = Vec::with_capacity(located.triangles.len());
     let mut glued = vec![false; n_c as usize];
@@ -1538,12 +1561,12 @@ mod tests {
     /// ascending; the two uniform patterns list none.
     #[test]
     fn crossed_edges_are_the_sign_changes() {
-        for signs in 0..8usize {
+        for (signs, &listed) in CROSSED_EDGES.iter().enumerate() {
             let neg = |c: usize| signs >> c & 1 == 1;
             let changes: Vec<usize> = (0..3).filter(|&e| neg(e) != neg((e + 1) % 3)).collect();
             match changes[..] {
                 [] => assert!(signs == 0 || signs == 7),
-                [e0, e1] => assert_eq!(CROSSED_EDGES[signs], (e0, e1), "signs {signs:03b}"),
+                [e0, e1] => assert_eq!(listed, (e0, e1), "signs {signs:03b}"),
                 _ => unreachable!("a triangle changes side along 0 or 2 edges"),
             }
         }

@@ -455,19 +455,15 @@ fn walk<Q: BoxQuery>(
         }
         !clear
     };
-    // Children a slab can touch: all of them, or on a sorted forest the
-    // span found by two binary searches (seed §4.3); the others are clear.
-    let span = |parent: &crate::surface::Aabb, all: std::ops::Range<usize>, axis: usize| {
-        if !forest.axis_sorted {
-            return all;
+    // Children a slab can touch: on a sorted forest those found by a binary
+    // search and the run after it (seed §4.3), else all of them; the
+    // others are clear.
+    let slab = |parent: &crate::surface::Aabb, axis: usize| {
+        if forest.axis_sorted {
+            k.axis_interval(parent, axis)
+        } else {
+            (f64::NEG_INFINITY, f64::INFINITY)
         }
-        let (lo, hi) = k.axis_interval(parent, axis);
-        let r = match axis {
-            2 => sorted_overlap(&forest.layers[all.clone()], |n| &n.bbox, 2, lo, hi),
-            1 => sorted_overlap(&forest.rows[all.clone()], |n| &n.bbox, 1, lo, hi),
-            _ => sorted_overlap(&forest.cells[all.clone()], |n| &n.bbox, 0, lo, hi),
-        };
-        all.start + r.start..all.start + r.end
     };
     // The leaves to expand, and per expanded inner node its span of them.
     let mut leaves: Vec<u32> = Vec::new();
@@ -477,19 +473,25 @@ fn walk<Q: BoxQuery>(
             continue;
         }
         let g_start = leaves.len();
-        for l in &forest.layers[span(&g.bbox, g.layers.range(), 2)] {
+        let layers = &forest.layers[g.layers.range()];
+        let (lo, hi) = slab(&g.bbox, 2);
+        for l in sorted_overlap(layers, |n| &n.bbox, 2, lo, hi).map(|i| &layers[i]) {
             if !visit(&l.bbox, stats) {
                 continue;
             }
             let l_start = leaves.len();
-            for r in &forest.rows[span(&l.bbox, l.rows.range(), 1)] {
+            let rows = &forest.rows[l.rows.range()];
+            let (lo, hi) = slab(&l.bbox, 1);
+            for r in sorted_overlap(rows, |n| &n.bbox, 1, lo, hi).map(|i| &rows[i]) {
                 if !visit(&r.bbox, stats) {
                     continue;
                 }
                 let r_start = leaves.len();
-                for c in span(&r.bbox, r.cells.range(), 0) {
-                    if visit(&forest.cells[c].bbox, stats) {
-                        leaves.push(c as u32);
+                let cells = &forest.cells[r.cells.range()];
+                let (lo, hi) = slab(&r.bbox, 0);
+                for c in sorted_overlap(cells, |n| &n.bbox, 0, lo, hi) {
+                    if visit(&cells[c].bbox, stats) {
+                        leaves.push((r.cells.start as usize + c) as u32);
                     }
                 }
                 inner.push((r_start, leaves.len()));

@@ -450,20 +450,24 @@ impl Forest {
     }
 }
 
-/// The nodes among `nodes` (boxes sorted along `axis`, see
+/// The indices of the nodes among `nodes` (boxes sorted along `axis`, see
 /// [`Forest::axis_sorted`]) whose extent along `axis` can meet the closed
-/// interval `[lo, hi]`: two binary searches (seed §4.3), as an index range
-/// into `nodes`.
-pub fn sorted_overlap<T>(
-    nodes: &[T],
-    bbox: impl Fn(&T) -> &Aabb,
+/// interval `[lo, hi]` (seed §4.3): a binary search for the first whose
+/// `max` reaches `lo`, then the run while `min` stays within `hi` (the
+/// nodes a caller visits anyway, instead of a second binary search).
+/// `[−∞, ∞]` gives every node, sorted or not.
+pub fn sorted_overlap<'a, T>(
+    nodes: &'a [T],
+    bbox: impl Fn(&T) -> &Aabb + 'a,
     axis: usize,
     lo: f64,
     hi: f64,
-) -> std::ops::Range<usize> {
+) -> impl Iterator<Item = usize> + 'a {
     let start = nodes.partition_point(|n| f64::from(bbox(n).max[axis]) < lo);
-    let end = nodes.partition_point(|n| f64::from(bbox(n).min[axis]) <= hi);
-    start..end.max(start)
+    (nodes[start..].iter())
+        .take_while(move |n| hi == f64::INFINITY || f64::from(bbox(n).min[axis]) <= hi)
+        .enumerate()
+        .map(move |(i, _)| start + i)
 }
 
 /// Least triangles per part of the parallel build (at most one part per

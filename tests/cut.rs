@@ -960,6 +960,13 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
         },
     ];
     let (plain, _, _) = Forest::from_mesh(&s.mesh);
+    // The same boxes taken as unsorted: every child box is tested instead
+    // of the binary-searched slab.
+    assert!(s.forest.axis_sorted);
+    let unsorted = Forest {
+        axis_sorted: false,
+        ..s.forest.clone()
+    };
     for k in &knives {
         let scan = locate_full_scan(&s.mesh, k).unwrap();
         assert!(!scan.triangles.is_empty(), "{k:?} misses the shell");
@@ -971,6 +978,10 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
             &scan,
             "virtual-grid forest",
         );
+        let all = locate(&s.mesh, &unsorted, k).unwrap();
+        same_located(&all, &scan, "unsorted forest");
+        assert!(all.stats.nodes_visited > tree.stats.nodes_visited, "{k:?}");
+        assert!(all.stats.triangles_tested >= tree.stats.triangles_tested);
     }
     // Negative control: a knife moved by a tenth of a voxel differs.
     let moved = plane([19.5, 19.5, 21.4], [0.1, 0.2, 1.0]);

@@ -246,32 +246,26 @@ impl PreparedKnife<'_> {
     }
 }
 
-impl BoxQuery for PreparedKnife<'_> {
+/// The box tests of a triangulated knife: the boxes of its own forest,
+/// grown by the margin.
+pub(crate) struct MeshBoxes<'a> {
+    pub forest: &'a Forest,
+    pub margin: f64,
+}
+
+impl BoxQuery for MeshBoxes<'_> {
     fn box_is_clear(&self, b: &Aabb) -> bool {
-        match (self.analytic(), &self.kind) {
-            (Some(a), _) => a.box_is_clear(b),
-            (None, Kind::Mesh { forest, .. }) => !forest_touches(forest, &grow(b, self.margin)),
-            (None, _) => false,
-        }
+        !forest_touches(self.forest, &grow(b, self.margin))
     }
 
-    fn axis_interval(&self, b: &Aabb, axis: usize) -> (f64, f64) {
-        match (self.analytic(), &self.kind) {
-            (Some(a), _) => a.axis_interval(b, axis),
-            (None, Kind::Mesh { forest, .. }) => {
-                let m = self.margin;
-                forest
-                    .groups
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), g| {
-                        (
-                            a.min(f64::from(g.bbox.min[axis]) - m),
-                            b.max(f64::from(g.bbox.max[axis]) + m),
-                        )
-                    })
-            }
-            (None, _) => (f64::NEG_INFINITY, f64::INFINITY),
-        }
+    fn axis_interval(&self, _: &Aabb, axis: usize) -> (f64, f64) {
+        let m = self.margin;
+        (self.forest.groups.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), g| {
+            (
+                a.min(f64::from(g.bbox.min[axis]) - m),
+                b.max(f64::from(g.bbox.max[axis]) + m),
+            )
+        })
     }
 }
 
@@ -321,22 +315,6 @@ impl AnalyticKnife {
             AnalyticKnife::Plane(a) => a.eval(q),
             AnalyticKnife::Rect(a) => a.eval(q),
             AnalyticKnife::Sphere(a) => a.eval(q),
-        }
-    }
-
-    fn box_is_clear(self, b: &Aabb) -> bool {
-        match self {
-            AnalyticKnife::Plane(a) => a.box_is_clear(b),
-            AnalyticKnife::Rect(a) => a.box_is_clear(b),
-            AnalyticKnife::Sphere(a) => a.box_is_clear(b),
-        }
-    }
-
-    fn axis_interval(self, b: &Aabb, axis: usize) -> (f64, f64) {
-        match self {
-            AnalyticKnife::Plane(a) => a.axis_interval(b, axis),
-            AnalyticKnife::Rect(a) => a.axis_interval(b, axis),
-            AnalyticKnife::Sphere(a) => a.axis_interval(b, axis),
         }
     }
 }

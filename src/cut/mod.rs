@@ -44,7 +44,7 @@ pub use knife::{Crossing, Knife, Side};
 use crate::surface::tree::sorted_overlap;
 use crate::surface::{Aabb, CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
-use knife::{Analytic, AnalyticKnife, BoxQuery, Kind, PreparedKnife};
+use knife::{Analytic, AnalyticKnife, BoxQuery, Kind, MeshBoxes, PreparedKnife};
 
 /// Options of [`cut`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -408,7 +408,11 @@ fn locate_mesh_knife(
         ));
     };
     let mut tested: Vec<u32> = Vec::new();
-    let expanded = walk(forest, k, &mut stats, &mut |c: &CellNode| {
+    let boxes = MeshBoxes {
+        forest: knife_forest,
+        margin: k.margin(),
+    };
+    let expanded = walk(forest, &boxes, &mut stats, &mut |c: &CellNode| {
         tested.extend_from_slice(&forest.triangles[c.triangles.range()]);
         c.triangles.len()
     });
@@ -475,22 +479,22 @@ fn walk<Q: BoxQuery>(
         let g_start = leaves.len();
         let layers = &forest.layers[g.layers.range()];
         let (lo, hi) = slab(&g.bbox, 2);
-        for l in sorted_overlap(layers, |n| &n.bbox, 2, lo, hi).map(|i| &layers[i]) {
+        for (_, l) in sorted_overlap(layers, |n| &n.bbox, 2, lo, hi) {
             if !visit(&l.bbox, stats) {
                 continue;
             }
             let l_start = leaves.len();
             let rows = &forest.rows[l.rows.range()];
             let (lo, hi) = slab(&l.bbox, 1);
-            for r in sorted_overlap(rows, |n| &n.bbox, 1, lo, hi).map(|i| &rows[i]) {
+            for (_, r) in sorted_overlap(rows, |n| &n.bbox, 1, lo, hi) {
                 if !visit(&r.bbox, stats) {
                     continue;
                 }
                 let r_start = leaves.len();
                 let cells = &forest.cells[r.cells.range()];
                 let (lo, hi) = slab(&r.bbox, 0);
-                for c in sorted_overlap(cells, |n| &n.bbox, 0, lo, hi) {
-                    if visit(&cells[c].bbox, stats) {
+                for (c, cell) in sorted_overlap(cells, |n| &n.bbox, 0, lo, hi) {
+                    if visit(&cell.bbox, stats) {
                         leaves.push((r.cells.start as usize + c) as u32);
                     }
                 }

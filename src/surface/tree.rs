@@ -450,24 +450,23 @@ impl Forest {
     }
 }
 
-/// The indices of the nodes among `nodes` (boxes sorted along `axis`, see
+/// The nodes among `nodes` (boxes sorted along `axis`, see
 /// [`Forest::axis_sorted`]) whose extent along `axis` can meet the closed
 /// interval `[lo, hi]` (seed §4.3): a binary search for the first whose
 /// `max` reaches `lo`, then the run while `min` stays within `hi` (the
 /// nodes a caller visits anyway, instead of a second binary search).
-/// `[−∞, ∞]` gives every node, sorted or not.
+/// `[−∞, ∞]` gives every node, sorted or not. Yields (index, node).
 pub fn sorted_overlap<'a, T>(
     nodes: &'a [T],
     bbox: impl Fn(&T) -> &Aabb + 'a,
     axis: usize,
     lo: f64,
     hi: f64,
-) -> impl Iterator<Item = usize> + 'a {
+) -> impl Iterator<Item = (usize, &'a T)> + 'a {
     let start = nodes.partition_point(|n| f64::from(bbox(n).max[axis]) < lo);
-    (nodes[start..].iter())
-        .take_while(move |n| hi == f64::INFINITY || f64::from(bbox(n).min[axis]) <= hi)
-        .enumerate()
-        .map(move |(i, _)| start + i)
+    (start..)
+        .zip(&nodes[start..])
+        .take_while(move |(_, n)| hi == f64::INFINITY || f64::from(bbox(n).min[axis]) <= hi)
 }
 
 /// Least triangles per part of the parallel build (at most one part per

@@ -217,12 +217,6 @@ impl Knife {
 }
 
 impl PreparedKnife<'_> {
-    /// Signed side value of a point for the analytic knives (plane and
-    /// rectangle: signed distance; sphere: |p − c|² − r²); `None` for mesh knives.
-    pub fn side_value(&self, p: DVec3) -> Option<f64> {
-        self.analytic().map(|a| a.eval(p))
-    }
-
     /// The analytic knife, resolved once so that a query's loops are
     /// compiled for its kind; `None` for mesh knives.
     pub fn analytic(&self) -> Option<AnalyticKnife> {

@@ -926,6 +926,14 @@ struct Sub {
     side: Option<bool>,
 }
 
+/// A stretch of the cut surface in output order (see `assemble`).
+enum Out<'a> {
+    /// Consecutive unsplit input triangles (their vertex nodes are their ids).
+    Unsplit(&'a [[u32; 3]]),
+    /// A sub-triangle or cap triangle (vertex ids as in [`Sub`]) and its side.
+    Sub([u32; 3], Option<bool>),
+}
+
 /// Splits, regroups and caps (shared by the tree and the scan).
 fn assemble(
     mesh: &TriMesh,
@@ -1002,47 +1010,105 @@ fn assemble(
         n_v + 2 * c + u32::from(positive)
     };
     let flat = |k3: &[u32; 3]| k3[0] == k3[1] || k3[1] == k3[2] || k3[2] == k3[0];
-    // Union-find over vertex nodes; every sub-triangle joins its vertices.
+    // The cut surface in output order: input triangles in id order (split
+    // ones replaced by their sub-triangles, as vertex nodes with their
+    // side), then the negative caps, then the positive caps. Runs of unsplit
+    // triangles are handed whole: their vertex nodes are their own ids.
+    let stream = |f: &mut dyn FnMut(Out<'_>)| {
+        let mut next = 0;
+        for (&t, s) in located.triangles.iter().zip(&subs) {
+            f(Out::Unsplit(&mesh.triangles[next..t as usize]));
+            for x in s {
+                f(Out::Sub(x.v, x.side));
+            }
+            next = t as usize + 1;
+        }
+        f(Out::Unsplit(&mesh.triangles[next..]));
+        for &c in &cap_tris {
+            f(Out::Sub(c, Some(true)));
+        }
+        for &c in &cap_tris {
+            f(Out::Sub([c[0], c[2], c[1]], Some(false)));
+        }
+    };
+    // Union-find over vertex nodes; every triangle joins its vertices. Cut
+    // vertices separate because each side uses its own copy; glued cut
+    // vertices have one copy and join both sides.
     let n_nodes = (n_v + 2 * n_c) as usize;
     let mut uf = UnionFind::with_len(n_nodes);
-    let mut crossed_iter = located.triangles.iter().zip(&subs).peekable();
-    // Output order: input triangles in id order (split ones replaced by
-    // their sub-triangles), then the negative caps, then the positive caps.
-    let mut out_tris: Vec<([u32; 3], Option<bool>)> =
-        Vec::with_capacity(mesh.triangles.len() + 3 * subs.len());
-    for (t, tri) in mesh.triangles.iter().enumerate() {
-        match crossed_iter.peek() {
-            Some((ct, s)) if **ct as usize == t => {
-                for sub in s.iter() {
-                    out_tris.push((sub.v, sub.side));
-                }
-                crossed_iter.next();
-            }
-            _ => out_tris.push((*tri, None)),
+    let mut join = |k3: [u32; 3]| {
+        if !flat(&k3) {
+            uf.union(k3[0], k3[1]);
+            uf.union(k3[0], k3[2]);
         }
-    }
-    for &c in &cap_tris {
-        out_tris.push((c, Some(true)));
-    }
-    for &c in &cap_tris {
-        out_tris.push(([c[0], c[2], c[1]], Some(false)));
-    }
-    let keyed: Vec<[u32; 3]> = out_tris
-        .iter()
-        .map(|(v, s)| v.map(|x| node(x, *s)))
-        .collect();
-    // Cut vertices separate because each side uses its own copy; glued cut
-    // vertices have one copy and join both sides.
-    for k3 in keyed.iter().filter(|k3| !flat(k3)) {
-        uf.union(k3[0], k3[1]);
-        uf.union(k3[0], k3[2]);
-    }
-    // Pieces by first triangle; per piece its own vertex numbering.
-    // Every vertex node belongs to exactly one piece (all triangles using it
-    // were united), so one global node → local index table serves all pieces.
+    };
+    stream(&mut |out| match out {
+        Out::Unsplit(run) => run.iter().for_each(|&t| join(t)),
+        Out::Sub(v, side) => join(v.map(|x| node(x, side))),
+    });
+    let root = uf.roots();
+    // Side of each input vertex for an analytic knife (an unsplit
+    // triangle's side is its first vertex's).
+    let negative: Vec<bool> = match k.analytic() {
+        Some(a) => (mesh.positions.par_iter())
+            .map(|q| a.eval(q.as_dvec3()) < 0.0)
+            .collect(),
+        None => Vec::new(),
+    };
+    let evidence = |neg: Option<bool>| match neg {
+        Some(n) => (n, !n),
+        None => (false, false),
+    };
+    // A sub-triangle's vertex nodes and side evidence (negative, positive),
+    // unless it is flat.
+    let sub_key = |v: [u32; 3], side: Option<bool>| {
+        let k3 = v.map(|x| node(x, side));
+        if flat(&k3) {
+            return None;
+        }
+        // Glued sub-triangles (an open knife or a rectangle's border ends
+        // there) touch both sides.
+        let glued_sub = side.is_none() && v.iter().any(|&x| x >= n_v);
+        let first_original = || v.iter().find(|&&x| x < n_v);
+        let seen = match side {
+            _ if glued_sub => (true, true),
+            Some(n) => evidence(Some(n)),
+            None => evidence(first_original().and_then(|&x| negative.get(x as usize).copied())),
+        };
+        Some((k3, seen))
+    };
+    // Pieces numbered by first triangle, and their triangle counts (so
+    // that each piece's arrays are allocated once).
     let mut piece_of_root = vec![u32::MAX; n_nodes];
-    let mut pieces: Vec<TriMesh> = Vec::new();
-    let mut piece_side: Vec<(bool, bool)> = Vec::new();
+    let mut n_triangles: Vec<usize> = Vec::new();
+    let mut count = |k3: [u32; 3]| {
+        let p = &mut piece_of_root[root[k3[0] as usize] as usize];
+        if *p == u32::MAX {
+            *p = n_triangles.len() as u32;
+            n_triangles.push(0);
+        }
+        n_triangles[*p as usize] += 1;
+    };
+    stream(&mut |out| match out {
+        Out::Unsplit(run) => (run.iter().filter(|t| !flat(t))).for_each(|&t| count(t)),
+        Out::Sub(v, side) => {
+            if let Some((k3, _)) = sub_key(v, side) {
+                count(k3);
+            }
+        }
+    });
+    // Per piece its own vertex numbering, by first use. Every vertex node
+    // belongs to exactly one piece (all triangles using it were united), so
+    // one global node → local index table serves all pieces. A closed piece
+    // has about half as many vertices as triangles.
+    let mut pieces: Vec<TriMesh> = (n_triangles.iter())
+        .map(|&n| TriMesh {
+            positions: Vec::with_capacity(n / 2 + 64),
+            triangles: Vec::with_capacity(n),
+            scalars: Vec::new(),
+        })
+        .collect();
+    let mut piece_side = vec![(false, false); pieces.len()];
     let mut local = vec![u32::MAX; n_nodes];
     let position = |key: u32| -> Vec3 {
         if key < n_v {
@@ -1051,44 +1117,32 @@ fn assemble(
             points[((key - n_v) / 2) as usize]
         }
     };
-    let side_of = |tri: &[u32; 3], s: Option<bool>| -> Option<bool> {
-        s.or_else(|| match &k.kind {
-            Kind::Mesh { .. } => None,
-            _ => tri
-                .iter()
-                .find(|&&v| v < n_v)
-                .and_then(|&v| k.side_value(mesh.positions[v as usize].as_dvec3()))
-                .map(|f| f < 0.0),
-        })
-    };
-    for (i, k3) in keyed.iter().enumerate().filter(|(_, k3)| !flat(k3)) {
-        let root = uf.find(k3[0]) as usize;
-        if piece_of_root[root] == u32::MAX {
-            piece_of_root[root] = pieces.len() as u32;
-            pieces.push(TriMesh::default());
-            piece_side.push((false, false));
-        }
-        let pi = piece_of_root[root] as usize;
-        // Glued sub-triangles (an open knife ends there) touch both sides;
-        // unsplit triangles of a mesh knife say nothing about their side.
-        let glued_sub = out_tris[i].1.is_none() && out_tris[i].0.iter().any(|&v| v >= n_v);
-        match side_of(&out_tris[i].0, out_tris[i].1) {
-            _ if glued_sub => piece_side[pi] = (true, true),
-            Some(true) => piece_side[pi].0 = true,
-            Some(false) => piece_side[pi].1 = true,
-            None => {}
-        }
+    let mut add = |k3: [u32; 3], seen: (bool, bool)| {
+        let pi = piece_of_root[root[k3[0] as usize] as usize] as usize;
+        let side = &mut piece_side[pi];
+        *side = (side.0 | seen.0, side.1 | seen.1);
         let piece = &mut pieces[pi];
-        let tri = k3.map(|key| {
+        let mut vertex = |key: u32| {
             let slot = &mut local[key as usize];
             if *slot == u32::MAX {
                 *slot = piece.positions.len() as u32;
                 piece.positions.push(position(key));
             }
             *slot
-        });
+        };
+        let tri = [vertex(k3[0]), vertex(k3[1]), vertex(k3[2])];
         piece.triangles.push(tri);
-    }
+    };
+    stream(&mut |out| match out {
+        // Unsplit triangles of a mesh knife say nothing about their side.
+        Out::Unsplit(run) => (run.iter().filter(|t| !flat(t)))
+            .for_each(|&t| add(t, evidence(negative.get(t[0] as usize).copied()))),
+        Out::Sub(v, side) => {
+            if let Some((k3, seen)) = sub_key(v, side) {
+                add(k3, seen);
+            }
+        }
+    });
     // A piece a closed mesh knife never reaches lies wholly inside or
     // outside it: its winding number says which.
     let untouched_side = match &k.kind {

@@ -107,6 +107,17 @@ impl UnionFind {
         x
     }
 
+    /// The root of every node, consuming the forest: one ascending pass,
+    /// since a node's parent never has a higher id (a union links the higher
+    /// root under the lower, halving keeps ancestors).
+    pub fn roots(mut self) -> Vec<u32> {
+        for x in 0..self.parent.len() {
+            let p = self.parent[x] as usize;
+            self.parent[x] = self.parent[p];
+        }
+        self.parent
+    }
+
     /// Unites the sets of `a` and `b`; returns the new root.
     pub fn union(&mut self, a: u32, b: u32) -> u32 {
         let (ra, rb) = (self.find(a), self.find(b));

@@ -256,6 +256,74 @@ fn hollow_shell_cut_gets_annular_caps() {
     same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
 }
 
+/// Connected components of a mesh's vertices joined by its triangles, and
+/// whether every vertex is used.
+fn components(m: &TriMesh) -> (usize, bool) {
+    let mut parent: Vec<usize> = (0..m.positions.len()).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    let mut used = vec![false; m.positions.len()];
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|v| v as usize);
+        used[a] = true;
+        used[b] = true;
+        used[c] = true;
+        for y in [b, c] {
+            let (ra, ry) = (find(&mut parent, a), find(&mut parent, y));
+            parent[ra.max(ry)] = ra.min(ry);
+        }
+    }
+    let n = (0..parent.len())
+        .filter(|&x| find(&mut parent, x) == x)
+        .count();
+    (n, used.iter().all(|&u| u))
+}
+
+/// Regrouping runs in parallel chunks of 65,536 input triangles: on a
+/// surface several chunks long the pieces are the same on one thread as on
+/// four, each is connected, uses every vertex it has, and together they
+/// hold every triangle.
+#[test]
+fn pieces_are_the_same_on_any_number_of_threads() {
+    let s = mc(&shell_volume(128, 40.0, 58.0));
+    let n = s.mesh.triangles.len();
+    assert!(n > 2 * 65_536, "{n} triangles");
+    let knives = [
+        (plane([63.5, 63.5, 60.0], [0.1, 0.2, 1.0]), CAP),
+        (
+            plane([63.5, 63.5, 60.0], [0.1, 0.2, 1.0]),
+            CutOptions { cap: false },
+        ),
+        (plane([63.5, 40.0, 63.5], [0.0, 1.0, 0.0]), CAP),
+    ];
+    for (k, opts) in &knives {
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| cut(&s.mesh, &s.forest, k, opts).unwrap())
+        };
+        let (one, four) = (on(1), on(4));
+        same_result(&one, &four);
+        assert_eq!(one.pieces.len(), if opts.cap { 2 } else { 4 }, "{k:?}");
+        for p in &one.pieces {
+            assert_eq!(components(p), (1, true), "{k:?}");
+        }
+        let held: usize = one.pieces.iter().map(|p| p.triangles.len()).sum();
+        let split = one.stats.triangles_split;
+        assert!(
+            held >= n + split,
+            "{held} triangles for {n} input, {split} split"
+        );
+    }
+}
+
 #[test]
 fn sphere_cut_takes_a_bite() {
     let s = mc(&ball_volume(40, 14.0));

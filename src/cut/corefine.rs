@@ -740,7 +740,16 @@ pub(crate) fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
     let open: Vec<u32> = start
         .par_windows(2)
         .flat_map_iter(|w| {
-            let mut edges = bucket[w[0]..w[1]].to_vec();
+            // A vertex has a few edges: sorted on the stack unless many.
+            let run = &bucket[w[0]..w[1]];
+            let (mut small, mut many) = ([(0, false, 0); 16], Vec::new());
+            let edges = if run.len() <= small.len() {
+                &mut small[..run.len()]
+            } else {
+                many.resize(run.len(), (0, false, 0));
+                &mut many[..]
+            };
+            edges.copy_from_slice(run);
             edges.sort_unstable();
             edges
                 .chunk_by(|x, y| x.0 == y.0)

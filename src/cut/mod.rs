@@ -32,6 +32,7 @@ mod corefine;
 mod knife;
 
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::{DVec2, DVec3, Vec3};
@@ -42,7 +43,7 @@ pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
 use crate::surface::tree::sorted_overlap;
-use crate::surface::{Aabb, CellNode, Forest, UnionFind};
+use crate::surface::{Aabb, AtomicUnionFind, CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 use knife::{Analytic, AnalyticKnife, BoxQuery, Kind, MeshBoxes, PreparedKnife};
 
@@ -111,7 +112,8 @@ pub struct CutStats {
 #[derive(Debug, Clone)]
 pub struct CutResult {
     /// The pieces (connected components after the cut), each its own
-    /// indexed mesh; numbered by their first triangle in input order.
+    /// indexed mesh; numbered by their first triangle in input order, each
+    /// with its input vertices in input order, then its cut and cap points.
     pub pieces: Vec<TriMesh>,
     /// Side of each piece.
     pub sides: Vec<Side>,
@@ -926,12 +928,319 @@ struct Sub {
     side: Option<bool>,
 }
 
-/// A stretch of the cut surface in output order (see `assemble`).
-enum Out<'a> {
-    /// Consecutive unsplit input triangles (their vertex nodes are their ids).
-    Unsplit(&'a [[u32; 3]]),
-    /// A sub-triangle or cap triangle (vertex ids as in [`Sub`]) and its side.
+/// Slots of the few keys (pieces) that runs of triangles mostly stay in:
+/// the last hit, else a hash map.
+#[derive(Default)]
+struct Slots {
+    last: Option<(u32, usize)>,
+    map: HashMap<u32, usize>,
+}
+
+impl Slots {
+    /// The slot of `key`, made by `new` the first time.
+    #[inline(always)]
+    fn get(&mut self, key: u32, new: impl FnOnce() -> usize) -> usize {
+        if let Some((k, s)) = self.last
+            && k == key
+        {
+            return s;
+        }
+        let s = *self.map.entry(key).or_insert_with(new);
+        self.last = Some((key, s));
+        s
+    }
+}
+
+/// Input triangles per chunk of the parallel regrouping passes.
+const REGROUP_CHUNK: usize = 1 << 16;
+
+/// The cut surface to regroup into pieces: input triangles in id order
+/// (split ones replaced by their sub-triangles), then the negative caps,
+/// then the positive caps, as triangles of vertex nodes. Passes over it run
+/// in parallel chunks of input triangles (the caps last), and its pieces
+/// come out the same for any number of threads.
+struct Regroup<'a> {
+    mesh: &'a TriMesh,
+    located: &'a Located,
+    subs: &'a [Vec<Sub>],
+    glued: &'a [bool],
+    caps: &'a [[u32; 3]],
+    /// Cut and cap points (vertex `n_v + i` is point i).
+    points: &'a [Vec3],
+    /// Per input vertex, whether it lies on the negative side (analytic
+    /// knives; empty for a triangulated knife).
+    negative: Vec<bool>,
+    /// Per chunk its first input triangle and first crossed triangle (index
+    /// into `located.triangles`), then the ends; the caps chunk follows.
+    bounds: Vec<(usize, usize)>,
+}
+
+/// One piece's share of a chunk: its root, triangles and side evidence
+/// (negative, positive).
+struct Tally {
+    root: u32,
+    triangles: usize,
+    seen: (bool, bool),
+}
+
+/// A chunk's stretch of one piece's triangles: (piece, its slots).
+type Stretch<'t> = (usize, &'t mut [[u32; 3]]);
+
+/// Where a kept triangle of the cut surface comes from.
+#[derive(Clone, Copy)]
+enum Origin {
+    /// An unsplit input triangle.
+    Unsplit,
+    /// A sub-triangle or cap (vertex ids as in [`Sub`]) with its side.
     Sub([u32; 3], Option<bool>),
+}
+
+impl<'a> Regroup<'a> {
+    fn new(
+        mesh: &'a TriMesh,
+        located: &'a Located,
+        subs: &'a [Vec<Sub>],
+        glued: &'a [bool],
+        caps: &'a [[u32; 3]],
+        points: &'a [Vec3],
+        negative: Vec<bool>,
+    ) -> Self {
+        let n_t = mesh.triangles.len();
+        let bounds = ((0..n_t).step_by(REGROUP_CHUNK).chain([n_t]))
+            .map(|t| (t, located.triangles.partition_point(|&c| (c as usize) < t)))
+            .collect();
+        Regroup {
+            mesh,
+            located,
+            subs,
+            glued,
+            caps,
+            points,
+            negative,
+            bounds,
+        }
+    }
+
+    fn n_v(&self) -> u32 {
+        self.mesh.positions.len() as u32
+    }
+
+    /// Vertex nodes: originals, then two copies per cut vertex (negative,
+    /// positive); a glued cut vertex uses its negative copy on both sides.
+    fn n_nodes(&self) -> usize {
+        self.mesh.positions.len() + 2 * self.points.len()
+    }
+
+    /// The node of vertex `v` in a triangle of side `side`. A cut at mesh
+    /// vertex `a` is `a` itself on a's side (and when glued), so the
+    /// sub-triangles it flattens repeat a node and are dropped.
+    fn node(&self, v: u32, side: Option<bool>) -> u32 {
+        let n_v = self.n_v();
+        if v < n_v {
+            return v;
+        }
+        let c = (v - n_v) as usize;
+        let glued = self.glued[c];
+        if let Some(&(a, b)) = self.located.edges.get(c)
+            && a == b
+            && (glued || side == Some(self.located.lower_negative[c]))
+        {
+            return a;
+        }
+        n_v + 2 * c as u32 + u32::from(!glued && side == Some(false))
+    }
+
+    /// Chunks, the caps last.
+    fn chunks(&self) -> std::ops::Range<usize> {
+        0..self.bounds.len()
+    }
+
+    /// Every triangle of chunk `i` that is not flat, as vertex nodes, in
+    /// output order.
+    #[inline(always)]
+    fn for_each_kept(&self, i: usize, mut f: impl FnMut([u32; 3], Origin)) {
+        let flat = |k3: &[u32; 3]| k3[0] == k3[1] || k3[1] == k3[2] || k3[2] == k3[0];
+        let sub = |v: [u32; 3], side: Option<bool>, f: &mut dyn FnMut([u32; 3], Origin)| {
+            let k3 = v.map(|x| self.node(x, side));
+            if !flat(&k3) {
+                f(k3, Origin::Sub(v, side));
+            }
+        };
+        if i + 1 == self.bounds.len() {
+            for &c in self.caps {
+                sub(c, Some(true), &mut f);
+            }
+            for &c in self.caps {
+                sub([c[0], c[2], c[1]], Some(false), &mut f);
+            }
+            return;
+        }
+        let ((t0, c0), (t1, c1)) = (self.bounds[i], self.bounds[i + 1]);
+        let mut next = t0;
+        let crossed = self.located.triangles[c0..c1]
+            .iter()
+            .zip(&self.subs[c0..c1]);
+        for (t, s) in crossed
+            .map(|(&t, s)| (t as usize, &s[..]))
+            .chain([(t1, &[][..])])
+        {
+            for k3 in self.mesh.triangles[next..t].iter().filter(|t| !flat(t)) {
+                f(*k3, Origin::Unsplit);
+            }
+            for x in s {
+                sub(x.v, x.side, &mut f);
+            }
+            next = t + 1;
+        }
+    }
+
+    /// The pieces (connected components of the vertex nodes), numbered by
+    /// their first triangle in output order, each with its vertices in
+    /// node order (input vertices, then cut and cap points) and its
+    /// triangles in output order; and per piece whether it holds triangles
+    /// of the negative / positive side.
+    fn pieces(&self) -> (Vec<TriMesh>, Vec<(bool, bool)>) {
+        let n_nodes = self.n_nodes();
+        // Every triangle joins its vertices. Cut vertices separate because
+        // each side uses its own copy; glued cut vertices have one copy and
+        // join both sides.
+        let uf = AtomicUnionFind::with_len(n_nodes);
+        let used: Vec<AtomicBool> = (0..n_nodes)
+            .into_par_iter()
+            .map(|_| AtomicBool::new(false))
+            .collect();
+        self.chunks().into_par_iter().for_each(|i| {
+            self.for_each_kept(i, |k3, _| {
+                k3.iter()
+                    .for_each(|&x| used[x as usize].store(true, Ordering::Relaxed));
+                uf.union(k3[0], k3[1]);
+                uf.union(k3[0], k3[2]);
+            });
+        });
+        let root = uf.roots();
+        // Per chunk, the roots of its pieces in order of first triangle, with
+        // their triangle counts and side evidence.
+        let tallies: Vec<Vec<Tally>> = (self.chunks().into_par_iter())
+            .map(|i| {
+                let (mut slots, mut tally) = (Slots::default(), Vec::<Tally>::new());
+                self.for_each_kept(i, |k3, origin| {
+                    let root = root[k3[0] as usize];
+                    let s = slots.get(root, || {
+                        tally.push(Tally {
+                            root,
+                            triangles: 0,
+                            seen: (false, false),
+                        });
+                        tally.len() - 1
+                    });
+                    let (e, t) = (self.evidence(k3, origin), &mut tally[s]);
+                    t.triangles += 1;
+                    t.seen = (t.seen.0 | e.0, t.seen.1 | e.1);
+                });
+                tally
+            })
+            .collect();
+        let mut piece_of_root = vec![u32::MAX; n_nodes];
+        let (mut n_triangles, mut sides) = (Vec::<usize>::new(), Vec::<(bool, bool)>::new());
+        let chunk_pieces: Vec<Vec<(usize, usize)>> = (tallies.into_iter())
+            .map(|tally| {
+                (tally.into_iter())
+                    .map(
+                        |Tally {
+                             root,
+                             triangles: n,
+                             seen: e,
+                         }| {
+                            let p = &mut piece_of_root[root as usize];
+                            if *p == u32::MAX {
+                                *p = n_triangles.len() as u32;
+                                n_triangles.push(0);
+                                sides.push((false, false));
+                            }
+                            let p = *p as usize;
+                            n_triangles[p] += n;
+                            sides[p] = (sides[p].0 | e.0, sides[p].1 | e.1);
+                            (p, n)
+                        },
+                    )
+                    .collect()
+            })
+            .collect();
+        // Vertices in node order; every node belongs to exactly one piece
+        // (all triangles using it were united), so one node → local index
+        // table serves all pieces.
+        let n_v = self.n_v();
+        let mut positions: Vec<Vec<Vec3>> = (n_triangles.iter())
+            .map(|&n| Vec::with_capacity(n / 2 + 64))
+            .collect();
+        let mut local = vec![0u32; n_nodes];
+        for (x, slot) in local.iter_mut().enumerate() {
+            if used[x].load(Ordering::Relaxed) {
+                let p = &mut positions[piece_of_root[root[x] as usize] as usize];
+                *slot = p.len() as u32;
+                p.push(if (x as u32) < n_v {
+                    self.mesh.positions[x]
+                } else {
+                    self.points[(x - n_v as usize) / 2]
+                });
+            }
+        }
+        // Triangles: each chunk writes its stretch of each of its pieces.
+        let mut triangles: Vec<Vec<[u32; 3]>> =
+            (n_triangles.iter()).map(|&n| vec![[0; 3]; n]).collect();
+        let mut rest: Vec<&mut [[u32; 3]]> = triangles.iter_mut().map(|t| &mut t[..]).collect();
+        let stretches: Vec<Vec<Stretch<'_>>> = (chunk_pieces.iter())
+            .map(|pieces| {
+                (pieces.iter())
+                    .map(|&(p, n)| {
+                        let (mine, after) = std::mem::take(&mut rest[p]).split_at_mut(n);
+                        rest[p] = after;
+                        (p, mine)
+                    })
+                    .collect()
+            })
+            .collect();
+        (self.chunks().into_par_iter().zip(stretches)).for_each(|(i, mut stretches)| {
+            let mut slots = Slots::default();
+            let mut filled = vec![0; stretches.len()];
+            self.for_each_kept(i, |k3, _| {
+                let p = piece_of_root[root[k3[0] as usize] as usize] as usize;
+                let s = slots.get(p as u32, || {
+                    (stretches.iter().position(|(q, _)| *q == p))
+                        .expect("each piece of a chunk has its stretch")
+                });
+                stretches[s].1[filled[s]] = k3.map(|x| local[x as usize]);
+                filled[s] += 1;
+            });
+        });
+        let pieces = (positions.into_iter().zip(triangles))
+            .map(|(positions, triangles)| TriMesh {
+                positions,
+                triangles,
+                scalars: Vec::new(),
+            })
+            .collect();
+        (pieces, sides)
+    }
+
+    /// The side evidence (negative, positive) of a kept triangle `k3`.
+    fn evidence(&self, k3: [u32; 3], origin: Origin) -> (bool, bool) {
+        let of = |neg: Option<bool>| neg.map_or((false, false), |n| (n, !n));
+        let n_v = self.n_v();
+        match origin {
+            // Unsplit triangles of a triangulated knife say nothing about
+            // their side.
+            Origin::Unsplit => of(self.negative.get(k3[0] as usize).copied()),
+            // Glued sub-triangles (an open knife or a rectangle's border
+            // ends there) touch both sides.
+            Origin::Sub(v, None) if v.iter().any(|&x| x >= n_v) => (true, true),
+            Origin::Sub(_, Some(n)) => of(Some(n)),
+            Origin::Sub(v, None) => {
+                let first = v.iter().find(|&&x| x < n_v);
+                of(first.and_then(|&x| self.negative.get(x as usize).copied()))
+            }
+        }
+    }
 }
 
 /// Splits, regroups and caps (shared by the tree and the scan).
@@ -942,7 +1251,6 @@ fn assemble(
     opts: &CutOptions,
 ) -> Result<CutResult> {
     let t0 = Instant::now();
-    let n_v = mesh.positions.len() as u32;
     let mut stats = located.stats.clone();
     let Split {
         subs,
@@ -990,63 +1298,6 @@ fn assemble(
         _ => split_analytic(mesh, &located, k, opts, &mut stats)?,
     };
     glued.resize(points.len(), false);
-    let n_c = points.len() as u32;
-    // Vertex nodes: originals, then two copies per cut vertex (negative,
-    // positive); a glued cut vertex uses its negative copy on both sides. A
-    // cut at mesh vertex `a` is `a` itself on a's side (and when glued), so
-    // the sub-triangles it flattens repeat a node and are dropped below.
-    let node = |v: u32, side: Option<bool>| -> u32 {
-        if v < n_v {
-            return v;
-        }
-        let c = v - n_v;
-        if let Some(&(a, b)) = located.edges.get(c as usize)
-            && a == b
-            && (glued[c as usize] || side == Some(located.lower_negative[c as usize]))
-        {
-            return a;
-        }
-        let positive = !glued[c as usize] && side == Some(false);
-        n_v + 2 * c + u32::from(positive)
-    };
-    let flat = |k3: &[u32; 3]| k3[0] == k3[1] || k3[1] == k3[2] || k3[2] == k3[0];
-    // The cut surface in output order: input triangles in id order (split
-    // ones replaced by their sub-triangles, as vertex nodes with their
-    // side), then the negative caps, then the positive caps. Runs of unsplit
-    // triangles are handed whole: their vertex nodes are their own ids.
-    let stream = |f: &mut dyn FnMut(Out<'_>)| {
-        let mut next = 0;
-        for (&t, s) in located.triangles.iter().zip(&subs) {
-            f(Out::Unsplit(&mesh.triangles[next..t as usize]));
-            for x in s {
-                f(Out::Sub(x.v, x.side));
-            }
-            next = t as usize + 1;
-        }
-        f(Out::Unsplit(&mesh.triangles[next..]));
-        for &c in &cap_tris {
-            f(Out::Sub(c, Some(true)));
-        }
-        for &c in &cap_tris {
-            f(Out::Sub([c[0], c[2], c[1]], Some(false)));
-        }
-    };
-    // Union-find over vertex nodes; every triangle joins its vertices. Cut
-    // vertices separate because each side uses its own copy; glued cut
-    // vertices have one copy and join both sides.
-    let n_nodes = (n_v + 2 * n_c) as usize;
-    let mut uf = UnionFind::with_len(n_nodes);
-    let mut join = |k3: [u32; 3]| {
-        if !flat(&k3) {
-            uf.union(k3[0], k3[1]);
-            uf.union(k3[0], k3[2]);
-        }
-    };
-    stream(&mut |out| match out {
-        Out::Unsplit(run) => run.iter().for_each(|&t| join(t)),
-        Out::Sub(v, side) => join(v.map(|x| node(x, side))),
-    });
-    let root = uf.roots();
     // Side of each input vertex for an analytic knife (an unsplit
     // triangle's side is its first vertex's).
     let negative: Vec<bool> = match k.analytic() {
@@ -1055,94 +1306,8 @@ fn assemble(
             .collect(),
         None => Vec::new(),
     };
-    let evidence = |neg: Option<bool>| match neg {
-        Some(n) => (n, !n),
-        None => (false, false),
-    };
-    // A sub-triangle's vertex nodes and side evidence (negative, positive),
-    // unless it is flat.
-    let sub_key = |v: [u32; 3], side: Option<bool>| {
-        let k3 = v.map(|x| node(x, side));
-        if flat(&k3) {
-            return None;
-        }
-        // Glued sub-triangles (an open knife or a rectangle's border ends
-        // there) touch both sides.
-        let glued_sub = side.is_none() && v.iter().any(|&x| x >= n_v);
-        let first_original = || v.iter().find(|&&x| x < n_v);
-        let seen = match side {
-            _ if glued_sub => (true, true),
-            Some(n) => evidence(Some(n)),
-            None => evidence(first_original().and_then(|&x| negative.get(x as usize).copied())),
-        };
-        Some((k3, seen))
-    };
-    // Pieces numbered by first triangle, and their triangle counts (so
-    // that each piece's arrays are allocated once).
-    let mut piece_of_root = vec![u32::MAX; n_nodes];
-    let mut n_triangles: Vec<usize> = Vec::new();
-    let mut count = |k3: [u32; 3]| {
-        let p = &mut piece_of_root[root[k3[0] as usize] as usize];
-        if *p == u32::MAX {
-            *p = n_triangles.len() as u32;
-            n_triangles.push(0);
-        }
-        n_triangles[*p as usize] += 1;
-    };
-    stream(&mut |out| match out {
-        Out::Unsplit(run) => (run.iter().filter(|t| !flat(t))).for_each(|&t| count(t)),
-        Out::Sub(v, side) => {
-            if let Some((k3, _)) = sub_key(v, side) {
-                count(k3);
-            }
-        }
-    });
-    // Per piece its own vertex numbering, by first use. Every vertex node
-    // belongs to exactly one piece (all triangles using it were united), so
-    // one global node → local index table serves all pieces. A closed piece
-    // has about half as many vertices as triangles.
-    let mut pieces: Vec<TriMesh> = (n_triangles.iter())
-        .map(|&n| TriMesh {
-            positions: Vec::with_capacity(n / 2 + 64),
-            triangles: Vec::with_capacity(n),
-            scalars: Vec::new(),
-        })
-        .collect();
-    let mut piece_side = vec![(false, false); pieces.len()];
-    let mut local = vec![u32::MAX; n_nodes];
-    let position = |key: u32| -> Vec3 {
-        if key < n_v {
-            mesh.positions[key as usize]
-        } else {
-            points[((key - n_v) / 2) as usize]
-        }
-    };
-    let mut add = |k3: [u32; 3], seen: (bool, bool)| {
-        let pi = piece_of_root[root[k3[0] as usize] as usize] as usize;
-        let side = &mut piece_side[pi];
-        *side = (side.0 | seen.0, side.1 | seen.1);
-        let piece = &mut pieces[pi];
-        let mut vertex = |key: u32| {
-            let slot = &mut local[key as usize];
-            if *slot == u32::MAX {
-                *slot = piece.positions.len() as u32;
-                piece.positions.push(position(key));
-            }
-            *slot
-        };
-        let tri = [vertex(k3[0]), vertex(k3[1]), vertex(k3[2])];
-        piece.triangles.push(tri);
-    };
-    stream(&mut |out| match out {
-        // Unsplit triangles of a mesh knife say nothing about their side.
-        Out::Unsplit(run) => (run.iter().filter(|t| !flat(t)))
-            .for_each(|&t| add(t, evidence(negative.get(t[0] as usize).copied()))),
-        Out::Sub(v, side) => {
-            if let Some((k3, seen)) = sub_key(v, side) {
-                add(k3, seen);
-            }
-        }
-    });
+    let (pieces, piece_side) =
+        Regroup::new(mesh, &located, &subs, &glued, &cap_tris, &points, negative).pieces();
     // A piece a closed mesh knife never reaches lies wholly inside or
     // outside it: its winding number says which.
     let untouched_side = match &k.kind {

@@ -30,6 +30,8 @@
 //! ([`T_MIN`]) keeps every vertex strictly inside its edge, so no triangle
 //! has zero area (see there).
 
+use std::sync::atomic::{AtomicU32, Ordering};
+
 use rayon::prelude::*;
 
 /// Least interpolation parameter, in grid steps: `2⁻¹⁰`. A sample equal to
@@ -124,6 +126,75 @@ impl UnionFind {
         let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
         self.parent[hi as usize] = lo;
         lo
+    }
+}
+
+/// Union-find that threads share: a union links the higher root under
+/// the lower by compare-and-swap, so each set's root is its smallest node
+/// whatever the order of the unions (the same roots as [`UnionFind`]).
+#[derive(Debug)]
+pub struct AtomicUnionFind {
+    parent: Vec<AtomicU32>,
+}
+
+impl AtomicUnionFind {
+    /// `n` singletons.
+    pub fn with_len(n: usize) -> Self {
+        AtomicUnionFind {
+            parent: (0..n as u32).into_par_iter().map(AtomicU32::new).collect(),
+        }
+    }
+
+    /// Root of `x`, halving the path: each step points a non-root at its
+    /// grandparent with a plain store. Only roots are ever linked (by
+    /// [`AtomicUnionFind::union`]'s compare-and-swap), and an ancestor stays
+    /// an ancestor, so a store racing another halving or a link still
+    /// leaves every node under an ancestor.
+    pub fn find(&self, mut x: u32) -> u32 {
+        let parent = &self.parent;
+        loop {
+            let p = parent[x as usize].load(Ordering::Acquire);
+            if p == x {
+                return x;
+            }
+            let g = parent[p as usize].load(Ordering::Acquire);
+            if g != p {
+                parent[x as usize].store(g, Ordering::Release);
+            }
+            x = g;
+        }
+    }
+
+    /// Joins the sets of `a` and `b`: the larger root is linked under the
+    /// smaller one only while it is still a root, else the roots are looked
+    /// up again.
+    pub fn union(&self, a: u32, b: u32) {
+        loop {
+            let (ra, rb) = (self.find(a), self.find(b));
+            if ra == rb {
+                return;
+            }
+            let (lo, hi) = (ra.min(rb), ra.max(rb));
+            if self.parent[hi as usize]
+                .compare_exchange(hi, lo, Ordering::AcqRel, Ordering::Acquire)
+                .is_ok()
+            {
+                return;
+            }
+        }
+    }
+
+    /// The root of every node, consuming the forest (see [`UnionFind::roots`]).
+    pub fn roots(self) -> Vec<u32> {
+        UnionFind {
+            parent: self.parent.into_iter().map(AtomicU32::into_inner).collect(),
+        }
+        .roots()
+    }
+
+    /// The node array, for reuse as scratch space.
+    pub fn into_inner(self) -> Vec<AtomicU32> {
+        self.parent
     }
 }
 
@@ -801,4 +872,38 @@ fn stitch(
         }
     });
     n_groups as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Unions in parallel give the roots of the same unions in sequence
+    /// (each set's smallest node), on a graph with long chains and cycles.
+    #[test]
+    fn atomic_union_find_equals_the_sequential_one() {
+        let n = 20_000u32;
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % u64::from(n)) as u32
+        };
+        let mut edges: Vec<(u32, u32)> = (0..n - 1)
+            .filter(|i| i % 97 != 0)
+            .map(|i| (i, i + 1))
+            .collect();
+        edges.extend((0..15_000).map(|_| (next(), next())));
+        let mut seq = UnionFind::with_len(n as usize);
+        edges.iter().for_each(|&(a, b)| {
+            seq.union(a, b);
+        });
+        let par = AtomicUnionFind::with_len(n as usize);
+        edges.par_iter().for_each(|&(a, b)| par.union(b, a));
+        let roots = par.roots();
+        assert_eq!(roots, seq.roots());
+        assert!(roots.iter().enumerate().all(|(x, &r)| r as usize <= x));
+        assert!(roots.iter().filter(|&&r| r == 0).count() > 1);
+    }
 }

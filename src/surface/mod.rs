@@ -35,7 +35,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
-pub use cpu::UnionFind;
+pub use cpu::{AtomicUnionFind, UnionFind};
 pub use field::Field;
 pub use tree::{Aabb, CellNode, Forest, GroupNode, LayerNode, RowNode, Span};
 

@@ -17,6 +17,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
+use super::cpu::AtomicUnionFind;
 use crate::TriMesh;
 
 /// Edge of a leaf block in marching-cubes cells. The seed's leaf is one
@@ -775,19 +776,16 @@ fn layer_runs(order: &[u32], group_starts: &[u32], cells: &[u32], layer: usize) 
 /// triangle is found (atomic minimum) and the groups are numbered in the
 /// order of those first triangles (a chunked prefix count).
 pub fn vertex_components(n_vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>, usize) {
-    let parent: Vec<AtomicU32> = (0..n_vertices as u32)
-        .into_par_iter()
-        .map(AtomicU32::new)
-        .collect();
+    let uf = AtomicUnionFind::with_len(n_vertices);
     triangles.par_iter().with_min_len(1 << 12).for_each(|t| {
-        link(&parent, t[0], t[1]);
-        link(&parent, t[0], t[2]);
+        uf.union(t[0], t[1]);
+        uf.union(t[0], t[2]);
     });
     let roots: Vec<u32> = (triangles.par_iter().with_min_len(1 << 12))
-        .map(|t| root(&parent, t[0]))
+        .map(|t| uf.find(t[0]))
         .collect();
     // First triangle of each root (u32::MAX: not a root of any triangle).
-    let first = parent;
+    let first = uf.into_inner();
     first
         .par_iter()
         .for_each(|f| f.store(u32::MAX, Ordering::Relaxed));
@@ -840,44 +838,6 @@ pub fn vertex_components(n_vertices: usize, triangles: &[[u32; 3]]) -> (Vec<u32>
         .map(|&r| id[r as usize].load(Ordering::Relaxed))
         .collect();
     (groups, n_groups as usize)
-}
-
-/// Root of `x` in the concurrent union-find `parent`, halving the path:
-/// each step points a non-root at its grandparent with a plain store. Only
-/// roots are ever linked (by [`link`]'s compare-and-swap), and an ancestor
-/// stays an ancestor, so a store racing another halving or a link still
-/// leaves every node under an ancestor.
-fn root(parent: &[AtomicU32], mut x: u32) -> u32 {
-    loop {
-        let p = parent[x as usize].load(Ordering::Acquire);
-        if p == x {
-            return x;
-        }
-        let g = parent[p as usize].load(Ordering::Acquire);
-        if g != p {
-            parent[x as usize].store(g, Ordering::Release);
-        }
-        x = g;
-    }
-}
-
-/// Joins the sets of `a` and `b`: the larger root is linked under the
-/// smaller one only while it is still a root (compare-and-swap), else the
-/// roots are looked up again. Roots are always their set's smallest index.
-fn link(parent: &[AtomicU32], a: u32, b: u32) {
-    loop {
-        let (ra, rb) = (root(parent, a), root(parent, b));
-        if ra == rb {
-            return;
-        }
-        let (lo, hi) = (ra.min(rb), ra.max(rb));
-        if parent[hi as usize]
-            .compare_exchange(hi, lo, Ordering::AcqRel, Ordering::Acquire)
-            .is_ok()
-        {
-            return;
-        }
-    }
 }
 
 #[cfg(test)]

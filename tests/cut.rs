@@ -327,6 +327,9 @@ fn pieces_are_the_same_on_any_number_of_threads() {
 #[test]
 fn sphere_cut_takes_a_bite() {
     let s = mc(&ball_volume(40, 14.0));
+    // Closed at the border and wound outward: the tree's cut skips the
+    // orientation analysis that the scan's makes, with the same pieces.
+    assert!(s.forest.closed_outward);
     let k = Knife::Sphere {
         centre: DVec3::new(19.5, 19.5, 31.0),
         radius: 8.0,
@@ -509,6 +512,10 @@ fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open(
         Backend::Cpu,
     )
     .unwrap();
+    assert!(
+        !s.forest.closed_outward,
+        "an open surface is not known to be closed"
+    );
     let z = 14.3f32;
     let r = cut(&s.mesh, &s.forest, &Knife::Mesh(sheet(z)), &CAP).unwrap();
     let p = cut(&s.mesh, &s.forest, &z_plane(z), &CAP).unwrap();

@@ -705,57 +705,62 @@ pub(crate) struct MeshSplit {
 /// components when, together, they enclose a negative volume (the surface
 /// is wound inward; cavities count against their outer surface, as they
 /// should). Open components enclose nothing and keep the convention that
-/// triangles face outward.
-pub(crate) fn inward_triangles(surface: &TriMesh) -> Vec<bool> {
-    let (comp, n) = vertex_components(surface.n_vertices(), &surface.triangles);
-    let mut volume6 = vec![0.0f64; n];
-    for (t, &c) in surface.triangles.iter().zip(&comp) {
-        let [a, b, c3] = t.map(|v| surface.positions[v as usize].as_dvec3());
-        volume6[c as usize] += a.dot(b.cross(c3));
+/// triangles face outward. With `closed_outward` (the surface is known to
+/// be closed and wound outward, [`Forest::closed_outward`]) none does, and
+/// nothing is computed.
+pub(crate) fn inward_triangles(surface: &TriMesh, closed_outward: bool) -> Vec<bool> {
+    if closed_outward {
+        return vec![false; surface.triangles.len()];
     }
+    let (comp, n) = vertex_components(surface.n_vertices(), &surface.triangles);
     // Closed: every edge used twice, once in each direction. The half-edges
-    // are bucketed by their lower vertex (a counting sort, O(F)); each
-    // bucket holds a vertex's few edges to higher vertices.
+    // are bucketed by their lower vertex (a counting sort, O(F)) as (higher
+    // vertex << 1 | runs upward); each bucket holds a vertex's few edges to
+    // higher vertices, and an edge's component is its lower vertex's.
     let half_edges = |t: &[u32; 3]| {
         let t = *t;
         (0..3).map(move |i| (t[i], t[(i + 1) % 3]))
     };
-    let mut start = vec![0usize; surface.n_vertices() + 1];
-    for (a, b) in surface.triangles.iter().flat_map(half_edges) {
-        start[a.min(b) as usize + 1] += 1;
+    let n_v = surface.n_vertices();
+    let mut volume6 = vec![0.0f64; n];
+    let mut start = vec![0usize; n_v + 1];
+    let mut vertex_comp = vec![0u32; n_v];
+    for (t, &c) in surface.triangles.iter().zip(&comp) {
+        let [a, b, c3] = t.map(|v| surface.positions[v as usize].as_dvec3());
+        volume6[c as usize] += a.dot(b.cross(c3));
+        for (a, b) in half_edges(t) {
+            start[a.min(b) as usize + 1] += 1;
+            vertex_comp[a as usize] = c;
+        }
     }
     for v in 1..start.len() {
         start[v] += start[v - 1];
     }
     let mut fill = start.clone();
-    // Per half-edge: (higher vertex, runs upward, component).
-    let mut bucket = vec![(0u32, false, 0u32); start[start.len() - 1]];
-    for (t, &c) in surface.triangles.iter().zip(&comp) {
-        for (a, b) in half_edges(t) {
-            let lo = a.min(b) as usize;
-            bucket[fill[lo]] = (a.max(b), a < b, c);
-            fill[lo] += 1;
-        }
+    let mut bucket = vec![0u64; start[n_v]];
+    for (a, b) in surface.triangles.iter().flat_map(half_edges) {
+        let lo = a.min(b) as usize;
+        bucket[fill[lo]] = u64::from(a.max(b)) << 1 | u64::from(a < b);
+        fill[lo] += 1;
     }
     let open: Vec<u32> = start
         .par_windows(2)
-        .flat_map_iter(|w| {
+        .enumerate()
+        .filter_map(|(v, w)| {
             // A vertex has a few edges: sorted on the stack unless many.
             let run = &bucket[w[0]..w[1]];
-            let (mut small, mut many) = ([(0, false, 0); 16], Vec::new());
+            let (mut small, mut many) = ([0; 16], Vec::new());
             let edges = if run.len() <= small.len() {
                 &mut small[..run.len()]
             } else {
-                many.resize(run.len(), (0, false, 0));
+                many.extend_from_slice(run);
                 &mut many[..]
             };
             edges.copy_from_slice(run);
             edges.sort_unstable();
-            edges
-                .chunk_by(|x, y| x.0 == y.0)
-                .filter(|run| !(run.len() == 2 && run[0].1 != run[1].1))
-                .map(|run| run[0].2)
-                .collect::<Vec<_>>()
+            let open = (edges.chunk_by(|x, y| x >> 1 == y >> 1))
+                .any(|run| !(run.len() == 2 && run[0] != run[1]));
+            open.then_some(vertex_comp[v])
         })
         .collect();
     let mut closed = vec![true; n];
@@ -778,6 +783,7 @@ pub(crate) fn split(
     origins: &[PointOrigin],
     segments: &[KnifeSegment],
     cap: bool,
+    closed_outward: bool,
 ) -> Result<MeshSplit> {
     let surface = pair.surface;
     let knife = pair.knife;
@@ -868,7 +874,7 @@ pub(crate) fn split(
     }
     // The solid is behind a surface triangle, or in front where its
     // component is closed and wound inward.
-    let inward = inward_triangles(surface);
+    let inward = inward_triangles(surface, closed_outward);
     // Knife triangles with segments, split.
     let mut by_knife: Vec<usize> = (0..segments.len()).collect();
     by_knife.sort_by_key(|&i| (segments[i].knife_triangle, segments[i].triangle));

@@ -158,7 +158,7 @@ pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) ->
     let prepared = knife.prepare(forest_scale(forest))?;
     let mut located = locate_prepared(mesh, forest, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
-    let analytic = assemble(mesh, located, &prepared, opts)?;
+    let analytic = assemble(mesh, located, &prepared, opts, Some(forest))?;
     polyhedral_if_crossed(knife, opts, analytic, |k| cut(mesh, forest, k, opts))
 }
 
@@ -216,7 +216,7 @@ pub fn cut_full_scan(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result
     let prepared = knife.prepare(scene_scale(mesh))?;
     let mut located = locate_scan_prepared(mesh, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
-    let analytic = assemble(mesh, located, &prepared, opts)?;
+    let analytic = assemble(mesh, located, &prepared, opts, None)?;
     polyhedral_if_crossed(knife, opts, analytic, |k| cut_full_scan(mesh, k, opts))
 }
 
@@ -1243,12 +1243,16 @@ impl<'a> Regroup<'a> {
     }
 }
 
-/// Splits, regroups and caps (shared by the tree and the scan).
+/// Splits, regroups and caps (shared by the tree and the scan). The tree's
+/// cut passes its forest: sphere caps then find the surface near them
+/// through it, and a surface known to be closed and wound outward
+/// ([`Forest::closed_outward`]) needs no orientation analysis.
 fn assemble(
     mesh: &TriMesh,
     located: Located,
     k: &PreparedKnife<'_>,
     opts: &CutOptions,
+    forest: Option<&Forest>,
 ) -> Result<CutResult> {
     let t0 = Instant::now();
     let mut stats = located.stats.clone();
@@ -1260,12 +1264,12 @@ fn assemble(
     } = match &k.kind {
         Kind::Mesh {
             mesh: knife,
-            forest,
+            forest: knife_forest,
         } => {
             let pair = corefine::Pair {
                 surface: mesh,
                 knife,
-                forest,
+                forest: knife_forest,
                 margin: k.margin(),
             };
             let ms = corefine::split(
@@ -1275,6 +1279,7 @@ fn assemble(
                 &located.origins,
                 &located.segments,
                 opts.cap,
+                forest.is_some_and(|f| f.closed_outward),
             )?;
             stats.loops_capped = ms.regions_capped;
             stats.curves_open = ms.curves_open;
@@ -1295,7 +1300,7 @@ fn assemble(
                 caps: ms.caps,
             }
         }
-        _ => split_analytic(mesh, &located, k, opts, &mut stats)?,
+        _ => split_analytic(mesh, &located, k, opts, forest, &mut stats)?,
     };
     glued.resize(points.len(), false);
     // Side of each input vertex for an analytic knife (an unsplit
@@ -1378,6 +1383,7 @@ fn split_analytic(
     located: &Located,
     k: &PreparedKnife<'_>,
     opts: &CutOptions,
+    forest: Option<&Forest>,
     stats: &mut CutStats,
 ) -> Result<Split> {
     let n_v = mesh.positions.len() as u32;
@@ -1464,7 +1470,7 @@ fn split_analytic(
         // surface wound inward is capped as its outward twin, then turned
         // back (planes need no such care: their caps fill the loops).
         let inward = matches!(k.kind, Kind::Sphere { .. }) && !loops.is_empty() && {
-            let front = corefine::inward_triangles(mesh);
+            let front = corefine::inward_triangles(mesh, forest.is_some_and(|f| f.closed_outward));
             located.triangles.iter().any(|&t| front[t as usize])
         };
         if inward {
@@ -1473,6 +1479,7 @@ fn split_analytic(
         if !loops.is_empty() {
             let surface = CutSurface {
                 mesh,
+                forest,
                 located,
                 subs: &subs,
             };
@@ -1500,6 +1507,8 @@ const CAP_REPAIR_ROUNDS: usize = 16;
 /// vertex, as in the pieces.
 struct CutSurface<'a> {
     mesh: &'a TriMesh,
+    /// The mesh's forest, when the cut went through it.
+    forest: Option<&'a Forest>,
     located: &'a Located,
     subs: &'a [Vec<Sub>],
 }
@@ -1530,19 +1539,28 @@ impl CutSurface<'_> {
         Aabb::triangle(a, b, c)
     }
 
-    /// The surface triangles whose boxes meet `bounds`.
+    /// The surface triangles whose boxes meet `bounds` (unsplit ones in
+    /// id order, from the forest's leaves that meet it when there is one,
+    /// else from a scan; then the sub-triangles).
     fn near(&self, bounds: &Aabb, points: &[Vec3]) -> Vec<[u32; 3]> {
-        let mut tris: Vec<[u32; 3]> = self
-            .mesh
-            .triangles
-            .par_iter()
-            .enumerate()
-            .filter(|(t, tri)| {
-                self.tri_box(tri, points).overlaps(bounds)
-                    && self.located.triangles.binary_search(&(*t as u32)).is_err()
-            })
-            .map(|(_, tri)| *tri)
-            .collect();
+        let keep = |t: usize| {
+            let tri = &self.mesh.triangles[t];
+            (self.tri_box(tri, points).overlaps(bounds)
+                && self.located.triangles.binary_search(&(t as u32)).is_err())
+            .then_some(*tri)
+        };
+        let mut tris: Vec<[u32; 3]> = match self.forest {
+            Some(forest) => {
+                let mut ids = Vec::new();
+                forest.overlapping(bounds, &mut ids);
+                ids.sort_unstable();
+                ids.into_iter().filter_map(|t| keep(t as usize)).collect()
+            }
+            None => (0..self.mesh.triangles.len())
+                .into_par_iter()
+                .filter_map(keep)
+                .collect(),
+        };
         tris.extend(
             self.subs
                 .iter()

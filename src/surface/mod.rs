@@ -169,7 +169,10 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
         pad: field.pad,
     };
     let (forest, groups) = rayon::join(
-        || Forest::build(&mesh, &blocks.keys, blocks.dims, &raw.groups, raw.n_groups),
+        || Forest {
+            closed_outward: field.pad == 1,
+            ..Forest::build(&mesh, &blocks.keys, blocks.dims, &raw.groups, raw.n_groups)
+        },
         || group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid),
     );
     Surface {

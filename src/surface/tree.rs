@@ -185,6 +185,13 @@ pub struct Forest {
     /// it lets a query find the children a slab can touch by binary search
     /// (seed §4.3) instead of testing every child box.
     pub axis_sorted: bool,
+    /// Whether the surface is known to be closed and wound outward: set for
+    /// marching-cubes surfaces closed at the volume border (watertight, and
+    /// the case table winds every triangle outward, so together they enclose
+    /// the solid's positive volume). A cut then skips the orientation
+    /// analysis of the whole mesh that sphere caps and triangulated knives
+    /// otherwise need; false (unknown) for any other mesh.
+    pub closed_outward: bool,
 }
 
 impl Forest {

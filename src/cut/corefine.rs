@@ -753,7 +753,7 @@ pub(crate) fn inward_triangles(surface: &TriMesh, closed_outward: bool) -> Vec<b
             let edges = if run.len() <= small.len() {
                 &mut small[..run.len()]
             } else {
-                many.extend_from_slice(run);
+                many.resize(run.len(), 0);
                 &mut many[..]
             };
             edges.copy_from_slice(run);

@@ -983,7 +983,8 @@ struct Tally {
     seen: (bool, bool),
 }
 
-/// A chunk's stretch of one piece's triangles: (piece, its slots).
+/// A chunk's stretch of one piece's triangles: (piece, the part of that
+/// piece's triangle array the chunk fills).
 type Stretch<'t> = (usize, &'t mut [[u32; 3]]);
 
 /// Where a kept triangle of the cut surface comes from.
@@ -1119,7 +1120,8 @@ impl<'a> Regroup<'a> {
         });
         let root = uf.roots();
         // Per chunk, the roots of its pieces in order of first triangle, with
-        // their triangle counts and side evidence.
+        // their triangle counts and side evidence; then, in chunk order, the
+        // pieces numbered by first triangle and each chunk's share of each.
         let tallies: Vec<Vec<Tally>> = (self.chunks().into_par_iter())
             .map(|i| {
                 let (mut slots, mut tally) = (Slots::default(), Vec::<Tally>::new());
@@ -1145,24 +1147,18 @@ impl<'a> Regroup<'a> {
         let chunk_pieces: Vec<Vec<(usize, usize)>> = (tallies.into_iter())
             .map(|tally| {
                 (tally.into_iter())
-                    .map(
-                        |Tally {
-                             root,
-                             triangles: n,
-                             seen: e,
-                         }| {
-                            let p = &mut piece_of_root[root as usize];
-                            if *p == u32::MAX {
-                                *p = n_triangles.len() as u32;
-                                n_triangles.push(0);
-                                sides.push((false, false));
-                            }
-                            let p = *p as usize;
-                            n_triangles[p] += n;
-                            sides[p] = (sides[p].0 | e.0, sides[p].1 | e.1);
-                            (p, n)
-                        },
-                    )
+                    .map(|t| {
+                        let p = &mut piece_of_root[t.root as usize];
+                        if *p == u32::MAX {
+                            *p = n_triangles.len() as u32;
+                            n_triangles.push(0);
+                            sides.push((false, false));
+                        }
+                        let p = *p as usize;
+                        n_triangles[p] += t.triangles;
+                        sides[p] = (sides[p].0 | t.seen.0, sides[p].1 | t.seen.1);
+                        (p, t.triangles)
+                    })
                     .collect()
             })
             .collect();

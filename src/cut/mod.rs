@@ -996,32 +996,15 @@ enum Origin {
     Sub([u32; 3], Option<bool>),
 }
 
-impl<'a> Regroup<'a> {
-    fn new(
-        mesh: &'a TriMesh,
-        located: &'a Located,
-        subs: &'a [Vec<Sub>],
-        glued: &'a [bool],
-        caps: &'a [[u32; 3]],
-        points: &'a [Vec3],
-        negative: Vec<bool>,
-    ) -> Self {
-        let n_t = mesh.triangles.len();
-        let bounds = ((0..n_t).step_by(REGROUP_CHUNK).chain([n_t]))
-            .map(|t| (t, located.triangles.partition_point(|&c| (c as usize) < t)))
-            .collect();
-        Regroup {
-            mesh,
-            located,
-            subs,
-            glued,
-            caps,
-            points,
-            negative,
-            bounds,
-        }
-    }
+/// Per chunk of [`REGROUP_CHUNK`] input triangles, its first triangle and
+/// first crossed triangle (index into the ascending `crossed`), then the ends.
+fn chunk_bounds(n_triangles: usize, crossed: &[u32]) -> Vec<(usize, usize)> {
+    ((0..n_triangles).step_by(REGROUP_CHUNK).chain([n_triangles]))
+        .map(|t| (t, crossed.partition_point(|&c| (c as usize) < t)))
+        .collect()
+}
 
+impl Regroup<'_> {
     fn n_v(&self) -> u32 {
         self.mesh.positions.len() as u32
     }
@@ -1307,8 +1290,17 @@ fn assemble(
             .collect(),
         None => Vec::new(),
     };
-    let (pieces, piece_side) =
-        Regroup::new(mesh, &located, &subs, &glued, &cap_tris, &points, negative).pieces();
+    let (pieces, piece_side) = Regroup {
+        mesh,
+        located: &located,
+        subs: &subs,
+        glued: &glued,
+        caps: &cap_tris,
+        points: &points,
+        negative,
+        bounds: chunk_bounds(mesh.triangles.len(), &located.triangles),
+    }
+    .pieces();
     // A piece a closed mesh knife never reaches lies wholly inside or
     // outside it: its winding number says which.
     let untouched_side = match &k.kind {

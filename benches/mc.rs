@@ -21,8 +21,8 @@ use std::time::{Duration, Instant};
 
 use chisel::Backend;
 use chisel::gpu::Gpu;
-use chisel::surface::tree::{LEAF_BLOCK, vertex_components};
-use chisel::surface::{Field, Forest, IsoSpec, McOptions, Surface, gpu, marching_cubes};
+use chisel::foundation::{Forest, vertex_components};
+use chisel::surface::{Field, IsoSpec, LEAF_BLOCK, McOptions, Surface, gpu, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 
@@ -115,7 +115,7 @@ fn main() {
         if let Ok(s) = marching_cubes(vol, iso, &opts, Backend::Cpu) {
             let (keys, dims) = leaf_keys(&s);
             let n_groups = s.groups.len();
-            let build = || Forest::build(&s.mesh, &keys, dims, &s.triangle_groups, n_groups);
+            let build = || Forest::build(s.mesh.view(), &keys, dims, &s.triangle_groups, n_groups);
             if build() == s.forest {
                 group.bench_function(format!("forest/{name}"), |b| b.iter(build));
             } else {

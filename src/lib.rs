@@ -19,6 +19,7 @@
 pub mod cli;
 pub mod cut;
 pub mod error;
+pub mod foundation;
 pub mod gpu;
 pub mod hscan;
 pub mod hull;

@@ -9,7 +9,8 @@ use chisel::cut::{
     CutOptions, CutResult, Knife, Located, SPHERE_CHORD_ERROR, Side, cut, cut_full_scan, cut_mesh,
     cut_sequence, locate, locate_full_scan,
 };
-use chisel::surface::{Forest, IsoSpec, McOptions, Surface, marching_cubes};
+use chisel::foundation::Forest;
+use chisel::surface::{IsoSpec, McOptions, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use chisel::{Backend, TriMesh};
 use glam::DVec3;
@@ -1034,7 +1035,7 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
             half_extents: [14.0, 6.0],
         },
     ];
-    let (plain, _, _) = Forest::from_mesh(&s.mesh);
+    let plain = Forest::from_triangles(s.mesh.view()).forest;
     // The same boxes taken as unsorted: every child box is tested instead
     // of the binary-searched slab.
     assert!(s.forest.axis_sorted);

@@ -7,9 +7,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use chisel::io::{
-    RawSpec, read_mesh, read_raw_volume, read_volume, write_atomic_with, write_mesh, write_volume,
-};
+use chisel::foundation::fs::write_atomic_with;
+use chisel::io::{RawSpec, read_mesh, read_raw_volume, read_volume, write_mesh, write_volume};
 use chisel::volume::{ScalarType, VolumeData};
 use chisel::{Error, TriMesh, Volume};
 use glam::Vec3;

@@ -656,7 +656,7 @@ fn forest_covers_every_triangle_once_with_true_boxes() {
                         assert_eq!(s.triangle_groups[t as usize], g as u32);
                         // Leaves are blocks of LEAF_BLOCK³ marching-cubes cells.
                         let key = s.triangle_cells[t as usize] as usize;
-                        let b = chisel::surface::tree::LEAF_BLOCK;
+                        let b = chisel::surface::LEAF_BLOCK;
                         let g = s.grid.dims.map(|d| d - 1);
                         let key = {
                             let (x, y, z) = (key % g[0], (key / g[0]) % g[1], key / (g[0] * g[1]));

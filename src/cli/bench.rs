@@ -135,7 +135,7 @@ fn check(args: &RelaxArgs) -> anyhow::Result<Option<(usize, usize)>> {
         anyhow::bail!("--refine above 1 subdivides a scan grid: give its --grid COLS,ROWS");
     }
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     Ok(grid)
 }

@@ -41,7 +41,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         (false, false) => {
             crate::io::check_mesh_output(&args.output)?;
             if let Some(path) = &args.preview {
-                crate::io::check_png_output(path)?;
+                crate::foundation::fs::check_png_output(path)?;
             }
             let m = crate::io::read_mesh(&args.input)?;
             if !m.scalars.is_empty() && !crate::io::mesh_format_carries_scalars(&args.output) {

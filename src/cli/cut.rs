@@ -135,10 +135,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     super::check_output_dir(&args.output)?;
     if let Some(path) = &args.preview {
-        crate::io::check_png_output(path)?;
+        crate::foundation::fs::check_png_output(path)?;
     }
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     let mesh = crate::io::read_mesh(&args.mesh)?;
     let knives = knives(args)?;

@@ -194,10 +194,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         crate::io::check_mesh_output(path)?;
     }
     if let Some(path) = &args.preview {
-        crate::io::check_png_output(path)?;
+        crate::foundation::fs::check_png_output(path)?;
     }
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     let (selection, component) = args.select.parse()?;
     let mut timings = serde_json::Map::new();

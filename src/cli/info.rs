@@ -19,7 +19,7 @@ pub struct Args {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     let instance = crate::gpu::instance();
     let adapters = adapter_reports(&instance);

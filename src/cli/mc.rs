@@ -56,10 +56,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let t = Instant::now();
     crate::io::check_mesh_output(&args.output)?;
     if let Some(path) = &args.preview {
-        crate::io::check_png_output(path)?;
+        crate::foundation::fs::check_png_output(path)?;
     }
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     if let Some(dir) = &args.groups_dir {
         super::check_output_dir(dir)?;

@@ -125,7 +125,7 @@ pub(super) fn check_output_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     if dir.exists() && !dir.is_dir() {
         anyhow::bail!("{}: is a file; expected an output folder", dir.display());
     }
-    Ok(crate::io::check_parent_folder(dir)?)
+    Ok(crate::foundation::fs::check_parent_folder(dir)?)
 }
 
 /// Creates `dir` and removes the `{prefix}NNN.ply` files an earlier run

@@ -92,13 +92,13 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         .into_iter()
         .flatten()
     {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     if let Some(path) = &args.mesh {
         crate::io::check_mesh_output(path)?;
     }
     if let Some(path) = &args.preview {
-        crate::io::check_png_output(path)?;
+        crate::foundation::fs::check_png_output(path)?;
     }
     // `-o` is the binary cell list, not a mesh (`hull -o` is): a wrong
     // extension is caught before the work.
@@ -169,10 +169,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     let bytes = poly.to_bytes();
     if let Some(path) = &args.output {
-        crate::io::write_atomic(path, &bytes)?;
+        crate::foundation::fs::write_atomic(path, &bytes)?;
     }
     if let Some(path) = &args.cells_json {
-        crate::io::write_atomic(
+        crate::foundation::fs::write_atomic(
             path,
             serde_json::to_string_pretty(&poly.to_json())?.as_bytes(),
         )?;

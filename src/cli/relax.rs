@@ -285,10 +285,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         crate::io::check_mesh_output(path)?;
     }
     for path in [&args.preview, &args.bone_preview].into_iter().flatten() {
-        crate::io::check_png_output(path)?;
+        crate::foundation::fs::check_png_output(path)?;
     }
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     if args.bone.is_none() {
         if args.bone_output.is_some() {

@@ -32,7 +32,7 @@ pub struct Args {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    crate::io::check_png_output(&args.output)?;
+    crate::foundation::fs::check_png_output(&args.output)?;
     let facing = args.view.facing()?;
     let mesh = crate::io::read_mesh(&args.input)?;
     let gpu = global.gpu()?;

@@ -9,7 +9,7 @@ use serde_json::Value;
 pub fn write_json(path: &Path, value: &Value) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(value)?;
     text.push('\n');
-    crate::io::write_atomic(path, text.as_bytes())?;
+    crate::foundation::fs::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 

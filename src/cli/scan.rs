@@ -164,7 +164,7 @@ impl ZkhTotals {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     let name = args.volume.display();
     let t_total = Instant::now();

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 use super::{BackendArg, Global};
 use crate::mesh::{Topology, self_intersections};
 use crate::parity::Backend;
-use crate::surface::tree::vertex_components;
+use crate::foundation::vertex_components;
 use crate::volume::analysis::{VolumeStats, label_components, threshold_components};
 
 /// Arguments of `chisel stats`.
@@ -49,7 +49,7 @@ pub fn is_volume(path: &std::path::Path) -> bool {
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
-        crate::io::check_output_path(path)?;
+        crate::foundation::fs::check_output_path(path)?;
     }
     let value = if is_volume(&args.file) {
         volume_stats(global, args)?

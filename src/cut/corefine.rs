@@ -34,8 +34,7 @@ use glam::{DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::cap;
-use crate::surface::tree::vertex_components;
-use crate::surface::{Aabb, Forest, UnionFind};
+use crate::foundation::{Aabb, Forest, UnionFind, vertex_components};
 use crate::{Error, Result, TriMesh};
 
 /// How a cut point of a triangulated knife arises.

@@ -10,7 +10,7 @@
 use glam::{DVec3, Vec3};
 
 use crate::TriMesh;
-use crate::surface::{Aabb, Forest};
+use crate::foundation::{Aabb, Forest};
 
 /// A scalpel.
 #[derive(Debug, Clone)]
@@ -178,7 +178,7 @@ impl Knife {
                         }
                     }
                 }
-                let (forest, _, _) = Forest::from_mesh(mesh);
+                let forest = Forest::from_triangles(mesh.view()).forest;
                 Kind::Mesh { mesh, forest }
             }
         };

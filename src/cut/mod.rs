@@ -42,8 +42,8 @@ pub use cap::SPHERE_CHORD_ERROR;
 pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, Side};
 
-use crate::surface::tree::sorted_overlap;
-use crate::surface::{Aabb, AtomicUnionFind, CellNode, Forest, UnionFind};
+use crate::foundation::forest::sorted_overlap;
+use crate::foundation::{Aabb, AtomicUnionFind, CellNode, Forest, UnionFind};
 use crate::{Error, Result, TriMesh};
 use knife::{Analytic, AnalyticKnife, BoxQuery, Kind, MeshBoxes, PreparedKnife};
 
@@ -152,7 +152,7 @@ pub struct Located {
 }
 
 /// Cuts a surface organised in `forest` (from marching cubes or
-/// [`Forest::from_mesh`]) with `knife`, through the tree.
+/// [`Forest::from_triangles`]) with `knife`, through the tree.
 pub fn cut(mesh: &TriMesh, forest: &Forest, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     let t0 = Instant::now();
     let prepared = knife.prepare(forest_scale(forest))?;
@@ -202,10 +202,10 @@ fn polyhedral_if_crossed(
     Ok(analytic)
 }
 
-/// Cuts any mesh: builds its forest first (virtual grid, see [`Forest::from_mesh`]).
+/// Cuts any mesh: builds its forest first (virtual grid, see [`Forest::from_triangles`]).
 pub fn cut_mesh(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     mesh.validate()?;
-    let (forest, _, _) = Forest::from_mesh(mesh);
+    let forest = Forest::from_triangles(mesh.view()).forest;
     cut(mesh, &forest, knife, opts)
 }
 
@@ -453,7 +453,7 @@ fn walk<Q: BoxQuery>(
     stats: &mut CutStats,
     leaf: &mut dyn FnMut(&CellNode) -> usize,
 ) -> Vec<(usize, usize)> {
-    let visit = |b: &crate::surface::Aabb, stats: &mut CutStats| {
+    let visit = |b: &Aabb, stats: &mut CutStats| {
         stats.nodes_visited += 1;
         let clear = k.box_is_clear(b);
         if clear {
@@ -464,7 +464,7 @@ fn walk<Q: BoxQuery>(
     // Children a slab can touch: on a sorted forest those found by a binary
     // search and the run after it (seed §4.3), else all of them; the
     // others are clear.
-    let slab = |parent: &crate::surface::Aabb, axis: usize| {
+    let slab = |parent: &Aabb, axis: usize| {
         if forest.axis_sorted {
             k.axis_interval(parent, axis)
         } else {

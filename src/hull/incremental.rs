@@ -20,43 +20,11 @@
 //! Coordinates are bounded by [`MAX_COORD`], so every normal (≤ 2³⁵), offset and `s` (≤ 2⁵⁴) fits `i64` without overflow; volumes are
 //! accumulated in `i128`.
 
+use crate::foundation::exact::{P3, cross, det, dot, gcd, sub};
 use super::CoplanarPolicy;
 
 /// Largest accepted |coordinate| (combinatorial units): 2¹⁶.
 pub const MAX_COORD: i64 = 1 << 16;
-
-pub(crate) type P3 = [i64; 3];
-
-pub(crate) fn sub(a: P3, b: P3) -> P3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn cross(a: P3, b: P3) -> P3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-pub(crate) fn dot(a: P3, b: P3) -> i64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// `det(a, b, c)` in `i128` (for volumes; arguments up to 2¹⁷).
-pub(crate) fn det128(a: P3, b: P3, c: P3) -> i128 {
-    let w = |v: P3| v.map(i128::from);
-    let (a, b, c) = (w(a), w(b), w(c));
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
-
-fn gcd(mut a: i64, mut b: i64) -> i64 {
-    while b != 0 {
-        (a, b) = (b, a % b);
-    }
-    a.abs()
-}
 
 /// Primitive integer vector along `n` (`n ≠ 0`).
 pub(crate) fn primitive(n: P3) -> P3 {
@@ -165,7 +133,7 @@ impl<'a> Builder<'a> {
             }
         }
         let p = |i: usize| pts[t[i] as usize];
-        b.vol6 = det128(sub(p(1), p(0)), sub(p(2), p(0)), sub(p(3), p(0))).abs();
+        b.vol6 = det(sub(p(1), p(0)), sub(p(2), p(0)), sub(p(3), p(0))).abs();
         let rest: Vec<u32> = (0..pts.len() as u32).filter(|i| !t.contains(i)).collect();
         b.assign(&rest, &ids);
         b
@@ -319,7 +287,7 @@ impl<'a> Builder<'a> {
                 for k in 1..face.verts.len() - 1 {
                     let a = sub(self.pts[face.verts[k] as usize], p);
                     let b = sub(self.pts[face.verts[k + 1] as usize], p);
-                    self.vol6 -= det128(v0, a, b);
+                    self.vol6 -= det(v0, a, b);
                 }
             }
         }
@@ -335,7 +303,7 @@ impl<'a> Builder<'a> {
         if self.policy == CoplanarPolicy::Merge {
             // Cone triangles i and i+1 are coplanar iff h_i, h_i+1, h_i+2, p are.
             let joins: Vec<bool> = (0..m)
-                .map(|i| det128(sub(h(i + 1), h(i)), sub(h(i + 2), h(i)), sub(p, h(i))) == 0)
+                .map(|i| det(sub(h(i + 1), h(i)), sub(h(i + 2), h(i)), sub(p, h(i))) == 0)
                 .collect();
             let Some(first) = (0..m).find(|&i| !joins[(i + m - 1) % m]) else {
                 return Err(crate::Error::InvalidInput(

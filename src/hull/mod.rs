@@ -24,7 +24,8 @@ use crate::mesh::TriMesh;
 use crate::voxel::{CandidateKind, DigitalObject, Frame};
 
 pub use cells::CellList;
-use incremental::{Builder, P3, cross, det128, dot, primitive, sub};
+use crate::foundation::exact::{P3, cross, det, dot, sub};
+use incremental::{Builder, primitive};
 pub use incremental::{HullStats, MAX_COORD};
 
 /// How faces coplanar with the inserted point are treated (§4.1.6).
@@ -466,7 +467,7 @@ impl ConvexHull {
             .map(|f| {
                 let v = |k: usize| self.vertices[f.vertices[k] as usize];
                 (1..f.vertices.len() - 1)
-                    .map(|k| det128(v(0), v(k), v(k + 1)))
+                    .map(|k| det(v(0), v(k), v(k + 1)))
                     .sum::<i128>()
             })
             .sum()

@@ -27,7 +27,7 @@ use std::path::Path;
 use super::nrrd::pattern_files;
 use super::raw::{Encoding, Payload, Piece, Skip, read_samples, sample_count, write_le};
 use super::text::{Endian, Scanner, clip, read_prefix};
-use super::write_atomic_with;
+use crate::foundation::fs::write_atomic_with;
 use crate::volume::ScalarType;
 use crate::{Error, Position, Result, Volume};
 

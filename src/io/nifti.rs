@@ -28,7 +28,7 @@ use flate2::write::GzEncoder;
 
 use super::raw::{Encoding, Payload, Piece, Skip, read_samples, write_le};
 use super::text::{Endian, Num};
-use super::write_atomic_with;
+use crate::foundation::fs::write_atomic_with;
 use crate::volume::{ScalarType, VolumeData};
 use crate::{Error, Position, Result, Volume};
 

@@ -14,7 +14,7 @@
 //! exactly zero area (collinear or coincident corners, repeated indices)
 //! take no part; they are counted apart.
 //!
-//! Broad phase: the mesh's bounding-box forest ([`Forest::from_mesh`]); each
+//! Broad phase: the mesh's bounding-box forest ([`Forest::from_triangles`]); each
 //! triangle is tested against the later triangles of the leaves its box
 //! meets whose own boxes meet it too.
 
@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use robust::{Coord, Coord3D};
 
 use super::TriMesh;
-use crate::surface::{Aabb, Forest};
+use crate::foundation::{Aabb, Forest};
 
 /// Result of [`self_intersections`].
 #[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
@@ -55,7 +55,7 @@ pub fn intersections_of_first(mesh: &TriMesh, n: usize) -> SelfIntersections {
     let degenerate: Vec<u32> = (0..planes.len() as u32)
         .filter(|&t| planes[t as usize].is_none())
         .collect();
-    let (forest, _, _) = Forest::from_mesh(mesh);
+    let forest = Forest::from_triangles(mesh.view()).forest;
     let tri_box = |t: usize| {
         let [a, b, c] = mesh.triangles[t].map(|v| mesh.positions[v as usize]);
         Aabb::triangle(a, b, c)
@@ -448,23 +448,7 @@ mod tests {
         }
     }
 
-    type P = [i64; 3];
-
-    fn sub(p: P, q: P) -> P {
-        [p[0] - q[0], p[1] - q[1], p[2] - q[2]]
-    }
-
-    fn cross(u: P, v: P) -> P {
-        [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ]
-    }
-
-    fn dot(u: P, v: P) -> i64 {
-        u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-    }
+    use crate::foundation::exact::{P3 as P, cross, dot, sub};
 
     /// Whether the origin lies in the convex hull of `pts` (nonzero
     /// points): in a segment, triangle or tetrahedron of them (Carathéodory).

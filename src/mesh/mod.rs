@@ -7,7 +7,6 @@
 
 pub mod collapse;
 pub mod csr;
-pub mod disjoint_sets;
 pub mod icosphere;
 pub mod intersect;
 pub mod orient;
@@ -15,13 +14,14 @@ pub mod topology;
 
 pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
-pub use disjoint_sets::DisjointSets;
 pub use icosphere::{icosphere_sag, unit_icosphere};
 pub use intersect::{SelfIntersections, intersections_of_first, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Bounds, Component, Orientation, Topology};
 
 use glam::Vec3;
+
+use crate::foundation::MeshView;
 
 /// A named per-vertex scalar field: `values.len() == positions.len()`.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,6 +104,14 @@ impl TriMesh {
                 .iter()
                 .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
         )
+    }
+
+    /// The positions and triangles as the spatial index reads them.
+    pub fn view(&self) -> MeshView<'_> {
+        MeshView {
+            positions: &self.positions,
+            triangles: &self.triangles,
+        }
     }
 
     /// Reverses the winding of every triangle (flips all normals).

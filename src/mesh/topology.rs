@@ -21,7 +21,7 @@ use glam::DVec3;
 use rayon::slice::ParallelSliceMut;
 
 use super::TriMesh;
-use super::disjoint_sets::DisjointSets;
+use crate::foundation::UnionFind;
 
 /// Marks "no such half-edge / component" in the index tables below.
 pub(crate) const NONE: usize = usize::MAX;
@@ -384,7 +384,7 @@ fn corners(mesh: &TriMesh, tri: &[u32; 3]) -> [DVec3; 3] {
 /// Every boundary edge joins the fans of its two end corners; a fan holds at
 /// most two boundary edges (its triangles form a path around the vertex), so
 /// these links form disjoint paths (ending at non-manifold edges) and cycles.
-fn walk_boundary(he: &HalfEdges, fans: &mut DisjointSets) -> (Vec<usize>, Vec<usize>) {
+fn walk_boundary(he: &HalfEdges, fans: &mut UnionFind<usize>) -> (Vec<usize>, Vec<usize>) {
     let ends: Vec<[usize; 2]> = (0..he.n_edges())
         .filter(|&e| he.uses[e] == 1)
         .map(|e| {
@@ -480,7 +480,7 @@ pub(crate) fn analyse(mesh: &TriMesh) -> Analysis {
 
     // Corners (3t + k) around the same vertex joined across manifold edges:
     // each resulting set is one fan.
-    let mut fans = DisjointSets::new(3 * nt);
+    let mut fans = UnionFind::<usize>::with_len(3 * nt);
     for (h, &g) in he.twin.iter().enumerate() {
         if g == NONE || g < h {
             continue;
@@ -519,7 +519,7 @@ pub(crate) fn analyse(mesh: &TriMesh) -> Analysis {
     }
 
     // Components: triangles sharing vertices; provisional ids by first triangle.
-    let mut vertex_sets = DisjointSets::new(nv);
+    let mut vertex_sets = UnionFind::<usize>::with_len(nv);
     for tri in tris.iter().filter(|t| !is_collapsed(t)) {
         vertex_sets.union(tri[0] as usize, tri[1] as usize);
         vertex_sets.union(tri[0] as usize, tri[2] as usize);

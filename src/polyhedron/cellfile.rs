@@ -285,7 +285,7 @@ impl Polyhedron {
 
     /// Writes the `.cells` file atomically.
     pub fn write(&self, path: &Path) -> crate::Result<()> {
-        crate::io::write_atomic(path, &self.to_bytes())
+        crate::foundation::fs::write_atomic(path, &self.to_bytes())
     }
 
     /// The readable form: one object per shell (parent, depth, role, kind,

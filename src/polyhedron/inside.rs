@@ -29,6 +29,7 @@
 //! All arithmetic is exact integer arithmetic on combinatorial coordinates
 //! (i128 for products), within ±2^24 ([`MAX_COORD`]).
 
+use crate::foundation::exact::{P2, cross_wide, orient2, sub};
 use crate::hscan::{RowSpans, Side, VoxelBox};
 use crate::parity::Backend;
 use crate::voxel::DigitalObject;
@@ -41,33 +42,19 @@ use super::{MergedSurface, Polyhedron, ShellGeometry};
 /// i128.
 pub const MAX_COORD: i64 = 1 << 24;
 
-type Q2 = [i64; 2];
 
-fn orient(a: Q2, b: Q2, c: Q2) -> i128 {
-    let (ab, ac) = (
-        [i128::from(b[0] - a[0]), i128::from(b[1] - a[1])],
-        [i128::from(c[0] - a[0]), i128::from(c[1] - a[1])],
-    );
-    ab[0] * ac[1] - ab[1] * ac[0]
-}
-
+/// The normal `(b − a) × (c − a)` of triangle `a b c`, in `i128`.
 fn cross3(a: [i64; 3], b: [i64; 3], c: [i64; 3]) -> [i128; 3] {
-    let u: [i128; 3] = std::array::from_fn(|k| i128::from(b[k] - a[k]));
-    let v: [i128; 3] = std::array::from_fn(|k| i128::from(c[k] - a[k]));
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
+    cross_wide(sub(b, a), sub(c, a))
 }
 
 /// Whether the foot point `f + (ε, ε²)` lies strictly inside the
 /// counter-clockwise triangle `t` (never on an edge).
-fn contains_perturbed(t: [Q2; 3], f: Q2) -> bool {
+fn contains_perturbed(t: [P2; 3], f: P2) -> bool {
     (0..3).all(|k| {
         let (p, q) = (t[k], t[(k + 1) % 3]);
-        let o = orient(p, q, f);
-        // orient(p, q, f + δ) = o + d_x·ε² − d_y·ε for d = q − p.
+        let o = orient2(p, q, f);
+        // orient2(p, q, f + δ) = o + d_x·ε² − d_y·ε for d = q − p.
         let s = if o != 0 {
             o
         } else if q[1] != p[1] {
@@ -82,12 +69,12 @@ fn contains_perturbed(t: [Q2; 3], f: Q2) -> bool {
 /// The local indices `i ∈ [0, n)` whose lattice coordinate `u0 + 2i` lies
 /// in the closed counter-clockwise triangle `t` (points `(u, v)`) on the
 /// line `v`, as an inclusive range; `None` when there are none.
-fn span(t: [Q2; 3], v: i64, u0: i64, n: usize) -> Option<(usize, usize)> {
+fn span(t: [P2; 3], v: i64, u0: i64, n: usize) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = (0i128, n as i128 - 1);
     for k in 0..3 {
         let (p, q) = (t[k], t[(k + 1) % 3]);
         let (du, dv) = (i128::from(q[0] - p[0]), i128::from(q[1] - p[1]));
-        // orient(p, q, (u0 + 2i, v)) ≥ 0  ⇔  2·dv·i ≤ r.
+        // orient2(p, q, (u0 + 2i, v)) ≥ 0  ⇔  2·dv·i ≤ r.
         let r = du * i128::from(v - p[1]) - dv * i128::from(u0 - p[0]);
         match dv.signum() {
             1 => hi = hi.min(r.div_euclid(2 * dv)),
@@ -123,9 +110,9 @@ fn on_triangle(t: [[i64; 3]; 3], c: [i64; 3]) -> bool {
     let q = |p: [i64; 3]| to_axis(p, k);
     let (a, b, e, x) = (q(t[0]), q(t[1]), q(t[2]), q(c));
     let o = [
-        orient([a[0], a[1]], [b[0], b[1]], [x[0], x[1]]).signum(),
-        orient([b[0], b[1]], [e[0], e[1]], [x[0], x[1]]).signum(),
-        orient([e[0], e[1]], [a[0], a[1]], [x[0], x[1]]).signum(),
+        orient2([a[0], a[1]], [b[0], b[1]], [x[0], x[1]]).signum(),
+        orient2([b[0], b[1]], [e[0], e[1]], [x[0], x[1]]).signum(),
+        orient2([e[0], e[1]], [a[0], a[1]], [x[0], x[1]]).signum(),
     ];
     !(o.contains(&1) && o.contains(&-1))
 }
@@ -227,7 +214,7 @@ impl MergedSurface {
             // Foot point f + (ε², ε): strictly inside the projection?
             let inside = (0..3).all(|k| {
                 let (a, b) = (q[k], q[(k + 1) % 3]);
-                let o = orient([a[0], a[1]], [b[0], b[1]], [cc[0], cc[1]]);
+                let o = orient2([a[0], a[1]], [b[0], b[1]], [cc[0], cc[1]]);
                 let (dx, dy) = (i128::from(b[0] - a[0]), i128::from(b[1] - a[1]));
                 // o + dx·ε − dy·ε², signed by the triangle's orientation.
                 let s = if o != 0 {
@@ -346,7 +333,7 @@ fn mark_vertical(p: [[i64; 3]; 3], bbox: &VoxelBox, marks: &mut [u8]) {
     };
     let (e0, e1) = (ends(false), ends(true));
     let zs = p.map(|v| [v[2], v[s]]);
-    let zs = if orient(zs[0], zs[1], zs[2]) > 0 {
+    let zs = if orient2(zs[0], zs[1], zs[2]) > 0 {
         zs
     } else {
         [zs[0], zs[2], zs[1]]

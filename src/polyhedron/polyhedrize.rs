@@ -67,6 +67,7 @@
 
 use std::collections::VecDeque;
 
+use crate::foundation::exact::{cross_wide, gcd, sub};
 use crate::hscan::VoxelBox;
 use crate::hull::{ConvexHull, HullFace, HullOptions};
 use crate::mesh::{ScalarField, TriMesh};
@@ -145,7 +146,7 @@ impl ShellGeometry {
             return Ok(ShellGeometry::Point(a));
         }
         let d = sub(b, a);
-        if pts.iter().all(|&p| cross(d, sub(p, a)) == [0, 0, 0]) {
+        if pts.iter().all(|&p| cross_wide(d, sub(p, a)) == [0, 0, 0]) {
             return Ok(ShellGeometry::Segment(a, b));
         }
         Ok(ShellGeometry::Polytope(ConvexHull::build(&pts, options)?))
@@ -607,7 +608,7 @@ fn share_face_area(a: &ConvexHull, b: &ConvexHull) -> bool {
     let edge_separates = |n: [i64; 3], poly: &[[i64; 3]], other: &[[i64; 3]]| {
         (0..poly.len()).any(|i| {
             let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
-            let inward = cross(n, sub(q, p));
+            let inward = cross_wide(n, sub(q, p));
             other.iter().all(|&x| {
                 let w = sub(x, p).map(i128::from);
                 inward[0] * w[0] + inward[1] * w[1] + inward[2] * w[2] <= 0
@@ -679,7 +680,7 @@ fn interiors_disjoint(a: &ConvexHull, b: &ConvexHull) -> bool {
     let eb = edge_directions(b);
     edge_directions(a).iter().any(|&u| {
         eb.iter().any(|&w| {
-            let n = cross(u, w).map(|c| c as i64);
+            let n = cross_wide(u, w).map(|c| c as i64);
             if n == [0, 0, 0] {
                 return false;
             }
@@ -1018,19 +1019,4 @@ fn voxel_of(c: [i64; 3]) -> [i64; 3] {
     c.map(|x| (x - 1).div_euclid(2))
 }
 
-fn gcd(a: i64, b: i64) -> i64 {
-    if b == 0 { a } else { gcd(b, a % b) }
-}
 
-fn sub(a: [i64; 3], b: [i64; 3]) -> [i64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [i64; 3], b: [i64; 3]) -> [i128; 3] {
-    let (a, b) = (a.map(i128::from), b.map(i128::from));
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}

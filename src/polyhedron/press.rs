@@ -14,23 +14,15 @@
 //! `((b − a) × (q − a))·n = ((b − a) × (c³ − a))·n` because the projection
 //! moves `c³` along `n` and `((b − a) × n)·n = 0`.
 
+use crate::foundation::exact::{cross_wide, sub};
 use crate::hull::{ConvexHull, HullFace};
 use crate::voxel::{voxel_centre, voxel_corner};
 
 use super::Zkh;
 
-fn sub(a: [i64; 3], b: [i64; 3]) -> [i64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
 /// `((b − a) × (p − a))·n` in `i128`.
 fn edge_side(a: [i64; 3], b: [i64; 3], p: [i64; 3], n: [i64; 3]) -> i128 {
-    let (e, w) = (sub(b, a).map(i128::from), sub(p, a).map(i128::from));
-    let c = [
-        e[1] * w[2] - e[2] * w[1],
-        e[2] * w[0] - e[0] * w[2],
-        e[0] * w[1] - e[1] * w[0],
-    ];
+    let c = cross_wide(sub(b, a), sub(p, a));
     c[0] * i128::from(n[0]) + c[1] * i128::from(n[1]) + c[2] * i128::from(n[2])
 }
 

@@ -22,13 +22,14 @@
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, HashMap};
 
+use crate::foundation::UnionFind;
+use crate::foundation::exact::{P2, cross2, det, dot2, gcd, orient2, sub2};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::voxel::Frame;
 
 use super::{Polyhedron, Role};
 
 /// Planar coordinates: a plane point with its dominant axis dropped.
-type P2 = [i64; 2];
 
 /// One face of a [`MergedSurface`]: a planar region, possibly with holes.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -120,7 +121,10 @@ impl MergedSurface {
     pub fn volume6(&self) -> i128 {
         self.triangles
             .iter()
-            .map(|t| det(t.map(|v| self.vertices[v as usize])))
+            .map(|t| {
+                let [a, b, c] = t.map(|v| self.vertices[v as usize]);
+                det(a, b, c)
+            })
             .sum()
     }
 
@@ -306,7 +310,7 @@ fn covering_depth(
                 project(cycle[k], n).map(|x| 3 * x),
                 project(cycle[(k + 1) % cycle.len()], n).map(|x| 3 * x),
             );
-            orient(a, b, c) * i128::from(sigma) >= 0
+            orient2(a, b, c) * i128::from(sigma) >= 0
         })
     };
     (polys.iter().zip(depths))
@@ -342,26 +346,10 @@ fn project(p: [i64; 3], n: [i64; 3]) -> P2 {
     if n[k] > 0 { [p[i], p[j]] } else { [p[j], p[i]] }
 }
 
-fn sub2(a: P2, b: P2) -> [i128; 2] {
-    [i128::from(a[0] - b[0]), i128::from(a[1] - b[1])]
-}
-
-fn cross2(a: [i128; 2], b: [i128; 2]) -> i128 {
-    a[0] * b[1] - a[1] * b[0]
-}
-
-fn dot2(a: [i128; 2], b: [i128; 2]) -> i128 {
-    a[0] * b[0] + a[1] * b[1]
-}
-
-/// Twice the signed area of triangle `a b c` (> 0 counter-clockwise).
-fn orient(a: P2, b: P2, c: P2) -> i128 {
-    cross2(sub2(b, a), sub2(c, a))
-}
 
 /// Whether `q` lies strictly inside segment `a b`.
 fn strictly_between(a: P2, b: P2, q: P2) -> bool {
-    orient(a, b, q) == 0 && dot2(sub2(q, a), sub2(b, a)) > 0 && dot2(sub2(q, b), sub2(a, b)) > 0
+    orient2(a, b, q) == 0 && dot2(sub2(q, a), sub2(b, a)) > 0 && dot2(sub2(q, b), sub2(a, b)) > 0
 }
 
 /// Twice the signed area of a loop.
@@ -374,11 +362,6 @@ fn area2(lp: &[usize], pos: &[P2]) -> i128 {
         .sum()
 }
 
-fn det(t: [[i64; 3]; 3]) -> i128 {
-    let [a, b, c] = t.map(|p| p.map(i128::from));
-    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-        + a[2] * (b[0] * c[1] - b[1] * c[0])
-}
 
 /// Boundary evaluation on one plane (canonical normal `n`, offset `d`):
 /// the faces of multiplicity +1 (outward `n`) and −1 (outward `−n`).
@@ -509,8 +492,8 @@ fn check_crossings(
     segs.sort_unstable();
     for (i, &(a, b)) in segs.iter().enumerate() {
         for &(c, e) in segs[i + 1..].iter().take_while(|s| s.0[0] <= b[0]) {
-            let (o1, o2) = (orient(a, b, c).signum(), orient(a, b, e).signum());
-            let (o3, o4) = (orient(c, e, a).signum(), orient(c, e, b).signum());
+            let (o1, o2) = (orient2(a, b, c).signum(), orient2(a, b, e).signum());
+            let (o3, o4) = (orient2(c, e, a).signum(), orient2(c, e, b).signum());
             if o1 * o2 < 0 && o3 * o4 < 0 {
                 return Err(invalid(format!(
                     "faces on plane {n:?}·x = {d} cross properly: the shells do not nest"
@@ -666,7 +649,7 @@ fn contains(lp: &[usize], q: &[P2], t: P2) -> bool {
             q[lp[(k + 1) % lp.len()]].map(|c| 2 * c),
         );
         if (a[1] > t[1]) != (b[1] > t[1]) {
-            let o = orient(a, b, t);
+            let o = orient2(a, b, t);
             if (b[1] > a[1]) == (o > 0) {
                 inside = !inside;
             }
@@ -742,9 +725,6 @@ fn split_t_junctions(vertices: &[[i64; 3]], faces: &mut [MergedFace]) {
     }
 }
 
-fn gcd(a: i64, b: i64) -> i64 {
-    if b == 0 { a } else { gcd(b, a % b) }
-}
 
 /// Every undirected edge is used as often in each direction (the chain is
 /// closed): the exact watertightness check.
@@ -828,7 +808,7 @@ fn triangulate(face: &MergedFace, vertices: &[[i64; 3]]) -> crate::Result<Vec<[u
     }
     let areas: Vec<i128> = out
         .iter()
-        .map(|t| orient(pos[t[0]], pos[t[1]], pos[t[2]]))
+        .map(|t| orient2(pos[t[0]], pos[t[1]], pos[t[2]]))
         .collect();
     if areas.iter().any(|&a| a <= 0) || areas.iter().sum::<i128>() != target {
         return Err(fail("the triangles do not tile the face"));
@@ -882,8 +862,8 @@ fn find_bridge(
                 if [u, w].iter().any(|&x| x == m || x == p) {
                     return false;
                 }
-                let proper = orient(m, p, u).signum() * orient(m, p, w).signum() < 0
-                    && orient(u, w, m).signum() * orient(u, w, p).signum() < 0;
+                let proper = orient2(m, p, u).signum() * orient2(m, p, w).signum() < 0
+                    && orient2(u, w, m).signum() * orient2(u, w, p).signum() < 0;
                 proper || strictly_between(u, w, m) || strictly_between(u, w, p)
             })
     })
@@ -902,7 +882,7 @@ fn clip_ears(poly: &[usize], pos: &[P2]) -> Option<(Vec<[usize; 3]>, Vec<usize>)
     let (mut remaining, mut cur, mut stall) = (n, 0usize, 0usize);
     while remaining >= 3 {
         let (a, c) = (prev[cur], next[cur]);
-        let o = orient(p(a), p(cur), p(c));
+        let o = orient2(p(a), p(cur), p(c));
         let ear = o > 0 && (remaining == 3 || is_ear(a, cur, c, &next, &prev, &p));
         if o == 0 || ear {
             if ear {
@@ -951,7 +931,7 @@ fn is_ear(
                     return false;
                 }
             }
-        } else if orient(pa, pb, q) >= 0 && orient(pb, pc, q) >= 0 && orient(pc, pa, q) >= 0 {
+        } else if orient2(pa, pb, q) >= 0 && orient2(pb, pc, q) >= 0 && orient2(pc, pa, q) >= 0 {
             return false;
         }
         j = next[j];
@@ -1025,7 +1005,7 @@ fn convex_faces_of(
     let to = |h: usize| tris[h / 3][(h + 1) % 3];
     let mut next: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 1) % 3).collect();
     let mut prev: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 2) % 3).collect();
-    let mut piece: Vec<usize> = (0..tris.len()).collect();
+    let mut piece = UnionFind::<usize>::with_len(tris.len());
     let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
     for h in 0..n {
         by_edge.entry((from(h), to(h))).or_default().push(h);
@@ -1043,7 +1023,7 @@ fn convex_faces_of(
         if u > v {
             continue;
         }
-        let (ph, pg) = (find(&mut piece, h / 3), find(&mut piece, g / 3));
+        let (ph, pg) = (piece.find(h / 3), piece.find(g / 3));
         if ph == pg {
             continue;
         }
@@ -1059,7 +1039,7 @@ fn convex_faces_of(
         prev[hn] = gp;
         alive[h] = false;
         alive[g] = false;
-        piece[pg] = ph;
+        piece.union(ph, pg);
     }
     let mut out = Vec::new();
     for start in 0..n {
@@ -1084,11 +1064,3 @@ fn convex_faces_of(
     out
 }
 
-/// Union-find root with path halving.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
-}

@@ -233,8 +233,8 @@ impl Image {
     /// Writes the image as PNG to `path`, atomically (temp file + rename);
     /// a name not ending in `.png` is refused.
     pub fn save_png(&self, path: &Path) -> Result<()> {
-        crate::io::check_png_output(path)?;
-        crate::io::write_atomic(path, &self.to_png()?)
+        crate::foundation::fs::check_png_output(path)?;
+        crate::foundation::fs::write_atomic(path, &self.to_png()?)
     }
 
     fn blank(width: u32, height: u32) -> Self {

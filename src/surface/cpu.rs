@@ -30,9 +30,9 @@
 //! ([`T_MIN`]) keeps every vertex strictly inside its edge, so no triangle
 //! has zero area (see there).
 
-use std::sync::atomic::{AtomicU32, Ordering};
-
 use rayon::prelude::*;
+
+use crate::foundation::UnionFind;
 
 /// Least interpolation parameter, in grid steps: `2⁻¹⁰`. A sample equal to
 /// the level would otherwise put the vertices of all its crossing edges on
@@ -65,137 +65,6 @@ pub struct RawSurface {
     pub groups: Vec<u32>,
     /// Number of groups.
     pub n_groups: usize,
-}
-
-/// Union-find with path halving and union by index (smaller root wins, so
-/// roots are the earliest-created node: deterministic).
-#[derive(Debug, Default, Clone)]
-pub struct UnionFind {
-    parent: Vec<u32>,
-}
-
-impl UnionFind {
-    /// A new singleton; returns its id.
-    pub fn push(&mut self) -> u32 {
-        let id = self.parent.len() as u32;
-        self.parent.push(id);
-        id
-    }
-
-    /// `n` singletons.
-    pub fn with_len(n: usize) -> Self {
-        UnionFind {
-            parent: (0..n as u32).collect(),
-        }
-    }
-
-    /// Number of nodes.
-    pub fn len(&self) -> usize {
-        self.parent.len()
-    }
-
-    /// Whether there are no nodes.
-    pub fn is_empty(&self) -> bool {
-        self.parent.is_empty()
-    }
-
-    /// Root of `x`.
-    pub fn find(&mut self, mut x: u32) -> u32 {
-        while self.parent[x as usize] != x {
-            let p = self.parent[x as usize];
-            self.parent[x as usize] = self.parent[p as usize];
-            x = self.parent[x as usize];
-        }
-        x
-    }
-
-    /// The root of every node, consuming the forest: one ascending pass,
-    /// since a node's parent never has a higher id (a union links the higher
-    /// root under the lower, halving keeps ancestors).
-    pub fn roots(mut self) -> Vec<u32> {
-        for x in 0..self.parent.len() {
-            let p = self.parent[x] as usize;
-            self.parent[x] = self.parent[p];
-        }
-        self.parent
-    }
-
-    /// Unites the sets of `a` and `b`; returns the new root.
-    pub fn union(&mut self, a: u32, b: u32) -> u32 {
-        let (ra, rb) = (self.find(a), self.find(b));
-        let (lo, hi) = if ra < rb { (ra, rb) } else { (rb, ra) };
-        self.parent[hi as usize] = lo;
-        lo
-    }
-}
-
-/// Union-find that threads share: a union links the higher root under
-/// the lower by compare-and-swap, so each set's root is its smallest node
-/// whatever the order of the unions (the same roots as [`UnionFind`]).
-#[derive(Debug)]
-pub struct AtomicUnionFind {
-    parent: Vec<AtomicU32>,
-}
-
-impl AtomicUnionFind {
-    /// `n` singletons.
-    pub fn with_len(n: usize) -> Self {
-        AtomicUnionFind {
-            parent: (0..n as u32).into_par_iter().map(AtomicU32::new).collect(),
-        }
-    }
-
-    /// Root of `x`, halving the path: each step points a non-root at its
-    /// grandparent with a plain store. Only roots are ever linked (by
-    /// [`AtomicUnionFind::union`]'s compare-and-swap), and an ancestor stays
-    /// an ancestor, so a store racing another halving or a link still
-    /// leaves every node under an ancestor.
-    pub fn find(&self, mut x: u32) -> u32 {
-        let parent = &self.parent;
-        loop {
-            let p = parent[x as usize].load(Ordering::Acquire);
-            if p == x {
-                return x;
-            }
-            let g = parent[p as usize].load(Ordering::Acquire);
-            if g != p {
-                parent[x as usize].store(g, Ordering::Release);
-            }
-            x = g;
-        }
-    }
-
-    /// Joins the sets of `a` and `b`: the larger root is linked under the
-    /// smaller one only while it is still a root, else the roots are looked
-    /// up again.
-    pub fn union(&self, a: u32, b: u32) {
-        loop {
-            let (ra, rb) = (self.find(a), self.find(b));
-            if ra == rb {
-                return;
-            }
-            let (lo, hi) = (ra.min(rb), ra.max(rb));
-            if self.parent[hi as usize]
-                .compare_exchange(hi, lo, Ordering::AcqRel, Ordering::Acquire)
-                .is_ok()
-            {
-                return;
-            }
-        }
-    }
-
-    /// The root of every node, consuming the forest (see [`UnionFind::roots`]).
-    pub fn roots(self) -> Vec<u32> {
-        UnionFind {
-            parent: self.parent.into_iter().map(AtomicU32::into_inner).collect(),
-        }
-        .roots()
-    }
-
-    /// The node array, for reuse as scratch space.
-    pub fn into_inner(self) -> Vec<AtomicU32> {
-        self.parent
-    }
 }
 
 const NONE: u32 = u32::MAX;
@@ -807,11 +676,9 @@ fn stitch(
         node_base.push(n_nodes);
         n_nodes += c.uf.len() as u32;
     }
-    let mut uf = UnionFind {
-        parent: Vec::with_capacity(n_nodes as usize),
-    };
-    for (c, &base) in chunk_groups.iter().zip(&node_base) {
-        uf.parent.extend(c.uf.parent.iter().map(|&p| base + p));
+    let mut uf = UnionFind::default();
+    for c in chunk_groups {
+        uf.append(&c.uf);
     }
     // Seams: chunk k's first layer is chunk k − 1's last.
     for k in 1..chunk_groups.len() {
@@ -825,13 +692,7 @@ fn stitch(
             }
         }
     }
-    // Parents never exceed their node (union by index), so one forward
-    // pass resolves every root.
-    let mut root = vec![0u32; n_nodes as usize];
-    for i in 0..n_nodes as usize {
-        let p = uf.parent[i] as usize;
-        root[i] = if p == i { p as u32 } else { root[p] };
-    }
+    let root = uf.roots();
     // Per chunk: global roots in place and the distinct roots in order of
     // first triangle; then canonical numbers in chunk order.
     let mut slices = Vec::with_capacity(chunks.len());
@@ -872,38 +733,4 @@ fn stitch(
         }
     });
     n_groups as usize
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Unions in parallel give the roots of the same unions in sequence
-    /// (each set's smallest node), on a graph with long chains and cycles.
-    #[test]
-    fn atomic_union_find_equals_the_sequential_one() {
-        let n = 20_000u32;
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % u64::from(n)) as u32
-        };
-        let mut edges: Vec<(u32, u32)> = (0..n - 1)
-            .filter(|i| i % 97 != 0)
-            .map(|i| (i, i + 1))
-            .collect();
-        edges.extend((0..15_000).map(|_| (next(), next())));
-        let mut seq = UnionFind::with_len(n as usize);
-        edges.iter().for_each(|&(a, b)| {
-            seq.union(a, b);
-        });
-        let par = AtomicUnionFind::with_len(n as usize);
-        edges.par_iter().for_each(|&(a, b)| par.union(b, a));
-        let roots = par.roots();
-        assert_eq!(roots, seq.roots());
-        assert!(roots.iter().enumerate().all(|(x, &r)| r as usize <= x));
-        assert!(roots.iter().filter(|&&r| r == 0).count() > 1);
-    }
 }

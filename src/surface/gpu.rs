@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use super::cpu::RawSurface;
 use super::field::Field;
 use super::tables;
-use super::tree::vertex_components;
+use crate::foundation::vertex_components;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::parity::find_sentinel;
 use crate::{Error, Result};

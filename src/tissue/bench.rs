@@ -162,7 +162,7 @@ pub fn increment_bone(net: &SpringNetwork, increment: &ResolvedPlan) -> Vec<[f32
 /// knee, c_max]`) and `network.json` (counts, Δt, damping, mass, the file
 /// list). Each file is written atomically.
 pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<()> {
-    use crate::io::write_atomic;
+    use crate::foundation::fs::write_atomic;
     let u_bone = super::relax::bone_displacements(net, bone)?;
     std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let w = 1.0 / net.params.mass;

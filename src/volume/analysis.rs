@@ -7,7 +7,7 @@
 //! order of their first voxel in file order (x fastest, then y, then z).
 
 use super::{ScalarType, Volume, VolumeData};
-use crate::mesh::DisjointSets;
+use crate::foundation::UnionFind;
 use crate::{Error, Result};
 
 /// Integer volumes with at most this many distinct values get a label
@@ -273,7 +273,7 @@ impl RunComponents {
             }
             row_start.push(runs.len());
         }
-        let mut sets = DisjointSets::new(runs.len());
+        let mut sets = UnionFind::<usize>::with_len(runs.len());
         let row_runs = |row: usize| row_start[row]..row_start[row + 1];
         for row in 0..rows {
             let (y, z) = (row % ny, row / ny);

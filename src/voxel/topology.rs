@@ -16,6 +16,7 @@
 use std::sync::OnceLock;
 
 use super::DigitalObject;
+use crate::foundation::UnionFind;
 use crate::volume::analysis::label_6_connected;
 
 /// Counts of ∂S (opened at non-manifold cells, see the module docs).
@@ -91,14 +92,7 @@ fn vertex_table() -> &'static [VertexClass; 256] {
         for (m, class) in t.iter_mut().enumerate() {
             let in_s = |o: usize| m >> o & 1 == 1;
             // Link nodes: (half-edge, S octant or 8 for "whole edge").
-            let mut parent: Vec<usize> = (0..6 * 9).collect();
-            fn find(p: &mut [usize], mut x: usize) -> usize {
-                while p[x] != x {
-                    p[x] = p[p[x]];
-                    x = p[x];
-                }
-                x
-            }
+            let mut links = UnionFind::<usize>::with_len(6 * 9);
             let node = |axis: usize, dir: usize, s_oct: usize| {
                 let ring = around(axis, dir);
                 let n_s = ring.iter().filter(|&&o| in_s(o)).count();
@@ -117,13 +111,12 @@ fn vertex_table() -> &'static [VertexClass; 256] {
                     let n1 = node(p, a >> p & 1, s_oct);
                     let n2 = node(q, a >> q & 1, s_oct);
                     used.extend([n1, n2]);
-                    let (r1, r2) = (find(&mut parent, n1), find(&mut parent, n2));
-                    parent[r1] = r2;
+                    links.union(n1, n2);
                 }
             }
             used.sort_unstable();
             used.dedup();
-            let mut roots: Vec<usize> = used.iter().map(|&n| find(&mut parent, n)).collect();
+            let mut roots: Vec<usize> = used.iter().map(|&n| links.find(n)).collect();
             roots.sort_unstable();
             roots.dedup();
             class.cycles = roots.len() as u8;
@@ -145,25 +138,6 @@ fn vertex_table() -> &'static [VertexClass; 256] {
 pub(crate) fn is_convex_vertex(m: u8) -> bool {
     let c = vertex_table()[m as usize];
     c.relevant_edges >= 3 && c.convex_edges == 3
-}
-
-struct UnionFind(Vec<u32>);
-
-impl UnionFind {
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let p = self.0[self.0[x as usize] as usize];
-            self.0[x as usize] = p;
-            x = p;
-        }
-        x
-    }
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.0[ra as usize] = rb;
-        }
-    }
 }
 
 impl DigitalObject {
@@ -240,7 +214,7 @@ impl DigitalObject {
             }
         }
         t.n2 = facets.len() as u64;
-        let mut uf = UnionFind((0..facets.len() as u32).collect());
+        let mut uf = UnionFind::<u32>::with_len(facets.len());
         let facet_id = |a: usize, b: usize, k: usize| -> u32 {
             let key = 3 * a.min(b) as u64 + k as u64;
             facets.binary_search(&key).map_or(u32::MAX, |i| i as u32)

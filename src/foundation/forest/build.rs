@@ -1,0 +1,303 @@
+//! Building a [`Forest`]'s parts in parallel: per part a run of (group,
+//! layer) runs sorted by cell, with its rows, leaves, boxes and leaf vertex
+//! tables.
+
+use glam::{Vec3, Vec3A};
+
+use super::{CellNode, LayerNode, MeshView, RowNode, Span};
+use crate::foundation::aabb::Aabb;
+
+/// Least triangles per part of the parallel build (at most one part per
+/// thread: each part zeroes a table over the mesh's vertices).
+pub(super) const PART_TRIANGLES: usize = 1 << 13;
+
+/// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct KeyGrid {
+    pub(super) cx: usize,
+    pub(super) cy: usize,
+    pub(super) layer: usize,
+}
+
+/// The triangles of one group in one cell layer: `order[start..end]`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LayerRun {
+    pub(super) start: usize,
+    pub(super) end: usize,
+    pub(super) z: u32,
+    /// Whether the next run belongs to another group.
+    pub(super) last_of_group: bool,
+}
+
+/// Nodes and leaf tables of consecutive runs; spans are local to the part
+/// except the triangle spans, which index the whole order.
+#[derive(Debug)]
+pub(super) struct Part {
+    pub(super) layers: Vec<LayerNode>,
+    pub(super) rows: Vec<RowNode>,
+    pub(super) cells: Vec<CellNode>,
+    pub(super) leaf_vertices: Vec<u32>,
+    pub(super) leaf_positions: Vec<Vec3>,
+    pub(super) corners: Vec<[u32; 3]>,
+    /// Per mesh vertex: tag of the last leaf that listed it (its first
+    /// triangle position + 1) and its index in `leaf_vertices` there.
+    pub(super) seen: Vec<[u32; 2]>,
+    /// Scratch of the counting sort: bucket starts, sorted ids.
+    pub(super) buckets: Vec<u32>,
+    pub(super) sorted: Vec<u32>,
+}
+
+impl Part {
+    /// An empty part for `n_triangles` triangles of a mesh of `n_vertices`.
+    pub(super) fn new(n_vertices: usize, n_triangles: usize) -> Part {
+        Part {
+            layers: Vec::new(),
+            rows: Vec::new(),
+            cells: Vec::new(),
+            leaf_vertices: Vec::with_capacity(n_triangles),
+            leaf_positions: Vec::with_capacity(n_triangles),
+            corners: Vec::with_capacity(n_triangles),
+            seen: vec![[0; 2]; n_vertices],
+            buckets: Vec::new(),
+            sorted: Vec::new(),
+        }
+    }
+
+    /// Sorts `tris` (the ids of `run`, ascending) by cell and appends the
+    /// run's layer node with its rows and leaves.
+    pub(super) fn layer(
+        &mut self,
+        mesh: MeshView<'_>,
+        cells: &[u32],
+        grid: KeyGrid,
+        run: &LayerRun,
+        tris: &mut [u32],
+    ) {
+        self.sort_by_cell(cells, tris, run.z as usize * grid.layer, grid.layer);
+        let row_start = self.rows.len() as u32;
+        let mut lbox = Aabb::EMPTY;
+        let mut i = 0;
+        while i < tris.len() {
+            let row = cells[tris[i] as usize] as usize / grid.cx;
+            let cell_start = self.cells.len() as u32;
+            let mut rbox = Aabb::EMPTY;
+            while i < tris.len() && cells[tris[i] as usize] as usize / grid.cx == row {
+                let key = cells[tris[i] as usize];
+                let end = i + tris[i..].partition_point(|&t| cells[t as usize] == key);
+                let leaf = self.leaf(mesh, &tris[i..end], run.start + i);
+                rbox = rbox.union(leaf.bbox);
+                self.cells.push(CellNode {
+                    x: (key as usize % grid.cx) as u32,
+                    triangles: Span {
+                        start: (run.start + i) as u32,
+                        end: (run.start + end) as u32,
+                    },
+                    next: self.cells.len() as u32 + 1,
+                    ..leaf
+                });
+                i = end;
+            }
+            self.rows.push(RowNode {
+                y: (row % grid.cy) as u32,
+                bbox: rbox,
+                cells: Span {
+                    start: cell_start,
+                    end: self.cells.len() as u32,
+                },
+            });
+            lbox = lbox.union(rbox);
+        }
+        if run.last_of_group
+            && let Some(last) = self.cells.last_mut()
+        {
+            last.next = u32::MAX;
+        }
+        self.layers.push(LayerNode {
+            z: run.z,
+            bbox: lbox,
+            rows: Span {
+                start: row_start,
+                end: self.rows.len() as u32,
+            },
+        });
+    }
+
+    /// Stable sort of `tris` by `cells[t]`, keys in `first..first + len`
+    /// (the run's layer): a counting sort over the layer when the run is
+    /// long against it, else over the keys' range when that is short, else
+    /// a sort by (key, id).
+    fn sort_by_cell(&mut self, cells: &[u32], tris: &mut [u32], first: usize, len: usize) {
+        let key = |t: u32| cells[t as usize];
+        let short = |range: usize| range <= 2 * tris.len() + 64;
+        let (lo, range) = if short(len) {
+            (first as u32, len)
+        } else {
+            let (lo, hi) = tris.iter().fold((u32::MAX, 0), |(lo, hi), &t| {
+                (lo.min(key(t)), hi.max(key(t)))
+            });
+            if lo >= hi {
+                return;
+            }
+            (lo, (hi - lo) as usize + 1)
+        };
+        if !short(range) {
+            tris.sort_unstable_by_key(|&t| u64::from(key(t)) << 32 | u64::from(t));
+            return;
+        }
+        self.buckets.clear();
+        self.buckets.resize(range + 1, 0);
+        for &t in tris.iter() {
+            self.buckets[(key(t) - lo) as usize + 1] += 1;
+        }
+        for k in 0..range {
+            self.buckets[k + 1] += self.buckets[k];
+        }
+        self.sorted.clear();
+        self.sorted.resize(tris.len(), 0);
+        for &t in tris.iter() {
+            let b = &mut self.buckets[(key(t) - lo) as usize];
+            self.sorted[*b as usize] = t;
+            *b += 1;
+        }
+        tris.copy_from_slice(&self.sorted);
+    }
+
+    /// Appends the leaf's distinct vertices (ascending) and its triangles'
+    /// corners; returns a leaf node holding its box and vertex span (the
+    /// box of the distinct vertices, which is that of the triangles).
+    /// `first` is the position of the leaf's first triangle in the order.
+    fn leaf(&mut self, mesh: MeshView<'_>, tris: &[u32], first: usize) -> CellNode {
+        let tag = first as u32 + 1;
+        let start = self.leaf_vertices.len();
+        for &t in tris {
+            for v in mesh.triangles[t as usize] {
+                let seen = &mut self.seen[v as usize];
+                if seen[0] != tag {
+                    seen[0] = tag;
+                    self.leaf_vertices.push(v);
+                }
+            }
+        }
+        sort_nearly_sorted(&mut self.leaf_vertices[start..]);
+        let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
+            self.seen[v as usize][1] = (start + i) as u32;
+            let p = mesh.positions[v as usize];
+            self.leaf_positions.push(p);
+            lo = lo.min(p.into());
+            hi = hi.max(p.into());
+        }
+        self.corners.extend(
+            tris.iter()
+                .map(|&t| mesh.triangles[t as usize].map(|v| self.seen[v as usize][1])),
+        );
+        CellNode {
+            x: 0,
+            bbox: Aabb {
+                min: lo.into(),
+                max: hi.into(),
+            },
+            triangles: Span { start: 0, end: 0 },
+            vertices: Span {
+                start: start as u32,
+                end: self.leaf_vertices.len() as u32,
+            },
+            next: u32::MAX,
+        }
+    }
+}
+
+/// Sorts ascending, by insertion when short: a leaf's vertices arrive
+/// nearly in order (its triangles are in cell order and marching-cubes
+/// vertex ids follow the grid).
+fn sort_nearly_sorted(v: &mut [u32]) {
+    if v.len() > 128 {
+        v.sort_unstable();
+        return;
+    }
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > x {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+/// Triangle ids sorted by (group, layer, id), layer `cells[t] / layer`,
+/// and the start of each group's ids (`n_groups + 1` entries): one stable
+/// counting sort by group when the layers never decrease along the ids,
+/// else a stable counting sort by layer first.
+pub(super) fn order_by_group_and_layer(
+    cells: &[u32],
+    layer: usize,
+    groups: &[u32],
+    n_groups: usize,
+) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n_groups + 1];
+    // Keys `lo..hi` form the current layer.
+    let (mut lo, mut hi, mut monotone) = (0usize, 0usize, true);
+    for (&c, &g) in cells.iter().zip(groups) {
+        start[g as usize + 1] += 1;
+        let c = c as usize;
+        if c >= hi {
+            lo = c - c % layer;
+            hi = lo + layer;
+        } else if c < lo {
+            monotone = false;
+        }
+    }
+    for g in 0..n_groups {
+        start[g + 1] += start[g];
+    }
+    let mut next = start.clone();
+    let mut out = vec![0u32; cells.len()];
+    let mut place = |t: u32| {
+        let s = &mut next[groups[t as usize] as usize];
+        out[*s as usize] = t;
+        *s += 1;
+    };
+    if monotone {
+        (0..cells.len() as u32).for_each(&mut place);
+    } else {
+        let n_layers = cells.iter().max().map_or(0, |&m| m as usize / layer + 1);
+        let mut at = vec![0u32; n_layers + 1];
+        for &c in cells {
+            at[c as usize / layer + 1] += 1;
+        }
+        for z in 0..n_layers {
+            at[z + 1] += at[z];
+        }
+        let mut by_layer = vec![0u32; cells.len()];
+        for (t, &c) in cells.iter().enumerate() {
+            let a = &mut at[c as usize / layer];
+            by_layer[*a as usize] = t as u32;
+            *a += 1;
+        }
+        by_layer.into_iter().for_each(&mut place);
+    }
+    (out, start)
+}
+
+/// The (group, layer) runs of `order` (sorted by group, layer, id).
+pub(super) fn layer_runs(order: &[u32], group_starts: &[u32], cells: &[u32], layer: usize) -> Vec<LayerRun> {
+    let z_of = |t: u32| cells[t as usize] as usize / layer;
+    let mut runs = Vec::new();
+    for w in group_starts.windows(2) {
+        let (mut i, end) = (w[0] as usize, w[1] as usize);
+        while i < end {
+            let z = z_of(order[i]);
+            let stop = i + order[i..end].partition_point(|&t| z_of(t) == z);
+            runs.push(LayerRun {
+                start: i,
+                end: stop,
+                z: z as u32,
+                last_of_group: stop == end,
+            });
+            i = stop;
+        }
+    }
+    runs
+}

@@ -46,7 +46,7 @@ fn load(ix: u32) -> array<vec4<u32>, 2> {
     return array<vec4<u32>, 2>(src[2u * ix], src[2u * ix + 1u]);
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>,
         @builtin(local_invocation_index) lid: u32,
         @builtin(num_workgroups) n_groups: vec3<u32>) {

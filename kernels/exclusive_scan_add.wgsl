@@ -22,7 +22,7 @@ const WG_SIZE: u32 = 256u;
 @group(0) @binding(1) var<storage, read> offsets: array<u32>;
 @group(0) @binding(2) var<storage, read_write> scanned: array<u32>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     let ix = linear_index(gid, n_groups, WG_SIZE);

@@ -31,7 +31,7 @@ const WG_SIZE: u32 = 256u;
 
 var<workgroup> sh_sum: array<u32, WG_SIZE>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>,
         @builtin(local_invocation_index) lid: u32,
         @builtin(num_workgroups) n_groups: vec3<u32>) {

@@ -14,13 +14,13 @@
 // Buffers:
 //   params: n_items = rows in the slab, nx, ny, z0, origin
 //   faces:  #F Face (shared/hull_face.wgsl)
-//   spans:  n_items vec4<i32> out: local x of (closed lo, closed hi, open
-//           lo, open hi), inclusive; empty = (0, −1)
 //   layers: the faces each z layer of the slab uses: layers[2k],
 //           layers[2k + 1] = start, end (in `layers`) of the ids of the
 //           faces local layer k tests, or LAYER_MISSES when the polyhedron
 //           misses the layer (every row empty). Every face for every layer,
 //           or only those whose z range holds it (hscan::row_spans_culled).
+//   spans:  n_items vec4<i32> out: local x of (closed lo, closed hi, open
+//           lo, open hi), inclusive; empty = (0, −1)
 // Range (hscan::check_range): |r| < 2^61, 2a < 2^32, no overflow.
 // Mirror: hscan::cpu::hull_rows (every face per layer) and
 // hull_rows_culled (the faces meeting the layer).
@@ -30,8 +30,8 @@
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> faces: array<Face>;
-@group(0) @binding(2) var<storage, read_write> spans: array<vec4<i32>>;
-@group(0) @binding(3) var<storage, read> layers: array<u32>;
+@group(0) @binding(2) var<storage, read> layers: array<u32>;
+@group(0) @binding(3) var<storage, read_write> spans: array<vec4<i32>>;
 
 const EMPTY = vec4<i32>(0, -1, 0, -1);
 
@@ -110,7 +110,7 @@ fn row_span(y: i64, z: i64, k: u32) -> vec4<i32> {
     return vec4<i32>(lo_c - ox, hi_c - ox, 0, -1);
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     let ix = linear_index(gid, n_groups, WG_SIZE);

@@ -46,7 +46,7 @@ fn side_of(v: u32) -> u32 {
     return select(2u, 1u, on);
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     let ix = linear_index(gid, n_groups, WG_SIZE);

@@ -16,8 +16,8 @@
 //   table:         257 case offsets, then 3 local edges per triangle
 //                  (surface::tables::CaseTable::flat)
 //   block_counts:  per block (vertices, triangles), out
-// Inside: sample ≥ level. Mirror: surface::cpu (number_points, emit_cells);
-// the host scans block_counts (exclusive) for mc_vertices/mc_triangles.
+// Inside: sample ≥ level. Mirror: surface::mirror::mc_classify; the host
+// scans block_counts (exclusive) for mc_vertices/mc_triangles.
 
 struct Params {
     nx: u32,

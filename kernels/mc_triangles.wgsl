@@ -19,7 +19,7 @@
 //                  x + (nx−1)·(y + (ny−1)·z); element = triangle id − t_start
 // Vertex of local edge e: owner point o (EDGE_OWNER[e] offset), axis e / 4,
 // id = vert_base[o] + number of crossing edges of o with a smaller axis.
-// Mirror: surface::cpu::emit_cells.
+// Mirror: surface::mirror::mc_triangles.
 
 #import block_scan
 

@@ -20,7 +20,7 @@
 //   t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN), a at p, b at
 //   p + e_axis; u[axis] = f32(p[axis]) + t. T_MIN = 2⁻¹⁰ keeps vertices
 //   inside their edges (no zero-area triangles; surface::cpu::T_MIN).
-// Mirror: surface::cpu::number_points.
+// Mirror: surface::mirror::mc_vertices.
 
 #import block_scan
 

@@ -45,7 +45,7 @@ fn load(ix: u32) -> vec2<u32> {
     return vec2<u32>(src[2u * ix], src[2u * ix + 1u]);
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(workgroup_id) wid: vec3<u32>,
         @builtin(local_invocation_index) lid: u32,
         @builtin(num_workgroups) n_groups: vec3<u32>) {

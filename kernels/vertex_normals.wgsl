@@ -30,7 +30,7 @@ const WG_SIZE: u32 = 256u;
 @group(0) @binding(4) var<storage, read> tri_ids: array<u32>;
 @group(0) @binding(5) var<storage, read_write> normals: array<vec4<f32>>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     let ix = linear_index(gid, n_groups, WG_SIZE);

@@ -1,5 +1,15 @@
 //! chisel: a GPU compute engine for surgical-planning geometry.
 //!
+//! Five layers; dependencies point down only (docs/ARCHITECTURE.md):
+//!
+//! ```text
+//!  ⑤ application   cli, render
+//!  ④ rooms         normals reduce scan surface hscan hull polyhedron cut tissue
+//!  ③ GPU, parity   gpu (context, kernel specs, pass builder, buffers), parity (Backend, Tolerance)
+//!  ② host data     mesh volume voxel io phantom
+//!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
+//! ```
+//!
 //! Data flows one way:
 //!
 //! ```text

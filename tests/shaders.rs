@@ -1,18 +1,21 @@
 //! Every WGSL file parses and validates with naga (capabilities = what the
 //! file's registry entry says it needs, mapped the way wgpu maps them), the
-//! registry and the folders list the same files, and the host side agrees
-//! with naga's reflection: uniform `Params` layouts (encase vs naga's
-//! `Layouter`), binding tables (group, binding, address space, access) and
-//! `WG_SIZE` (SPEC §0.3, STYLE "Rust ↔ GPU").
+//! registry and the folders list the same files, and the host agrees with
+//! the WGSL: every kernel's spec (bindings, workgroup size, constants) is
+//! reflected from the WGSL itself and used at run time by the pass builder,
+//! which refuses a binding of the wrong kind; here the specs are checked for
+//! the house order, the host's uniform `Params` layouts against naga's
+//! `Layouter`, and the mirrors' constants against the kernels' (SPEC §0.3,
+//! STYLE "Rust ↔ GPU").
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::{hscan, normals, reduce, scan, surface};
+use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
+use chisel::{Error, hscan, normals, reduce, scan, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
-use wgpu::BufferBindingType as B;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -121,18 +124,9 @@ fn portable_kernels_need_no_capabilities() {
     }
 }
 
-/// What the host binds and dispatches for a kernel.
-struct Host {
-    /// Binding types at `@group(0) @binding(i)`.
-    bindings: &'static [B],
-    /// Invocations per workgroup the host divides by.
-    wg_size: u32,
-    /// Other WGSL `const`s the host relies on, with the host's values.
-    consts: &'static [(&'static str, u32)],
-    /// The encase `Params` bytes with distinct field values, and each field's
-    /// (name, value) in declaration order.
-    params: (Vec<u8>, Vec<(&'static str, u32)>),
-}
+/// The encase bytes of a kernel's `Params` with distinct field values, and
+/// each field's (name, value) in declaration order.
+type Sample = (Vec<u8>, Vec<(&'static str, u32)>);
 
 fn encase_bytes<T: encase::ShaderType + encase::internal::WriteInto>(v: &T) -> Vec<u8> {
     let mut buf = encase::UniformBuffer::new(Vec::new());
@@ -140,58 +134,25 @@ fn encase_bytes<T: encase::ShaderType + encase::internal::WriteInto>(v: &T) -> V
     buf.into_inner()
 }
 
-/// `kernels/vertex_normals.wgsl`'s bindings as `normals::gpu` binds them
-/// (params, positions, triangles, offsets, tri_ids, normals).
-const NORMALS_BINDINGS: &[B] = &[
-    B::Uniform,
-    B::Storage { read_only: true },
-    B::Storage { read_only: true },
-    B::Storage { read_only: true },
-    B::Storage { read_only: true },
-    B::Storage { read_only: false },
-];
-
-fn host(kernel: Kernel) -> Host {
+/// The host's `Params` of `kernel`, written with distinct values.
+fn params_sample(kernel: Kernel) -> Sample {
     match kernel {
-        Kernel::VertexNormals => Host {
-            bindings: NORMALS_BINDINGS,
-            wg_size: 256,
-            consts: &[],
-            params: (
+        Kernel::VertexNormals => (
                 encase_bytes(&normals::gpu::Params { n_vertices: 0xA1 }),
                 vec![("n_vertices", 0xA1)],
             ),
-        },
-        Kernel::BoundsReduce | Kernel::RangeReduce => Host {
-            bindings: reduce::gpu::BINDINGS,
-            wg_size: reduce::gpu::WG_SIZE,
-            consts: &[("BLOCK", reduce::gpu::BLOCK)],
-            params: (
+        Kernel::BoundsReduce | Kernel::RangeReduce => (
                 encase_bytes(&reduce::gpu::Params {
                     n_items: 0xB1,
                     pairs: 0xB2,
                 }),
                 vec![("n_items", 0xB1), ("pairs", 0xB2)],
             ),
-        },
-        Kernel::ExclusiveScanBlocks | Kernel::ExclusiveScanAdd => Host {
-            bindings: if kernel == Kernel::ExclusiveScanBlocks {
-                scan::gpu::BLOCKS_BINDINGS
-            } else {
-                scan::gpu::ADD_BINDINGS
-            },
-            wg_size: scan::gpu::WG_SIZE,
-            consts: &[],
-            params: (
+        Kernel::ExclusiveScanBlocks | Kernel::ExclusiveScanAdd => (
                 encase_bytes(&scan::gpu::Params { n: 0xC1 }),
                 vec![("n", 0xC1)],
             ),
-        },
-        Kernel::McClassify => Host {
-            bindings: surface::gpu::CLASSIFY_BINDINGS,
-            wg_size: surface::gpu::WG_SIZE,
-            consts: &[],
-            params: (
+        Kernel::McClassify => (
                 encase_bytes(&surface::gpu::ClassifyParams {
                     nx: 0xD1,
                     ny: 0xD2,
@@ -213,12 +174,7 @@ fn host(kernel: Kernel) -> Host {
                     ("level", 0xD8),
                 ],
             ),
-        },
-        Kernel::McVertices => Host {
-            bindings: surface::gpu::VERTICES_BINDINGS,
-            wg_size: surface::gpu::WG_SIZE,
-            consts: &[],
-            params: (
+        Kernel::McVertices => (
                 encase_bytes(&surface::gpu::VerticesParams {
                     nx: 0xE1,
                     ny: 0xE2,
@@ -244,12 +200,7 @@ fn host(kernel: Kernel) -> Host {
                     ("level", 0xEA),
                 ],
             ),
-        },
-        Kernel::McTriangles => Host {
-            bindings: surface::gpu::TRIANGLES_BINDINGS,
-            wg_size: surface::gpu::WG_SIZE,
-            consts: &[],
-            params: (
+        Kernel::McTriangles => (
                 encase_bytes(&surface::gpu::TrianglesParams {
                     nx: 0xF1,
                     ny: 0xF2,
@@ -275,17 +226,7 @@ fn host(kernel: Kernel) -> Host {
                     ("level", 0xFA),
                 ],
             ),
-        },
-        Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => {
-            Host {
-                bindings: if matches!(kernel, Kernel::HullRows | Kernel::HullRowsI32x2) {
-                    hscan::gpu::ROWS_BINDINGS
-                } else {
-                    hscan::gpu::SCAN_BINDINGS
-                },
-                wg_size: hscan::gpu::WG_SIZE,
-                consts: &[],
-                params: (
+        Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => (
                     encase_bytes(&hscan::gpu::Params {
                         n_faces: 0xD1,
                         n_items: 0xD2,
@@ -307,135 +248,69 @@ fn host(kernel: Kernel) -> Host {
                         ("origin_z", 0xD8),
                     ],
                 ),
-            }
+        Kernel::SpringStep | Kernel::SpringChebyshev | Kernel::TissueReduceMax => {
+            tissue_params_sample(kernel)
         }
-        Kernel::SpringStep | Kernel::SpringChebyshev => Host {
-            bindings: tissue::STEP_BINDINGS,
-            wg_size: tissue::WG_SIZE,
-            consts: &[],
-            params: (
-                encase_bytes(&tissue::Params {
-                    n_free: 0xD1,
-                    use_forces: 0xD2,
-                    dt: f32::from_bits(0xD3),
-                    damping: f32::from_bits(0xD4),
-                    gain: f32::from_bits(0xD5),
-                    isotropy: f32::from_bits(0xD6),
-                }),
-                if kernel == Kernel::SpringStep {
-                    vec![
-                        ("n_free", 0xD1),
-                        ("use_forces", 0xD2),
-                        ("dt", 0xD3),
-                        ("damping", 0xD4),
-                        ("gain", 0xD5),
-                        ("isotropy", 0xD6),
-                    ]
-                } else {
-                    vec![
-                        ("n_free", 0xD1),
-                        ("use_forces", 0xD2),
-                        ("h", 0xD3),
-                        ("momentum", 0xD4),
-                        ("gain", 0xD5),
-                        ("isotropy", 0xD6),
-                    ]
-                },
-            ),
-        },
-        Kernel::TissueReduceMax => Host {
-            bindings: tissue::REDUCE_BINDINGS,
-            wg_size: tissue::WG_SIZE,
-            consts: &[],
-            params: (
-                encase_bytes(&tissue::ReduceParams {
-                    n: 0xE1,
-                    mode: 0xE2,
-                }),
-                vec![("n", 0xE1), ("mode", 0xE2)],
-            ),
-        },
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
-            "{}: add its host binding table to tests/shaders.rs::host",
+            "{}: add its `Params` sample to tests/shaders.rs::params_sample",
             other.path()
         ),
     }
 }
 
-fn u32_const(module: &naga::Module, name: &str) -> Option<u32> {
-    let c = module
-        .constants
-        .iter()
-        .find(|(_, c)| c.name.as_deref() == Some(name))?
-        .1;
-    match module.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::U32(v)) => Some(v),
-        _ => None,
+/// Every kernel's spec reflects from its WGSL: one compute entry `main`,
+/// `@workgroup_size(WG_SIZE)`, the uniform `Params` at binding 0 (and any
+/// other uniforms after it), then the buffers it reads, then those it
+/// writes (the house order the pass builder's calls follow).
+#[test]
+fn every_kernel_spec_follows_the_house_order() {
+    for &kernel in Kernel::ALL {
+        let spec = kernel.spec().unwrap_or_else(|e| panic!("{e}"));
+        let path = kernel.path();
+        assert_eq!(spec.kernel, kernel);
+        assert_eq!(
+            spec.const_u32("WG_SIZE").ok(),
+            Some(spec.wg_size),
+            "{path}: WG_SIZE vs @workgroup_size"
+        );
+        let rank = |k: &BindKind| match k {
+            BindKind::Uniform => 0,
+            BindKind::Read => 1,
+            BindKind::ReadWrite => 2,
+        };
+        assert_eq!(spec.bindings.first(), Some(&BindKind::Uniform), "{path}");
+        assert!(
+            spec.bindings.windows(2).all(|w| rank(&w[0]) <= rank(&w[1])),
+            "{path}: bindings {:?} not uniform → read → read-write",
+            spec.bindings
+        );
     }
 }
 
-/// Bindings, `WG_SIZE` and `Params` layout of every kernel against its host.
+/// The mirrors' block sizes are the kernels' constants.
 #[test]
-fn kernels_match_their_host_side() {
+fn mirrors_use_their_kernels_constants() {
+    let spec = |k: Kernel| k.spec().unwrap();
+    for k in [Kernel::BoundsReduce, Kernel::RangeReduce] {
+        assert_eq!(spec(k).const_u32("BLOCK").unwrap() as usize, reduce::cpu::BLOCK);
+    }
+    for k in [Kernel::ExclusiveScanBlocks, Kernel::ExclusiveScanAdd] {
+        assert_eq!(spec(k).wg_size as usize, scan::cpu::WG_SIZE);
+    }
+    for k in [Kernel::McClassify, Kernel::McVertices, Kernel::McTriangles] {
+        assert_eq!(spec(k).wg_size, surface::mirror::WG_SIZE);
+    }
+}
+
+/// `Params` layout of every kernel: naga's offsets against the bytes encase
+/// writes for the host's struct.
+#[test]
+fn params_match_the_wgsl_layout() {
     for &kernel in Kernel::ALL {
         let path = kernel.path();
         let module = validate(&path, kernel.source(), kernel.requires());
-        let host = host(kernel);
-
-        // Bindings: group 0, numbered 0..n, types as the host binds them.
-        let mut reflected: Vec<(u32, u32, B)> = module
-            .global_variables
-            .iter()
-            .filter_map(|(_, g)| {
-                let rb = g.binding.as_ref()?;
-                let ty = match g.space {
-                    naga::AddressSpace::Uniform => B::Uniform,
-                    naga::AddressSpace::Storage { access } => B::Storage {
-                        read_only: !access.contains(naga::StorageAccess::STORE),
-                    },
-                    other => panic!("{path}: binding in {other:?}"),
-                };
-                Some((rb.group, rb.binding, ty))
-            })
-            .collect();
-        reflected.sort_by_key(|r| (r.0, r.1));
-        let expected: Vec<(u32, u32, B)> = host
-            .bindings
-            .iter()
-            .enumerate()
-            .map(|(i, &b)| (0, i as u32, b))
-            .collect();
-        assert_eq!(reflected, expected, "{path}: bindings vs host table");
-
-        // One compute entry `main`; WG_SIZE = @workgroup_size = host's.
-        assert_eq!(module.entry_points.len(), 1, "{path}: entry points");
-        let ep = &module.entry_points[0];
-        assert_eq!(
-            (ep.name.as_str(), ep.stage),
-            ("main", naga::ShaderStage::Compute)
-        );
-        assert_eq!(
-            ep.workgroup_size,
-            [host.wg_size, 1, 1],
-            "{path}: workgroup size"
-        );
-        assert_eq!(
-            u32_const(&module, "WG_SIZE"),
-            Some(host.wg_size),
-            "{path}: WG_SIZE"
-        );
-
-        for (name, value) in host.consts {
-            assert_eq!(
-                u32_const(&module, name),
-                Some(*value),
-                "{path}: const {name}"
-            );
-        }
-
-        // Params: naga's layout vs the bytes encase writes.
-        let (bytes, fields) = host.params;
+        let (bytes, fields) = params_sample(kernel);
         let mut layouter = naga::proc::Layouter::default();
         layouter.update(module.to_ctx()).unwrap();
         let (handle, ty) = module
@@ -461,5 +336,82 @@ fn kernels_match_their_host_side() {
             assert_eq!(word, *value, "{path}: Params.{name} at offset {at}");
             assert_eq!(layouter[m.ty].size, 4, "{path}: Params.{name} is 4 bytes");
         }
+    }
+}
+
+/// The pass builder refuses bindings that disagree with the WGSL: a read
+/// where the kernel writes, one binding too few, one too many. Binding the
+/// declared kinds in order succeeds (the control).
+#[test]
+fn pass_builder_refuses_bindings_the_wgsl_does_not_declare() {
+    let Some(gpu) = chisel::gpu::gpu_for_tests().unwrap_or_else(|e| panic!("{e}")) else {
+        return;
+    };
+    let gpu: &Gpu = &gpu;
+    let params = UniformBuffer::new(gpu, "test.params", &scan::gpu::Params { n: 4 }).unwrap();
+    let a = GpuArray::<u32>::from_slice(gpu, "test.a", &[1, 2, 3, 4]).unwrap();
+    let b = GpuArray::<u32>::zeroed(gpu, "test.b", 4).unwrap();
+    // exclusive_scan_add: params, read offsets, read-write scanned.
+    let binder = || gpu.kernel(Kernel::ExclusiveScanAdd).unwrap().uniform(&params);
+    assert!(binder().read(&a).write(&b).bind().is_ok());
+    let refused = |r: chisel::Result<chisel::gpu::BoundKernel>, what: &str| match r {
+        Err(Error::Kernel { name, message }) => {
+            assert_eq!(name, "exclusive_scan_add");
+            assert!(message.contains(what), "{message}");
+        }
+        other => panic!("expected a refusal naming {what}: {other:?}"),
+    };
+    refused(binder().read(&a).read(&b).bind(), "binding 2 is ReadWrite");
+    refused(binder().read(&a).bind(), "2 of its 3 bindings");
+    refused(binder().read(&a).write(&b).write(&b).bind(), "declares 3 bindings");
+}
+
+/// The tissue kernels' `Params` samples (one struct per kernel).
+fn tissue_params_sample(kernel: Kernel) -> Sample {
+    let f = f32::from_bits;
+    match kernel {
+        Kernel::SpringStep => (
+            encase_bytes(&tissue::Params {
+                n_free: 0xD1,
+                use_forces: 0xD2,
+                dt: f(0xD3),
+                damping: f(0xD4),
+                gain: f(0xD5),
+                isotropy: f(0xD6),
+            }),
+            vec![
+                ("n_free", 0xD1),
+                ("use_forces", 0xD2),
+                ("dt", 0xD3),
+                ("damping", 0xD4),
+                ("gain", 0xD5),
+                ("isotropy", 0xD6),
+            ],
+        ),
+        Kernel::SpringChebyshev => (
+            encase_bytes(&tissue::Params {
+                n_free: 0xD1,
+                use_forces: 0xD2,
+                dt: f(0xD3),
+                damping: f(0xD4),
+                gain: f(0xD5),
+                isotropy: f(0xD6),
+            }),
+            vec![
+                ("n_free", 0xD1),
+                ("use_forces", 0xD2),
+                ("h", 0xD3),
+                ("momentum", 0xD4),
+                ("gain", 0xD5),
+                ("isotropy", 0xD6),
+            ],
+        ),
+        _ => (
+            encase_bytes(&tissue::ReduceParams {
+                n: 0xE1,
+                mode: 0xE2,
+            }),
+            vec![("n", 0xE1), ("mode", 0xE2)],
+        ),
     }
 }

@@ -43,14 +43,13 @@ impl<T: Pod> GpuArray<T> {
         let label = format!("chisel.{label}");
         let zero = [T::zeroed()];
         let contents: &[T] = if data.is_empty() { &zero } else { data };
-        let buffer = gpu.scoped(&label, || {
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(&label),
-                    contents: bytemuck::cast_slice(contents),
-                    usage: STORAGE,
-                })
-        })?;
+        let buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&label),
+                contents: bytemuck::cast_slice(contents),
+                usage: STORAGE,
+            });
         Ok(GpuArray {
             buffer,
             len: data.len(),
@@ -66,20 +65,29 @@ impl<T: Pod> GpuArray<T> {
         Self::from_slice(gpu, label, &vec![sentinel; len])
     }
 
+    /// A kernel's output: filled with `sentinel` when the device was opened
+    /// with [`super::GpuOptions::sentinels`] (tests, `CHISEL_GPU_SENTINELS=1`),
+    /// else cleared on the device, so production pays no host upload.
+    pub fn output(gpu: &Gpu, label: &str, len: usize, sentinel: T) -> Result<Self> {
+        if gpu.sentinels() {
+            Self::filled(gpu, label, len, sentinel)
+        } else {
+            Self::zeroed(gpu, label, len)
+        }
+    }
+
     /// A new buffer of `len` zeros, cleared on the device (nothing crosses
     /// the bus): for outputs a kernel writes in full before anything reads
     /// them, where a sentinel would never be checked.
     pub fn zeroed(gpu: &Gpu, label: &str, len: usize) -> Result<Self> {
         let bytes = Self::check_size(gpu, label, len)?;
         let label = format!("chisel.{label}");
-        let buffer = gpu.scoped(&label, || {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(&label),
-                size: bytes.max(std::mem::size_of::<T>() as u64),
-                usage: STORAGE,
-                mapped_at_creation: false,
-            })
-        })?;
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&label),
+            size: bytes.max(std::mem::size_of::<T>() as u64),
+            usage: STORAGE,
+            mapped_at_creation: false,
+        });
         Ok(GpuArray {
             buffer,
             len,
@@ -118,6 +126,11 @@ impl<T: Pod> GpuArray<T> {
         self.buffer.as_entire_binding()
     }
 
+    /// The wgpu label, `chisel.<kernel>.<buffer>`.
+    pub fn label(&self) -> &str {
+        &self.label
+    }
+
     /// Overwrites the elements from `data` (same length).
     pub fn write(&self, gpu: &Gpu, data: &[T]) -> Result<()> {
         if data.len() != self.len {
@@ -146,28 +159,31 @@ impl<T: Pod> GpuArray<T> {
     /// Records a copy into a mappable staging buffer on `encoder`; call
     /// [`Staged::finish`] after submitting to get the data.
     pub fn stage(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<Staged<T>> {
-        let bytes = self.byte_len();
-        let staging = gpu.scoped(&self.label, || {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(&format!("{}.staging", self.label)),
-                size: bytes.max(4),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        })?;
-        if bytes > 0 {
-            encoder.copy_buffer_to_buffer(&self.buffer, 0, &staging, 0, bytes);
-        }
-        Ok(Staged {
+        let staged = self.staging(gpu);
+        staged.copy_from(encoder, self);
+        Ok(staged)
+    }
+
+    /// A mappable staging buffer of this array's size, for read-backs
+    /// repeated many times ([`Staged::copy_from`], then [`Staged::finish`]).
+    pub fn staging(&self, gpu: &Gpu) -> Staged<T> {
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("{}.staging", self.label)),
+            size: self.byte_len().max(4),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Staged {
             staging,
             len: self.len,
             label: self.label.clone(),
             _t: PhantomData,
-        })
+        }
     }
 }
 
-/// A recorded copy waiting to be mapped; see [`GpuArray::stage`].
+/// A staging buffer a copy is recorded into, then mapped; see
+/// [`GpuArray::stage`] (once) and [`GpuArray::staging`] (reused).
 #[derive(Debug)]
 pub struct Staged<T: Pod> {
     staging: wgpu::Buffer,
@@ -177,8 +193,17 @@ pub struct Staged<T: Pod> {
 }
 
 impl<T: Pod> Staged<T> {
-    /// Maps the staging buffer and copies it out (after the copy was submitted).
-    pub fn finish(self, gpu: &Gpu) -> Result<Vec<T>> {
+    /// Records a copy of `src` (of this staging buffer's length) on `encoder`.
+    pub fn copy_from(&self, encoder: &mut wgpu::CommandEncoder, src: &GpuArray<T>) {
+        let bytes = (self.len.min(src.len) * std::mem::size_of::<T>()) as u64;
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(&src.buffer, 0, &self.staging, 0, bytes);
+        }
+    }
+
+    /// Maps the staging buffer and copies it out (after the copy was
+    /// submitted); unmapped again, so it can take the next copy.
+    pub fn finish(&self, gpu: &Gpu) -> Result<Vec<T>> {
         if self.len == 0 {
             return Ok(Vec::new());
         }
@@ -197,7 +222,7 @@ impl<T: Pod> Staged<T> {
                 label: self.label.clone(),
                 message: e.to_string(),
             })?;
-        gpu.check_lost()?;
+        gpu.check_errors()?;
         let mapped = rx.recv().map_err(|_| Error::Readback {
             label: self.label.clone(),
             message: "map callback never ran".into(),
@@ -225,6 +250,7 @@ impl<T: Pod> Staged<T> {
 #[derive(Debug)]
 pub struct UniformBuffer<T> {
     pub buffer: wgpu::Buffer,
+    label: String,
     _t: PhantomData<T>,
 }
 
@@ -237,16 +263,16 @@ impl<T: ShaderType + WriteInto> UniformBuffer<T> {
             message: e.to_string(),
         })?;
         let label = format!("chisel.{label}");
-        let buffer = gpu.scoped(&label, || {
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(&label),
-                    contents: &bytes.into_inner(),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                })
-        })?;
+        let buffer = gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(&label),
+                contents: &bytes.into_inner(),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
         Ok(UniformBuffer {
             buffer,
+            label,
             _t: PhantomData,
         })
     }
@@ -254,6 +280,11 @@ impl<T: ShaderType + WriteInto> UniformBuffer<T> {
     /// The buffer as a binding resource.
     pub fn binding(&self) -> wgpu::BindingResource<'_> {
         self.buffer.as_entire_binding()
+    }
+
+    /// The wgpu label, `chisel.<kernel>.params`.
+    pub fn label(&self) -> &str {
+        &self.label
     }
 }
 

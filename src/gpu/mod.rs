@@ -10,13 +10,19 @@
 
 mod adapter;
 mod buffer;
+mod pass;
 mod registry;
+mod spec;
 mod timing;
 
 pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
 pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges};
+pub use pass::{Binder, BoundKernel};
 pub use registry::{Kernel, Shader, preprocess};
+pub use spec::{BindKind, KernelSpec};
 pub use timing::{PassTimer, PassTimes};
+
+use pass::Compiled;
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -44,7 +50,15 @@ pub struct GpuOptions {
     pub max_binding_bytes: Option<u64>,
     /// Open the device without optional features (tests the portable paths).
     pub portable: bool,
+    /// Fill kernel outputs with sentinels (NaN, `u32::MAX`) before each
+    /// dispatch and check after readback that none survived
+    /// ([`GpuArray::output`]): tests and debugging (`CHISEL_GPU_SENTINELS=1`
+    /// turns it on for any device). Off, outputs are cleared on the device.
+    pub sentinels: bool,
 }
+
+/// Environment variable that turns output sentinels on ([`GpuOptions::sentinels`]).
+pub const SENTINELS_ENV: &str = "CHISEL_GPU_SENTINELS";
 
 /// The GPU context: instance, adapter, device, queue and cached pipelines.
 #[derive(Debug)]
@@ -58,8 +72,13 @@ pub struct Gpu {
     /// Optional features in use.
     pub features: GpuFeatures,
     max_binding_bytes: u64,
+    sentinels: bool,
+    /// Why the device was lost, once it was.
     lost: Arc<Mutex<Option<String>>>,
-    pipelines: Mutex<HashMap<Kernel, Arc<wgpu::ComputePipeline>>>,
+    /// The first error no error scope caught (an allocation out of memory,
+    /// a validation error while recording), reported at the next check.
+    uncaptured: Arc<Mutex<Option<Error>>>,
+    pipelines: Mutex<HashMap<Kernel, Arc<Compiled>>>,
 }
 
 impl Gpu {
@@ -105,6 +124,20 @@ impl Gpu {
                 *slot = Some(format!("{reason:?}: {message}"));
             }
         });
+        let uncaptured = Arc::new(Mutex::new(None));
+        let uncaptured_cb = Arc::clone(&uncaptured);
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let error = match &e {
+                wgpu::Error::OutOfMemory { .. } => Error::OutOfMemory(e.to_string()),
+                _ => Error::Validation {
+                    label: "chisel".into(),
+                    message: e.to_string(),
+                },
+            };
+            if let Ok(mut slot) = uncaptured_cb.lock() {
+                slot.get_or_insert(error);
+            }
+        }));
         let adapter_max = required_limits
             .max_storage_buffer_binding_size
             .min(required_limits.max_buffer_size);
@@ -125,7 +158,10 @@ impl Gpu {
             info,
             features,
             max_binding_bytes,
+            sentinels: options.sentinels
+                || std::env::var(SENTINELS_ENV).is_ok_and(|v| v == "1" || v == "true"),
             lost,
+            uncaptured,
             pipelines: Mutex::new(HashMap::new()),
         })
     }
@@ -153,70 +189,87 @@ impl Gpu {
         usize::try_from(self.max_binding_bytes / size).unwrap_or(usize::MAX)
     }
 
-    /// Fails with [`Error::DeviceLost`] if the device-lost callback fired.
-    pub fn check_lost(&self) -> Result<()> {
-        match self.lost.lock().ok().and_then(|s| s.clone()) {
-            Some(msg) => Err(Error::DeviceLost(msg)),
+    /// Whether kernel outputs start as sentinels ([`GpuOptions::sentinels`]).
+    pub fn sentinels(&self) -> bool {
+        self.sentinels
+    }
+
+    /// Fails with [`Error::DeviceLost`] if the device-lost callback fired,
+    /// or with the first error no error scope caught (taken, so it is
+    /// reported once).
+    pub fn check_errors(&self) -> Result<()> {
+        if let Some(msg) = self.lost.lock().ok().and_then(|s| s.clone()) {
+            return Err(Error::DeviceLost(msg));
+        }
+        match self.uncaptured.lock().ok().and_then(|mut s| s.take()) {
+            Some(e) => Err(e),
             None => Ok(()),
         }
     }
 
-    /// The compute pipeline of `kernel`, built once (inside validation and
-    /// out-of-memory error scopes) and cached for the life of the device.
-    pub fn pipeline(&self, kernel: Kernel) -> Result<Arc<wgpu::ComputePipeline>> {
-        if let Some(p) = self
-            .pipelines
-            .lock()
-            .ok()
-            .and_then(|m| m.get(&kernel).cloned())
-        {
-            return Ok(p);
-        }
-        self.check_lost()?;
-        if !self.device.features().contains(kernel.requires()) {
-            return Err(Error::Kernel {
-                name: kernel.name().into(),
-                message: format!(
-                    "needs device features {:?}, which this adapter lacks",
-                    kernel.requires()
-                ),
-            });
-        }
-        let source = preprocess(kernel.source()).map_err(|message| Error::Kernel {
+    /// The pass builder of `kernel` ([`pass`]): its pipeline, built once
+    /// with the bind-group layout its WGSL declares ([`Kernel::spec`]) and
+    /// cached for the life of the device.
+    pub fn kernel(&self, kernel: Kernel) -> Result<Binder<'_>> {
+        let spec = kernel.spec()?;
+        let cached = (self.pipelines.lock().ok()).and_then(|m| m.get(&kernel).cloned());
+        let compiled = match cached {
+            Some(c) => c,
+            None => {
+                let c = Arc::new(self.compile(kernel, spec)?);
+                if let Ok(mut m) = self.pipelines.lock() {
+                    m.insert(kernel, Arc::clone(&c));
+                }
+                c
+            }
+        };
+        Ok(Binder::new(self, spec, compiled))
+    }
+
+    /// Compiles `kernel` inside validation and out-of-memory error scopes.
+    fn compile(&self, kernel: Kernel, spec: &KernelSpec) -> Result<Compiled> {
+        self.check_errors()?;
+        let fail = |message: String| Error::Kernel {
             name: kernel.name().into(),
             message,
-        })?;
-        let label = kernel.label();
-        let pipeline = self
-            .scoped(&label, || {
-                let module = self
-                    .device
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(&label),
-                        source: wgpu::ShaderSource::Wgsl(source.into()),
-                    });
-                self.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(&label),
-                        layout: None,
-                        module: &module,
-                        entry_point: Some("main"),
-                        compilation_options: Default::default(),
-                        cache: None,
-                    })
-            })
-            .map_err(|e| match e {
-                Error::Validation { message, .. } => Error::Kernel {
-                    name: kernel.name().into(),
-                    message,
-                },
-                other => other,
-            })?;
-        let pipeline = Arc::new(pipeline);
-        if let Ok(mut m) = self.pipelines.lock() {
-            m.insert(kernel, Arc::clone(&pipeline));
+        };
+        if !self.device.features().contains(kernel.requires()) {
+            return Err(fail(format!(
+                "needs device features {:?}, which this adapter lacks",
+                kernel.requires()
+            )));
         }
-        Ok(pipeline)
+        let source = preprocess(kernel.source()).map_err(fail)?;
+        let label = kernel.label();
+        self.scoped(&label, || {
+            let module = (self.device).create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(&label),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let layout = (self.device).create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(&label),
+                entries: &pass::layout_entries(spec),
+            });
+            let pipeline_layout =
+                (self.device).create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(&label),
+                    bind_group_layouts: &[Some(&layout)],
+                    immediate_size: 0,
+                });
+            let pipeline = (self.device).create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(&label),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            Compiled { pipeline, layout }
+        })
+        .map_err(|e| match e {
+            Error::Validation { message, .. } => fail(message),
+            other => other,
+        })
     }
 
     /// Runs `f` inside validation + out-of-memory error scopes and turns a
@@ -227,7 +280,7 @@ impl Gpu {
         let out = f();
         let v = pollster::block_on(validation.pop());
         let o = pollster::block_on(oom.pop());
-        self.check_lost()?;
+        self.check_errors()?;
         if let Some(e) = o {
             return Err(Error::OutOfMemory(format!("{label}: {e}")));
         }
@@ -238,33 +291,6 @@ impl Gpu {
             });
         }
         Ok(out)
-    }
-
-    /// A bind group for `kernel` with `buffers` at bindings `0..n` of group 0
-    /// (order: uniform → read-only → read-write, as the kernel declares them).
-    pub fn bind(
-        &self,
-        kernel: Kernel,
-        pipeline: &wgpu::ComputePipeline,
-        buffers: &[wgpu::BindingResource<'_>],
-    ) -> Result<wgpu::BindGroup> {
-        let label = kernel.label();
-        self.scoped(&label, || {
-            let layout = pipeline.get_bind_group_layout(0);
-            let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
-                .iter()
-                .enumerate()
-                .map(|(i, r)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: r.clone(),
-                })
-                .collect();
-            self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&label),
-                layout: &layout,
-                entries: &entries,
-            })
-        })
     }
 
     /// Workgroup counts `(x, y)` covering `n_invocations` at `wg_size` per
@@ -285,24 +311,6 @@ impl Gpu {
         }
     }
 
-    /// Records a dispatch of `n_invocations` (skipped when zero).
-    pub fn dispatch(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        pipeline: &wgpu::ComputePipeline,
-        bind_group: &wgpu::BindGroup,
-        n_invocations: u32,
-        wg_size: u32,
-    ) {
-        if n_invocations == 0 {
-            return;
-        }
-        let (x, y) = self.workgroups(n_invocations, wg_size);
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-    }
-
     /// Submits `encoder` and waits for the queue to drain.
     pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
         let index = self.queue.submit([encoder.finish()]);
@@ -312,7 +320,7 @@ impl Gpu {
                 timeout: None,
             })
             .map_err(|e| Error::DeviceLost(e.to_string()))?;
-        self.check_lost()
+        self.check_errors()
     }
 
     /// A fresh command encoder labelled `chisel.<label>`.
@@ -337,8 +345,13 @@ pub fn instance() -> wgpu::Instance {
 
 /// The GPU in tests: the adapter from `CHISEL_ADAPTER`, or `None` with a note
 /// on stderr when none exists. With `CI=true` a missing adapter is an error.
+/// Its outputs start as sentinels ([`GpuOptions::sentinels`]).
 pub fn gpu_for_tests() -> Result<Option<Gpu>> {
-    match Gpu::new() {
+    let options = GpuOptions {
+        sentinels: true,
+        ..GpuOptions::default()
+    };
+    match Gpu::with_options(options) {
         Ok(g) => Ok(Some(g)),
         Err(e @ Error::NoAdapter { .. }) => {
             if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {

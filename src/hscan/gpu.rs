@@ -17,9 +17,6 @@ use super::{Classification, HalfSpace, RowSpan, RowSpans, VoxelBox, check_range,
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::{Error, Result};
 
-/// Invocations per workgroup of all four kernels.
-pub const WG_SIZE: u32 = 256;
-
 /// Bytes of one slab's output at most, below the binding limit, so that
 /// every index stays within `u32` in the kernels.
 const MAX_SLAB_BYTES: u64 = 1 << 30;
@@ -49,22 +46,6 @@ pub struct Params {
     pub origin_y: i32,
     pub origin_z: i32,
 }
-
-/// Bindings of `hull_scan*`, by binding number (group 0): params, faces,
-/// side codes.
-pub const SCAN_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
-
-/// Bindings of `hull_rows*`: params, faces, spans, the layers' face lists.
-pub const ROWS_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-    wgpu::BufferBindingType::Storage { read_only: true },
-];
 
 /// Start of a layer's face list when the polyhedron misses the layer
 /// (`LAYER_MISSES` in `kernels/shared/hull_face.wgsl`).
@@ -325,8 +306,8 @@ impl HullScanInput {
     }
 
     /// Dispatches `kernel` over `n_invocations` into a fresh output of
-    /// `out_len` sentinel-filled elements and reads it back; `lists`: the
-    /// row kernels' face lists.
+    /// `out_len` elements (a kernel output, [`GpuArray::output`]) and reads
+    /// it back; `lists`: the row kernels' face lists.
     #[expect(
         clippy::too_many_arguments,
         reason = "one per binding and dispatch size"
@@ -343,22 +324,17 @@ impl HullScanInput {
     ) -> Result<Vec<T>> {
         let name = kernel.name();
         let uniform = UniformBuffer::new(gpu, &format!("{name}.params"), params)?;
-        let out = GpuArray::filled(gpu, &format!("{name}.out"), out_len, sentinel)?;
+        let out = GpuArray::output(gpu, &format!("{name}.out"), out_len, sentinel)?;
         let lists = lists
             .map(|l| GpuArray::from_slice(gpu, &format!("{name}.layers"), l))
             .transpose()?;
-        let pipeline = gpu.pipeline(kernel)?;
-        let mut buffers = vec![uniform.binding(), self.faces.binding(), out.binding()];
-        buffers.extend(lists.as_ref().map(GpuArray::binding));
-        let bind = gpu.bind(kernel, &pipeline, &buffers)?;
-        let mut encoder = gpu.encoder(name);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&kernel.label()),
-                timestamp_writes: None,
-            });
-            gpu.dispatch(&mut pass, &pipeline, &bind, n_invocations, WG_SIZE);
+        let mut binder = gpu.kernel(kernel)?.uniform(&uniform).read(&self.faces);
+        if let Some(lists) = &lists {
+            binder = binder.read(lists);
         }
+        let bound = binder.write(&out).bind()?;
+        let mut encoder = gpu.encoder(name);
+        bound.record(gpu, &mut encoder, n_invocations, None);
         gpu.submit_and_wait(encoder)?;
         out.read(gpu)
     }

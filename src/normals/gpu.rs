@@ -4,8 +4,6 @@ use super::NormalsInput;
 use crate::Result;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 
-const WG_SIZE: u32 = 256;
-
 /// Uniform parameters of `vertex_normals`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct Params {
@@ -20,13 +18,14 @@ pub struct NormalsBuffers {
     triangles: GpuArray<u32>,
     offsets: GpuArray<u32>,
     tri_ids: GpuArray<u32>,
-    /// #V output normals (NaN-filled until the kernel writes them).
+    /// #V output normals (NaN sentinels until the kernel writes them, on a
+    /// device with sentinels on).
     pub normals: GpuArray<[f32; 4]>,
     n_vertices: u32,
 }
 
 impl NormalsBuffers {
-    /// Uploads `input`; the output starts filled with NaN sentinels.
+    /// Uploads `input`; the output is a kernel output ([`GpuArray::output`]).
     pub fn upload(gpu: &Gpu, input: &NormalsInput) -> Result<Self> {
         let n_vertices = u32::try_from(input.positions.len()).map_err(|_| {
             crate::Error::InvalidInput("vertex_normals: more than 2^32 vertices".into())
@@ -37,7 +36,7 @@ impl NormalsBuffers {
             triangles: GpuArray::from_slice(gpu, "vertex_normals.triangles", &input.triangles)?,
             offsets: GpuArray::from_slice(gpu, "vertex_normals.offsets", &input.adjacency.offsets)?,
             tri_ids: GpuArray::from_slice(gpu, "vertex_normals.tri_ids", &input.adjacency.targets)?,
-            normals: GpuArray::filled(
+            normals: GpuArray::output(
                 gpu,
                 "vertex_normals.normals",
                 input.positions.len(),
@@ -49,25 +48,15 @@ impl NormalsBuffers {
 
     /// Records the kernel into `encoder` (no submission).
     pub fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let kernel = Kernel::VertexNormals;
-        let pipeline = gpu.pipeline(kernel)?;
-        let bind = gpu.bind(
-            kernel,
-            &pipeline,
-            &[
-                self.params.binding(),
-                self.positions.binding(),
-                self.triangles.binding(),
-                self.offsets.binding(),
-                self.tri_ids.binding(),
-                self.normals.binding(),
-            ],
-        )?;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&kernel.label()),
-            timestamp_writes: None,
-        });
-        gpu.dispatch(&mut pass, &pipeline, &bind, self.n_vertices, WG_SIZE);
+        gpu.kernel(Kernel::VertexNormals)?
+            .uniform(&self.params)
+            .read(&self.positions)
+            .read(&self.triangles)
+            .read(&self.offsets)
+            .read(&self.tri_ids)
+            .write(&self.normals)
+            .bind()?
+            .record(gpu, encoder, self.n_vertices, None);
         Ok(())
     }
 }

@@ -11,8 +11,6 @@ use super::cpu::from_key;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer, chunk_ranges};
 use crate::{Error, Result};
 
-/// Invocations per workgroup (`WG_SIZE` in both kernels).
-pub const WG_SIZE: u32 = 256;
 /// Items one workgroup reduces to one pair (`BLOCK` in both kernels:
 /// `WG_SIZE · ITEMS_PER_INVOCATION`).
 pub const BLOCK: u32 = super::cpu::BLOCK as u32;
@@ -25,13 +23,6 @@ pub struct Params {
     /// 0: `src` holds raw f32 bit patterns; 1: (lo, hi) key pairs.
     pub pairs: u32,
 }
-
-/// Bindings of both kernels, by binding number (group 0).
-pub const BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
 
 /// One pass: its parameters and its 2·ceil(n_items / BLOCK) output keys.
 #[derive(Debug)]
@@ -57,7 +48,7 @@ pub type RangeBuffers = ReduceBuffers<u32>;
 
 impl<T: Pod> ReduceBuffers<T> {
     /// Uploads `input` (bit patterns, ≥ 1 item, one storage binding) and
-    /// allocates the passes; outputs start as `sentinel`.
+    /// allocates the passes; outputs are kernel outputs ([`GpuArray::output`]).
     fn upload(gpu: &Gpu, kernel: Kernel, input: &[T], sentinel: T) -> Result<Self> {
         let name = kernel.name();
         let n = u32::try_from(input.len())
@@ -82,7 +73,7 @@ impl<T: Pod> ReduceBuffers<T> {
                     &Params { n_items, pairs },
                 )?,
                 n_items,
-                dst: GpuArray::filled(
+                dst: GpuArray::output(
                     gpu,
                     &format!("{name}.pass{}", passes.len()),
                     2 * n_out as usize,
@@ -108,24 +99,24 @@ impl<T: Pod> ReduceBuffers<T> {
 
     /// Records every pass into `encoder` (no submission).
     pub fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let pipeline = gpu.pipeline(self.kernel)?;
         let mut binds = Vec::with_capacity(self.passes.len());
         let mut src = &self.input;
         for pass in &self.passes {
-            binds.push(gpu.bind(
-                self.kernel,
-                &pipeline,
-                &[pass.params.binding(), src.binding(), pass.dst.binding()],
-            )?);
+            let bound = (gpu.kernel(self.kernel)?)
+                .uniform(&pass.params)
+                .read(src)
+                .write(&pass.dst)
+                .bind()?;
+            binds.push(bound);
             src = &pass.dst;
         }
         let mut cpass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some(&self.kernel.label()),
             timestamp_writes: None,
         });
-        for (pass, bind) in self.passes.iter().zip(&binds) {
-            let n_invocations = pass.n_items.div_ceil(BLOCK) * WG_SIZE;
-            gpu.dispatch(&mut cpass, &pipeline, bind, n_invocations, WG_SIZE);
+        for (pass, bound) in self.passes.iter().zip(&binds) {
+            let n_invocations = pass.n_items.div_ceil(BLOCK) * bound.wg_size();
+            bound.dispatch(gpu, &mut cpass, n_invocations);
         }
         Ok(())
     }

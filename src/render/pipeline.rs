@@ -483,7 +483,7 @@ fn map_read(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
             timeout: None,
         })
         .map_err(|e| err(e.to_string()))?;
-    gpu.check_lost()?;
+    gpu.check_errors()?;
     rx.recv()
         .map_err(|_| err("map callback never ran".into()))?
         .map_err(|e| err(e.to_string()))?;

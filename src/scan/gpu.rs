@@ -10,30 +10,12 @@ use super::Scan;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::{Error, Result};
 
-/// Elements per block (`WG_SIZE` in both kernels).
-pub const WG_SIZE: u32 = 256;
-
 /// Uniform parameters of both scan kernels.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct Params {
     /// Elements at this level.
     pub n: u32,
 }
-
-/// Bindings of `exclusive_scan_blocks`, by binding number (group 0).
-pub const BLOCKS_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
-
-/// Bindings of `exclusive_scan_add`, by binding number (group 0).
-pub const ADD_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
 
 /// One level: n elements scanned per block, ceil(n / WG_SIZE) totals.
 #[derive(Debug)]
@@ -44,8 +26,8 @@ struct Level {
     totals: GpuArray<u32>,
 }
 
-/// Device buffers of one scan, kept for resident reruns. Outputs start
-/// filled with the `u32::MAX` sentinel.
+/// Device buffers of one scan, kept for resident reruns. Outputs are kernel
+/// outputs ([`GpuArray::output`], sentinel `u32::MAX`).
 #[derive(Debug)]
 pub struct ScanBuffers {
     values: GpuArray<u32>,
@@ -65,10 +47,12 @@ impl ScanBuffers {
                 ))
             })?;
         let values = GpuArray::from_slice(gpu, "exclusive_scan.values", values)?;
+        // Elements per block: the workgroup size of both kernels.
+        let block = Kernel::ExclusiveScanBlocks.spec()?.wg_size;
         let mut levels = Vec::new();
         loop {
             let k = levels.len();
-            let n_blocks = n.div_ceil(WG_SIZE);
+            let n_blocks = n.div_ceil(block);
             levels.push(Level {
                 params: UniformBuffer::new(
                     gpu,
@@ -76,13 +60,13 @@ impl ScanBuffers {
                     &Params { n },
                 )?,
                 n,
-                scanned: GpuArray::filled(
+                scanned: GpuArray::output(
                     gpu,
                     &format!("exclusive_scan.scanned{k}"),
                     n as usize,
                     u32::MAX,
                 )?,
-                totals: GpuArray::filled(
+                totals: GpuArray::output(
                     gpu,
                     &format!("exclusive_scan.totals{k}"),
                     n_blocks as usize,
@@ -114,47 +98,36 @@ impl ScanBuffers {
 
     /// Records block scans up the levels and adds back down (no submission).
     pub fn record(&self, gpu: &Gpu, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
-        let blocks = gpu.pipeline(Kernel::ExclusiveScanBlocks)?;
-        let add = gpu.pipeline(Kernel::ExclusiveScanAdd)?;
         let mut up = Vec::with_capacity(self.levels.len());
         let mut src = &self.values;
         for level in &self.levels {
-            up.push(gpu.bind(
-                Kernel::ExclusiveScanBlocks,
-                &blocks,
-                &[
-                    level.params.binding(),
-                    src.binding(),
-                    level.scanned.binding(),
-                    level.totals.binding(),
-                ],
-            )?);
+            let bound = (gpu.kernel(Kernel::ExclusiveScanBlocks)?)
+                .uniform(&level.params)
+                .read(src)
+                .write(&level.scanned)
+                .write(&level.totals)
+                .bind()?;
+            up.push(bound);
             src = &level.totals;
         }
-        let down = self
-            .levels
-            .windows(2)
+        let down = (self.levels.windows(2))
             .map(|pair| {
-                gpu.bind(
-                    Kernel::ExclusiveScanAdd,
-                    &add,
-                    &[
-                        pair[0].params.binding(),
-                        pair[1].scanned.binding(),
-                        pair[0].scanned.binding(),
-                    ],
-                )
+                (gpu.kernel(Kernel::ExclusiveScanAdd)?)
+                    .uniform(&pair[0].params)
+                    .read(&pair[1].scanned)
+                    .write(&pair[0].scanned)
+                    .bind()
             })
             .collect::<Result<Vec<_>>>()?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("chisel.exclusive_scan"),
             timestamp_writes: None,
         });
-        for (level, bind) in self.levels.iter().zip(&up) {
-            gpu.dispatch(&mut pass, &blocks, bind, level.n, WG_SIZE);
+        for (level, bound) in self.levels.iter().zip(&up) {
+            bound.dispatch(gpu, &mut pass, level.n);
         }
-        for (level, bind) in self.levels.iter().zip(&down).rev() {
-            gpu.dispatch(&mut pass, &add, bind, level.n, WG_SIZE);
+        for (level, bound) in self.levels.iter().zip(&down).rev() {
+            bound.dispatch(gpu, &mut pass, level.n);
         }
         Ok(())
     }

@@ -25,23 +25,9 @@ use super::cpu::RawSurface;
 use super::field::Field;
 use super::tables;
 use crate::foundation::vertex_components;
-use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::parity::find_sentinel;
 use crate::{Error, Result};
-
-/// Invocations per workgroup of all three kernels (`WG_SIZE` in WGSL).
-pub const WG_SIZE: u32 = 256;
-
-const UNIFORM: wgpu::BufferBindingType = wgpu::BufferBindingType::Uniform;
-const READ: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: true };
-const WRITE: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: false };
-/// `mc_classify` bindings: params, samples, table, block_counts.
-pub const CLASSIFY_BINDINGS: &[wgpu::BufferBindingType] = &[UNIFORM, READ, READ, WRITE];
-/// `mc_vertices` bindings: params, samples, block_offsets, vert_base, positions.
-pub const VERTICES_BINDINGS: &[wgpu::BufferBindingType] = &[UNIFORM, READ, READ, WRITE, WRITE];
-/// `mc_triangles` bindings: params, samples, table, block_offsets, vert_base, triangles.
-pub const TRIANGLES_BINDINGS: &[wgpu::BufferBindingType] =
-    &[UNIFORM, READ, READ, READ, READ, WRITE];
 
 /// Uniform parameters of `mc_classify`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
@@ -128,8 +114,9 @@ pub fn assemble(raw: GpuRaw) -> RawSurface {
     }
 }
 
-/// The three passes; output buffers start as NaN / `u32::MAX` sentinels and
-/// any survivor is an error.
+/// The three passes. On a device with sentinels on
+/// ([`crate::gpu::GpuOptions::sentinels`]) output buffers start as NaN /
+/// `u32::MAX` and any survivor is an error.
 pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     let [nx, ny, nz] = field.dims;
     if field.dims.iter().any(|&d| d < 2) {
@@ -142,7 +129,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         )));
     }
     let layer = nx * ny;
-    let bpl = layer.div_ceil(WG_SIZE as usize);
+    // Blocks per layer: one workgroup of all three kernels a block.
+    let bpl = layer.div_ceil(Kernel::McClassify.spec()?.wg_size as usize);
     let max = gpu.max_binding_bytes();
     let layer_bytes = (layer * 4) as u64;
     // A classify slab holds its layers plus one above.
@@ -184,8 +172,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     }
 
     // Host exclusive scan of the block sums.
-    let off_v = exclusive_scan(counts.iter().map(|c| c[0]))?;
-    let off_t = exclusive_scan(counts.iter().map(|c| c[1]))?;
+    let off_v = scan_with_total(counts.iter().map(|c| c[0]))?;
+    let off_t = scan_with_total(counts.iter().map(|c| c[1]))?;
     let per_layer = |z: usize, k: usize| -> u64 {
         counts[z * bpl..(z + 1) * bpl]
             .iter()
@@ -297,9 +285,10 @@ fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<G
     GpuArray::from_slice(gpu, "mc.samples", &data)
 }
 
-/// Exclusive scan in u32 with the total appended (one entry more than
-/// `values`); errors when the total overflows.
-fn exclusive_scan(values: impl Iterator<Item = u32>) -> Result<Vec<u32>> {
+/// The host scan between the passes: exclusive prefix sum in u32 with the
+/// total appended (one entry more than `values`); errors when the total
+/// overflows.
+pub(super) fn scan_with_total(values: impl Iterator<Item = u32>) -> Result<Vec<u32>> {
     let mut sum = 0u32;
     let mut out = Vec::new();
     for v in values {
@@ -342,38 +331,19 @@ fn classify(
             level,
         },
     )?;
-    let counts = GpuArray::filled(gpu, "mc_classify.block_counts", n_blocks, [u32::MAX; 2])?;
-    let pipeline = gpu.pipeline(kernel)?;
-    let bind = gpu.bind(
-        kernel,
-        &pipeline,
-        &[
-            params.binding(),
-            samples.buffer.binding(),
-            table.binding(),
-            counts.binding(),
-        ],
-    )?;
+    let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks, [u32::MAX; 2])?;
+    let bound = bind_classify(gpu, &params, samples.buffer, table, &counts)?;
     let timer = gpu.pass_timer(1);
     let mut encoder = gpu.encoder("mc_classify");
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&kernel.label()),
-            timestamp_writes: timer.as_ref().map(|t| t.writes(0)),
-        });
-        gpu.dispatch(
-            &mut pass,
-            &pipeline,
-            &bind,
-            (n_blocks as u32) * WG_SIZE,
-            WG_SIZE,
-        );
-    }
+    let n_invocations = n_blocks as u32 * bound.wg_size();
+    bound.record(gpu, &mut encoder, n_invocations, timer.as_ref().map(|t| (t, 0)));
     let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
     let staged = counts.stage(gpu, &mut encoder)?;
     gpu.submit_and_wait(encoder)?;
     let out = staged.finish(gpu)?;
-    if let Some(i) = find_sentinel(&out, [u32::MAX; 2]) {
+    if gpu.sentinels()
+        && let Some(i) = find_sentinel(&out, [u32::MAX; 2])
+    {
         return Err(sentinel(kernel, i));
     }
     Ok((out, times.map(|t| t.finish(gpu)).transpose()?))
@@ -427,8 +397,8 @@ fn emit(
         &off_t[a * bpl..=(a + cell_layers.max(1)) * bpl],
     )?;
     let vert_base = GpuArray::<u32>::zeroed(gpu, "mc_vertices.vert_base", vb_layers * layer)?;
-    let positions = GpuArray::filled(gpu, "mc_vertices.positions", slab.n_v, [f32::NAN; 4])?;
-    let triangles = GpuArray::filled(gpu, "mc_triangles.triangles", slab.n_t, [u32::MAX; 4])?;
+    let positions = GpuArray::output(gpu, "mc_vertices.positions", slab.n_v, [f32::NAN; 4])?;
+    let triangles = GpuArray::output(gpu, "mc_triangles.triangles", slab.n_t, [u32::MAX; 4])?;
     let vparams = UniformBuffer::new(
         gpu,
         "mc_vertices.params",
@@ -463,70 +433,164 @@ fn emit(
     )?;
     let vk = Kernel::McVertices;
     let tk = Kernel::McTriangles;
-    let vpipe = gpu.pipeline(vk)?;
-    let tpipe = gpu.pipeline(tk)?;
-    let vbind = gpu.bind(
-        vk,
-        &vpipe,
-        &[
-            vparams.binding(),
-            samples.buffer.binding(),
-            offsets_v.binding(),
-            vert_base.binding(),
-            positions.binding(),
-        ],
-    )?;
-    let tbind = gpu.bind(
-        tk,
-        &tpipe,
-        &[
-            tparams.binding(),
-            samples.buffer.binding(),
-            table.binding(),
-            offsets_t.binding(),
-            vert_base.binding(),
-            triangles.binding(),
-        ],
+    let vbound = bind_vertices(gpu, &vparams, samples.buffer, &offsets_v, &vert_base, &positions)?;
+    let tbound = bind_triangles(
+        gpu,
+        &tparams,
+        samples.buffer,
+        table,
+        &offsets_t,
+        &vert_base,
+        &triangles,
     )?;
     let timer = gpu.pass_timer(2);
     let mut encoder = gpu.encoder("mc_emit");
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&vk.label()),
-            timestamp_writes: timer.as_ref().map(|t| t.writes(0)),
-        });
-        gpu.dispatch(
-            &mut pass,
-            &vpipe,
-            &vbind,
-            (vb_layers * bpl) as u32 * WG_SIZE,
-            WG_SIZE,
-        );
-    }
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&tk.label()),
-            timestamp_writes: timer.as_ref().map(|t| t.writes(1)),
-        });
-        gpu.dispatch(
-            &mut pass,
-            &tpipe,
-            &tbind,
-            (cell_layers * bpl) as u32 * WG_SIZE,
-            WG_SIZE,
-        );
-    }
+    let at = |i| timer.as_ref().map(|t| (t, i));
+    let n_v = (vb_layers * bpl) as u32 * vbound.wg_size();
+    vbound.record(gpu, &mut encoder, n_v, at(0));
+    let n_t = (cell_layers * bpl) as u32 * tbound.wg_size();
+    tbound.record(gpu, &mut encoder, n_t, at(1));
     let staged_p = positions.stage(gpu, &mut encoder)?;
     let staged_t = triangles.stage(gpu, &mut encoder)?;
     let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
     gpu.submit_and_wait(encoder)?;
     let p = staged_p.finish(gpu)?;
     let t = staged_t.finish(gpu)?;
-    if let Some(i) = p.iter().position(|v| v[..3].iter().any(|c| c.is_nan())) {
-        return Err(sentinel(vk, i));
-    }
-    if let Some(i) = find_sentinel(&t, [u32::MAX; 4]) {
-        return Err(sentinel(tk, i));
+    if gpu.sentinels() {
+        if let Some(i) = p.iter().position(|v| v[..3].iter().any(|c| c.is_nan())) {
+            return Err(sentinel(vk, i));
+        }
+        if let Some(i) = find_sentinel(&t, [u32::MAX; 4]) {
+            return Err(sentinel(tk, i));
+        }
     }
     Ok((p, t, times.map(|t| t.finish(gpu)).transpose()?))
+}
+
+fn bind_classify(
+    gpu: &Gpu,
+    params: &UniformBuffer<ClassifyParams>,
+    samples: &GpuArray<f32>,
+    table: &GpuArray<u32>,
+    block_counts: &GpuArray<[u32; 2]>,
+) -> Result<BoundKernel> {
+    (gpu.kernel(Kernel::McClassify)?)
+        .uniform(params)
+        .read(samples)
+        .read(table)
+        .write(block_counts)
+        .bind()
+}
+
+fn bind_vertices(
+    gpu: &Gpu,
+    params: &UniformBuffer<VerticesParams>,
+    samples: &GpuArray<f32>,
+    block_offsets: &GpuArray<u32>,
+    vert_base: &GpuArray<u32>,
+    positions: &GpuArray<[f32; 4]>,
+) -> Result<BoundKernel> {
+    (gpu.kernel(Kernel::McVertices)?)
+        .uniform(params)
+        .read(samples)
+        .read(block_offsets)
+        .write(vert_base)
+        .write(positions)
+        .bind()
+}
+
+fn bind_triangles(
+    gpu: &Gpu,
+    params: &UniformBuffer<TrianglesParams>,
+    samples: &GpuArray<f32>,
+    table: &GpuArray<u32>,
+    block_offsets: &GpuArray<u32>,
+    vert_base: &GpuArray<u32>,
+    triangles: &GpuArray<[u32; 4]>,
+) -> Result<BoundKernel> {
+    (gpu.kernel(Kernel::McTriangles)?)
+        .uniform(params)
+        .read(samples)
+        .read(table)
+        .read(block_offsets)
+        .read(vert_base)
+        .write(triangles)
+        .bind()
+}
+
+/// Records `bound` over `n_blocks` blocks, submits, and reads `out` back.
+fn run_blocks<T: bytemuck::Pod>(
+    gpu: &Gpu,
+    bound: &BoundKernel,
+    n_blocks: u32,
+    out: &GpuArray<T>,
+) -> Result<Vec<T>> {
+    let mut encoder = gpu.encoder(bound.kernel().name());
+    bound.record(gpu, &mut encoder, n_blocks * bound.wg_size(), None);
+    gpu.submit_and_wait(encoder)?;
+    out.read(gpu)
+}
+
+/// One `mc_classify` dispatch on explicit inputs, as
+/// [`super::mirror::mc_classify`] takes them (parity tests): the counts of
+/// `params.n_layers · params.blocks_per_layer` blocks.
+pub fn mc_classify(
+    gpu: &Gpu,
+    params: &ClassifyParams,
+    samples: &[f32],
+    table: &[u32],
+) -> Result<Vec<[u32; 2]>> {
+    let n_blocks = params.n_layers * params.blocks_per_layer;
+    let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks as usize, [u32::MAX; 2])?;
+    let uniform = UniformBuffer::new(gpu, "mc_classify.params", params)?;
+    let samples = GpuArray::from_slice(gpu, "mc_classify.samples", samples)?;
+    let table = GpuArray::from_slice(gpu, "mc_classify.table", table)?;
+    let bound = bind_classify(gpu, &uniform, &samples, &table, &counts)?;
+    run_blocks(gpu, &bound, n_blocks, &counts)
+}
+
+/// One `mc_vertices` dispatch on explicit inputs, as
+/// [`super::mirror::mc_vertices`] takes them: (`vert_base`, `positions`),
+/// `vert_base` starting at zero, `positions` a kernel output of
+/// `n_vertices` elements.
+pub fn mc_vertices(
+    gpu: &Gpu,
+    params: &VerticesParams,
+    samples: &[f32],
+    block_offsets: &[u32],
+    n_vertices: usize,
+) -> Result<(Vec<u32>, Vec<[f32; 4]>)> {
+    let n_blocks = params.n_layers * params.blocks_per_layer;
+    let layer = (params.nx * params.ny) as usize;
+    let uniform = UniformBuffer::new(gpu, "mc_vertices.params", params)?;
+    let samples = GpuArray::from_slice(gpu, "mc_vertices.samples", samples)?;
+    let offsets = GpuArray::from_slice(gpu, "mc_vertices.block_offsets", block_offsets)?;
+    let vert_base = GpuArray::zeroed(gpu, "mc_vertices.vert_base", params.n_layers as usize * layer)?;
+    let positions = GpuArray::output(gpu, "mc_vertices.positions", n_vertices, [f32::NAN; 4])?;
+    let bound = bind_vertices(gpu, &uniform, &samples, &offsets, &vert_base, &positions)?;
+    let positions = run_blocks(gpu, &bound, n_blocks, &positions)?;
+    Ok((vert_base.read(gpu)?, positions))
+}
+
+/// One `mc_triangles` dispatch on explicit inputs, as
+/// [`super::mirror::mc_triangles`] takes them: `n_triangles` triangles.
+pub fn mc_triangles(
+    gpu: &Gpu,
+    params: &TrianglesParams,
+    samples: &[f32],
+    table: &[u32],
+    block_offsets: &[u32],
+    vert_base: &[u32],
+    n_triangles: usize,
+) -> Result<Vec<[u32; 4]>> {
+    let n_blocks = params.n_layers * params.blocks_per_layer;
+    let uniform = UniformBuffer::new(gpu, "mc_triangles.params", params)?;
+    let samples = GpuArray::from_slice(gpu, "mc_triangles.samples", samples)?;
+    let table = GpuArray::from_slice(gpu, "mc_triangles.table", table)?;
+    let offsets = GpuArray::from_slice(gpu, "mc_triangles.block_offsets", block_offsets)?;
+    let vert_base = GpuArray::from_slice(gpu, "mc_triangles.vert_base", vert_base)?;
+    let triangles = GpuArray::output(gpu, "mc_triangles.triangles", n_triangles, [u32::MAX; 4])?;
+    let bound =
+        bind_triangles(gpu, &uniform, &samples, &table, &offsets, &vert_base, &triangles)?;
+    run_blocks(gpu, &bound, n_blocks, &triangles)
 }

@@ -22,10 +22,17 @@
 //! [`tables`]. CPU and GPU give the same vertices (bit for bit, same f32
 //! expressions; see [`cpu`]), the same triangles in the same order, and so
 //! the same groups and tree.
+//!
+//! Kernel contracts: [`mirror`] holds one plain CPU loop per kernel
+//! (`mc_classify`, `mc_vertices`, `mc_triangles`) that reads beside its
+//! WGSL; each GPU kernel is tested against its mirror on the same inputs,
+//! and the bit-row CPU path ([`cpu`], the fast path) against the mirrors
+//! chained (`tests/parity/mc_*.rs`).
 
 pub mod cpu;
 pub mod field;
 pub mod gpu;
+pub mod mirror;
 pub mod tables;
 
 use std::collections::HashSet;

@@ -10,41 +10,14 @@ use glam::Vec4;
 use super::cpu::StepParams;
 use super::network::{SpringCsr, SpringNetwork};
 use super::relax::{Probe, Setup, Solver, Stepper};
-use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, Staged, UniformBuffer};
 use crate::{Error, Result};
 
-/// Invocations per workgroup (`WG_SIZE` in all three kernels).
-pub const WG_SIZE: u32 = 256;
-/// Workgroups of the first reduction stage (≤ WG_SIZE so one workgroup
-/// finishes the second stage).
+/// Workgroups of the first reduction stage (≤ `WG_SIZE` of
+/// `tissue_reduce_max` so one workgroup finishes the second stage).
 const REDUCE_GROUPS: u32 = 256;
 /// Most iterations recorded into one command buffer.
 const MAX_PER_SUBMIT: u32 = 512;
-
-/// `spring_step.wgsl` / `spring_chebyshev.wgsl` bindings as bound here
-/// (params, materials, offsets, entries, rest, forces, pos_in, pos_out, vel).
-pub const STEP_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
-
-/// `tissue_reduce_max.wgsl` bindings as bound here (params, vel, pos, snap,
-/// part_in, part_out).
-pub const REDUCE_BINDINGS: &[wgpu::BufferBindingType] = &[
-    wgpu::BufferBindingType::Uniform,
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: true },
-    wgpu::BufferBindingType::Storage { read_only: false },
-];
 
 /// `Params` of `spring_step.wgsl` / `spring_chebyshev.wgsl` (same layout;
 /// the Chebyshev kernel names `dt` `h` and `damping` `momentum`).
@@ -116,14 +89,12 @@ pub struct GpuStepper<'g> {
     vel: GpuArray<[f32; 4]>,
     snap: GpuArray<[f32; 4]>,
     result: GpuArray<[u32; 2]>,
-    staging: wgpu::Buffer,
-    step_pipeline: std::sync::Arc<wgpu::ComputePipeline>,
-    reduce_pipeline: std::sync::Arc<wgpu::ComputePipeline>,
+    staging: Staged<[u32; 2]>,
     /// `[0]`: pos[0] → pos[1]; `[1]`: pos[1] → pos[0].
-    step_bind: [wgpu::BindGroup; 2],
+    step_bind: [BoundKernel; 2],
     /// First reduction stage reading pos[cur].
-    reduce_bind: [wgpu::BindGroup; 2],
-    reduce_final: wgpu::BindGroup,
+    reduce_bind: [BoundKernel; 2],
+    reduce_final: BoundKernel,
     cur: usize,
     /// Host copy of the rest positions (state ↔ absolute positions).
     rest: Vec<[f32; 4]>,
@@ -197,7 +168,8 @@ impl<'g> GpuStepper<'g> {
         ];
         let vel = GpuArray::from_slice(gpu, "spring_step.vel", velocities)?;
         let snap = GpuArray::from_slice(gpu, "tissue_reduce_max.snap", &positions[..nf])?;
-        let n_reduce_groups = n_free.div_ceil(WG_SIZE).clamp(1, REDUCE_GROUPS);
+        let reduce_wg = Kernel::TissueReduceMax.spec()?.wg_size;
+        let n_reduce_groups = n_free.div_ceil(reduce_wg).clamp(1, REDUCE_GROUPS.min(reduce_wg));
         let partials = GpuArray::filled(
             gpu,
             "tissue_reduce_max.partials",
@@ -220,61 +192,40 @@ impl<'g> GpuStepper<'g> {
                 },
             )?,
         ];
-        let staging = gpu.scoped("tissue_reduce_max.staging", || {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("chisel.tissue_reduce_max.staging"),
-                size: 8,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        })?;
-        let step_pipeline = gpu.pipeline(kernel)?;
-        let reduce_pipeline = gpu.pipeline(Kernel::TissueReduceMax)?;
+        let staging = result.staging(gpu);
         let step_bind_for = |src: usize| {
-            gpu.bind(
-                kernel,
-                &step_pipeline,
-                &[
-                    uniform.binding(),
-                    materials.binding(),
-                    offsets.binding(),
-                    entries.binding(),
-                    rest_buf.binding(),
-                    forces.binding(),
-                    pos[src].binding(),
-                    pos[1 - src].binding(),
-                    vel.binding(),
-                ],
-            )
+            (gpu.kernel(kernel)?)
+                .uniform(&uniform)
+                .uniform(&materials)
+                .read(&offsets)
+                .read(&entries)
+                .read(&rest_buf)
+                .read(&forces)
+                .read(&pos[src])
+                .write(&pos[1 - src])
+                .write(&vel)
+                .bind()
         };
         let step_bind = [step_bind_for(0)?, step_bind_for(1)?];
         let reduce_bind_for = |cur: usize| {
-            gpu.bind(
-                Kernel::TissueReduceMax,
-                &reduce_pipeline,
-                &[
-                    reduce_params[0].binding(),
-                    vel.binding(),
-                    pos[cur].binding(),
-                    snap.binding(),
-                    result.binding(),
-                    partials.binding(),
-                ],
-            )
+            (gpu.kernel(Kernel::TissueReduceMax)?)
+                .uniform(&reduce_params[0])
+                .read(&vel)
+                .read(&pos[cur])
+                .read(&snap)
+                .read(&result)
+                .write(&partials)
+                .bind()
         };
         let reduce_bind = [reduce_bind_for(0)?, reduce_bind_for(1)?];
-        let reduce_final = gpu.bind(
-            Kernel::TissueReduceMax,
-            &reduce_pipeline,
-            &[
-                reduce_params[1].binding(),
-                vel.binding(),
-                pos[0].binding(),
-                snap.binding(),
-                partials.binding(),
-                result.binding(),
-            ],
-        )?;
+        let reduce_final = (gpu.kernel(Kernel::TissueReduceMax)?)
+            .uniform(&reduce_params[1])
+            .read(&vel)
+            .read(&pos[0])
+            .read(&snap)
+            .read(&partials)
+            .write(&result)
+            .bind()?;
         Ok(GpuStepper {
             gpu,
             kernel,
@@ -285,8 +236,6 @@ impl<'g> GpuStepper<'g> {
             snap,
             result,
             staging,
-            step_pipeline,
-            reduce_pipeline,
             step_bind,
             reduce_bind,
             reduce_final,
@@ -309,13 +258,7 @@ impl<'g> GpuStepper<'g> {
             timestamp_writes: None,
         });
         for _ in 0..n {
-            self.gpu.dispatch(
-                &mut pass,
-                &self.step_pipeline,
-                &self.step_bind[self.cur],
-                self.n_free,
-                WG_SIZE,
-            );
+            self.step_bind[self.cur].dispatch(self.gpu, &mut pass, self.n_free);
             self.cur ^= 1;
         }
     }
@@ -325,45 +268,20 @@ impl<'g> GpuStepper<'g> {
             label: Some("chisel.tissue_reduce_max"),
             timestamp_writes: None,
         });
-        pass.set_pipeline(&self.reduce_pipeline);
-        pass.set_bind_group(0, &self.reduce_bind[self.cur], &[]);
-        pass.dispatch_workgroups(self.n_reduce_groups, 1, 1);
-        pass.set_bind_group(0, &self.reduce_final, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        let bound = &self.reduce_bind[self.cur];
+        bound.dispatch(self.gpu, &mut pass, self.n_reduce_groups * bound.wg_size());
+        let last = &self.reduce_final;
+        last.dispatch(self.gpu, &mut pass, last.wg_size());
     }
 
     fn read_result(&self, mut encoder: wgpu::CommandEncoder) -> Result<[u32; 2]> {
-        encoder.copy_buffer_to_buffer(&self.result.buffer, 0, &self.staging, 0, 8);
+        self.staging.copy_from(&mut encoder, &self.result);
         self.gpu.submit_and_wait(encoder)?;
-        let (tx, rx) = std::sync::mpsc::channel();
-        self.staging.map_async(wgpu::MapMode::Read, 0..8, move |r| {
-            let _ = tx.send(r);
-        });
-        let failed = |message: String| Error::Readback {
+        let keys = self.staging.finish(self.gpu)?;
+        keys.first().copied().ok_or_else(|| Error::Readback {
             label: "chisel.tissue_reduce_max.result".into(),
-            message,
-        };
-        self.gpu
-            .device
-            .poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: None,
-            })
-            .map_err(|e| failed(e.to_string()))?;
-        self.gpu.check_lost()?;
-        rx.recv()
-            .map_err(|_| failed("map callback never ran".into()))?
-            .map_err(|e| failed(e.to_string()))?;
-        let keys = {
-            let view = self
-                .staging
-                .get_mapped_range(0..8)
-                .map_err(|e| failed(e.to_string()))?;
-            let k: [u32; 2] = bytemuck::pod_read_unaligned(&view);
-            k
-        };
-        self.staging.unmap();
-        Ok(keys)
+            message: "empty readback".into(),
+        })
     }
 
     fn copy_to_snapshot(&self, encoder: &mut wgpu::CommandEncoder) {

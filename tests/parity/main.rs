@@ -7,11 +7,15 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod mc_kernels;
 mod mc_surface;
 
 mod bounds_reduce;
 mod exclusive_scan;
 mod hull_scan;
+mod mc_classify;
+mod mc_triangles;
+mod mc_vertices;
 mod range_reduce;
 mod spring_chebyshev;
 mod spring_step;

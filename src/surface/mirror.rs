@@ -1,0 +1,312 @@
+//! The marching-cubes kernels' mirrors: plain CPU loops over the same
+//! workgroups and invocations as `kernels/mc_classify.wgsl`,
+//! `kernels/mc_vertices.wgsl` and `kernels/mc_triangles.wgsl`, with the same
+//! names, buffers and f32 expressions, one function per kernel. They read
+//! beside their WGSL; the production CPU path is the bit-row
+//! implementation in [`super::cpu`], tested equal to these mirrors chained
+//! (`tests/surface.rs`), and each GPU kernel is tested against its mirror
+//! on the same inputs (`tests/parity/mc_*.rs`), so a divergence names its
+//! kernel.
+//!
+//! Tolerances ([`TOL_POSITION_ULPS`]): block counts, vertex ids, edge ids and
+//! triangles are integers and compare exactly; positions are bit for bit on
+//! adapters with correctly rounded division (lavapipe), else within
+//! WGSL's 2.5-ulp division bound carried through `f32(p) + t`.
+#![expect(
+    clippy::needless_range_loop,
+    reason = "mirrors the kernels' invocation loops"
+)]
+
+use super::field::Field;
+use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams, scan_with_total};
+use super::cpu::T_MIN;
+use super::tables;
+use crate::Result;
+
+/// Invocations per workgroup of the three kernels (`WG_SIZE`; checked
+/// against the WGSL by `tests/shaders.rs`).
+pub const WG_SIZE: u32 = 256;
+
+
+/// Units in the last place a GPU position may differ from the mirror's on
+/// hardware whose f32 division is not correctly rounded: WGSL allows 2.5
+/// ulp for `x / y`, carried through `clamp` and `f32(p) + t` into at most
+/// one more rounding (3 ulp of the coordinate's magnitude, rounded up).
+pub const TOL_POSITION_ULPS: u32 = 3;
+
+/// `edge_owner` of `mc_triangles.wgsl`: the corner owning each local edge.
+const EDGE_OWNER: [u32; 12] = [0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3];
+
+/// The `samples` layout of all three kernels: global layers from `z_first`.
+fn sample(samples: &[f32], nx: u32, ny: u32, z_first: u32, x: u32, y: u32, z: u32) -> f32 {
+    samples[(x + nx * (y + ny * (z - z_first))) as usize]
+}
+
+/// `mc_classify`: per block of `WG_SIZE` points, (vertices, triangles).
+/// `block_counts` holds `n_layers · blocks_per_layer` entries.
+pub fn mc_classify(
+    params: &ClassifyParams,
+    samples: &[f32],
+    table: &[u32],
+    block_counts: &mut [[u32; 2]],
+) {
+    let p = params;
+    let inside = |x: u32, y: u32, z: u32| -> u32 {
+        u32::from(sample(samples, p.nx, p.ny, p.z_first, x, y, z) >= p.level)
+    };
+    let n_layer = p.nx * p.ny;
+    for w in 0..block_counts.len() as u32 {
+        let layer = w / p.blocks_per_layer;
+        let mut sh_sum = [0u32; 2];
+        for lid in 0..WG_SIZE {
+            let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
+            let mut nv = 0;
+            let mut nt = 0;
+            if layer < p.n_layers && q < n_layer {
+                let x = q % p.nx;
+                let y = q / p.nx;
+                let z = p.z_begin + layer;
+                let m = inside(x, y, z);
+                if x + 1 < p.nx && inside(x + 1, y, z) != m {
+                    nv += 1;
+                }
+                if y + 1 < p.ny && inside(x, y + 1, z) != m {
+                    nv += 1;
+                }
+                if z + 1 < p.nz && inside(x, y, z + 1) != m {
+                    nv += 1;
+                }
+                if x + 1 < p.nx && y + 1 < p.ny && z + 1 < p.nz {
+                    let mut case_ix = 0u32;
+                    for c in 0..8u32 {
+                        case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
+                    }
+                    nt = table[case_ix as usize + 1] - table[case_ix as usize];
+                }
+            }
+            sh_sum[0] += nv;
+            sh_sum[1] += nt;
+        }
+        if layer < p.n_layers {
+            block_counts[w as usize] = sh_sum;
+        }
+    }
+}
+
+/// `mc_vertices`: per point its first vertex id (`vert_base`, `n_layers ·
+/// nx · ny`) and, for the first `n_owned` layers, the vertices of its
+/// crossing edges (`positions`, element = vertex id − `v_start`, `w` = the
+/// edge id's bits). `block_offsets`: the exclusive scan of the vertex
+/// counts with the total appended. Blocks without a vertex write nothing.
+pub fn mc_vertices(
+    params: &VerticesParams,
+    samples: &[f32],
+    block_offsets: &[u32],
+    vert_base: &mut [u32],
+    positions: &mut [[f32; 4]],
+) {
+    let p = params;
+    let sample = |x: u32, y: u32, z: u32| sample(samples, p.nx, p.ny, p.z_first, x, y, z);
+    let n_layer = p.nx * p.ny;
+    let n_blocks = p.n_layers * p.blocks_per_layer;
+    for w in 0..n_blocks {
+        let layer = w / p.blocks_per_layer;
+        let sh_count = block_offsets[w as usize + 1] - block_offsets[w as usize];
+        if sh_count == 0 {
+            continue;
+        }
+        let mut inclusive = 0u32;
+        for lid in 0..WG_SIZE {
+            let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
+            let in_range = layer < p.n_layers && q < n_layer;
+            let x = q % p.nx;
+            let y = q / p.nx;
+            let z = p.z_begin + layer;
+            let mut crossing = 0u32;
+            let mut a = 0.0f32;
+            let mut far = [0.0f32; 3];
+            if in_range {
+                a = sample(x, y, z);
+                let m = a >= p.level;
+                if x + 1 < p.nx {
+                    far[0] = sample(x + 1, y, z);
+                    if (far[0] >= p.level) != m {
+                        crossing |= 1;
+                    }
+                }
+                if y + 1 < p.ny {
+                    far[1] = sample(x, y + 1, z);
+                    if (far[1] >= p.level) != m {
+                        crossing |= 2;
+                    }
+                }
+                if z + 1 < p.nz {
+                    far[2] = sample(x, y, z + 1);
+                    if (far[2] >= p.level) != m {
+                        crossing |= 4;
+                    }
+                }
+            }
+            let nv = crossing.count_ones();
+            inclusive += nv;
+            if !in_range {
+                continue;
+            }
+            let base = block_offsets[w as usize] + inclusive - nv;
+            vert_base[(layer * n_layer + q) as usize] = base;
+            if layer >= p.n_owned {
+                continue;
+            }
+            let point = q + n_layer * z;
+            let mut k = base - p.v_start;
+            for axis in 0..3u32 {
+                if crossing & (1 << axis) != 0 {
+                    let t = ((p.level - a) / (far[axis as usize] - a)).clamp(T_MIN, 1.0 - T_MIN);
+                    let mut u = [x as f32, y as f32, z as f32];
+                    u[axis as usize] += t;
+                    positions[k as usize] = [u[0], u[1], u[2], f32::from_bits(3 * point + axis)];
+                    k += 1;
+                }
+            }
+        }
+    }
+}
+
+/// `mc_triangles`: the triangles of every cell of `n_layers` cell layers
+/// from `z_begin` at their scanned offsets (element = triangle id −
+/// `t_start`), `[v0, v1, v2, cell]`, vertex ids from `vert_base` (whose
+/// first layer is global layer `vb_first`). Blocks without a triangle write
+/// nothing.
+pub fn mc_triangles(
+    params: &TrianglesParams,
+    samples: &[f32],
+    table: &[u32],
+    block_offsets: &[u32],
+    vert_base: &[u32],
+    triangles: &mut [[u32; 4]],
+) {
+    let p = params;
+    let inside = |x: u32, y: u32, z: u32| -> u32 {
+        u32::from(sample(samples, p.nx, p.ny, p.z_first, x, y, z) >= p.level)
+    };
+    let n_layer = p.nx * p.ny;
+    // Vertex id of the edge (point o, axis).
+    let vertex = |o: [u32; 3], axis: u32| -> u32 {
+        let m = inside(o[0], o[1], o[2]);
+        let mut rank = 0;
+        if axis > 0 && o[0] + 1 < p.nx && inside(o[0] + 1, o[1], o[2]) != m {
+            rank += 1;
+        }
+        if axis > 1 && o[1] + 1 < p.ny && inside(o[0], o[1] + 1, o[2]) != m {
+            rank += 1;
+        }
+        vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.nx + o[0]) as usize] + rank
+    };
+    let n_blocks = p.n_layers * p.blocks_per_layer;
+    for w in 0..n_blocks {
+        let layer = w / p.blocks_per_layer;
+        let sh_count = block_offsets[w as usize + 1] - block_offsets[w as usize];
+        if sh_count == 0 {
+            continue;
+        }
+        let mut inclusive = 0u32;
+        for lid in 0..WG_SIZE {
+            let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
+            let x = q % p.nx;
+            let y = q / p.nx;
+            let z = p.z_begin + layer;
+            let in_range = layer < p.n_layers && q < n_layer && x + 1 < p.nx && y + 1 < p.ny;
+            let mut case_ix = 0u32;
+            let mut nt = 0u32;
+            if in_range {
+                for c in 0..8u32 {
+                    case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
+                }
+                nt = table[case_ix as usize + 1] - table[case_ix as usize];
+            }
+            inclusive += nt;
+            if nt == 0 {
+                continue;
+            }
+            let out0 = block_offsets[w as usize] + inclusive - nt - p.t_start;
+            let cell = x + (p.nx - 1) * (y + (p.ny - 1) * z);
+            let first = table[case_ix as usize];
+            for k in 0..nt {
+                let mut v = [0u32; 3];
+                for j in 0..3 {
+                    let e = table[(257 + 3 * (first + k)) as usize + j];
+                    let c = EDGE_OWNER[e as usize];
+                    let o = [x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)];
+                    v[j] = vertex(o, e / 4);
+                }
+                triangles[(out0 + k) as usize] = [v[0], v[1], v[2], cell];
+            }
+        }
+    }
+}
+
+/// The three mirrors chained over the whole grid of `field` in one slab,
+/// as the GPU runs them (classify, host scan, vertices, triangles): the
+/// reference the bit-row CPU path is tested against.
+pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
+    let [nx, ny, nz] = field.dims;
+    if field.dims.iter().any(|&d| d < 2) {
+        return Ok(GpuRaw::default());
+    }
+    let layer = nx * ny;
+    let mut samples = vec![0.0f32; layer * nz];
+    for (z, out) in samples.chunks_mut(layer).enumerate() {
+        field.layer(z, out);
+    }
+    let table = tables::table().flat();
+    let bpl = layer.div_ceil(WG_SIZE as usize);
+    let dims = [nx as u32, ny as u32, nz as u32];
+    let mut counts = vec![[0u32; 2]; nz * bpl];
+    let classify = ClassifyParams {
+        nx: dims[0],
+        ny: dims[1],
+        nz: dims[2],
+        z_first: 0,
+        z_begin: 0,
+        n_layers: dims[2],
+        blocks_per_layer: bpl as u32,
+        level: field.level,
+    };
+    mc_classify(&classify, &samples, &table, &mut counts);
+    let off_v = scan_with_total(counts.iter().map(|c| c[0]))?;
+    let off_t = scan_with_total(counts.iter().map(|c| c[1]))?;
+    let mut vert_base = vec![0u32; nz * layer];
+    let mut positions = vec![[0.0f32; 4]; off_v[nz * bpl] as usize];
+    let vertices = VerticesParams {
+        nx: dims[0],
+        ny: dims[1],
+        nz: dims[2],
+        z_first: 0,
+        z_begin: 0,
+        n_layers: dims[2],
+        n_owned: dims[2],
+        blocks_per_layer: bpl as u32,
+        v_start: 0,
+        level: field.level,
+    };
+    mc_vertices(&vertices, &samples, &off_v, &mut vert_base, &mut positions);
+    let mut triangles = vec![[0u32; 4]; off_t[nz * bpl] as usize];
+    let cells = TrianglesParams {
+        nx: dims[0],
+        ny: dims[1],
+        nz: dims[2],
+        z_first: 0,
+        z_begin: 0,
+        n_layers: dims[2] - 1,
+        blocks_per_layer: bpl as u32,
+        vb_first: 0,
+        t_start: 0,
+        level: field.level,
+    };
+    mc_triangles(&cells, &samples, &table, &off_t, &vert_base, &mut triangles);
+    Ok(GpuRaw {
+        positions,
+        triangles,
+        kernel_seconds: None,
+    })
+}

@@ -1,0 +1,237 @@
+//! The inputs of the three marching-cubes kernels, made by their mirrors in
+//! sequence (`surface::mirror`), for the per-kernel parity modules
+//! `mc_classify`, `mc_vertices` and `mc_triangles`: each GPU kernel runs on
+//! exactly the inputs its mirror gets, so a divergence names its kernel.
+//! A stage set covers the whole grid, or one emission slab `[a, b)` of
+//! point layers with the offsets and sample window the production path
+//! gives it (`surface::gpu`).
+
+use chisel::parity::Mismatch;
+use chisel::surface::gpu::{ClassifyParams, TrianglesParams, VerticesParams};
+use chisel::surface::mirror::{self, WG_SIZE};
+use chisel::surface::{Field, IsoSpec, tables};
+use chisel::volume::{Volume, VolumeData};
+
+use crate::common;
+
+/// One fixture's inputs and mirror outputs, kernel by kernel.
+pub struct Stages {
+    pub what: String,
+    pub table: Vec<u32>,
+    pub classify: ClassifyParams,
+    pub classify_samples: Vec<f32>,
+    pub block_counts: Vec<[u32; 2]>,
+    pub vertices: VerticesParams,
+    pub emit_samples: Vec<f32>,
+    pub vertex_offsets: Vec<u32>,
+    pub vert_base: Vec<u32>,
+    pub positions: Vec<[f32; 4]>,
+    pub triangles_params: TrianglesParams,
+    pub triangle_offsets: Vec<u32>,
+    pub triangles: Vec<[u32; 4]>,
+}
+
+/// Exclusive scan with the total appended (the host scan between passes).
+fn scan(values: impl Iterator<Item = u32>) -> Vec<u32> {
+    let mut sum = 0;
+    let mut out: Vec<u32> = values
+        .map(|v| {
+            sum += v;
+            sum - v
+        })
+        .collect();
+    out.push(sum);
+    out
+}
+
+/// The stages of `vol` at `iso` for point layers `[a, b)` of the emission
+/// (`None`: the whole grid); classification always covers the whole grid.
+pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize)>) -> Stages {
+    let field = Field::new(vol, iso, true).unwrap();
+    let [nx, ny, nz] = field.dims;
+    let layer = nx * ny;
+    let mut samples = vec![0.0f32; layer * nz];
+    for (z, out) in samples.chunks_mut(layer).enumerate() {
+        field.layer(z, out);
+    }
+    let table = tables::table().flat();
+    let bpl = layer.div_ceil(WG_SIZE as usize);
+    let [nx32, ny32, nz32] = [nx as u32, ny as u32, nz as u32];
+    let classify = ClassifyParams {
+        nx: nx32,
+        ny: ny32,
+        nz: nz32,
+        z_first: 0,
+        z_begin: 0,
+        n_layers: nz32,
+        blocks_per_layer: bpl as u32,
+        level: field.level,
+    };
+    let mut block_counts = vec![[0u32; 2]; nz * bpl];
+    mirror::mc_classify(&classify, &samples, &table, &mut block_counts);
+    let off_v = scan(block_counts.iter().map(|c| c[0]));
+    let off_t = scan(block_counts.iter().map(|c| c[1]));
+    let (a, b) = slab.unwrap_or((0, nz));
+    let vb_layers = (b + 1).min(nz) - a;
+    let cell_layers = b.min(nz - 1).saturating_sub(a);
+    let emit_samples = samples[a * layer..(b + 2).min(nz) * layer].to_vec();
+    let vertices = VerticesParams {
+        nx: nx32,
+        ny: ny32,
+        nz: nz32,
+        z_first: a as u32,
+        z_begin: a as u32,
+        n_layers: vb_layers as u32,
+        n_owned: (b - a) as u32,
+        blocks_per_layer: bpl as u32,
+        v_start: off_v[a * bpl],
+        level: field.level,
+    };
+    let vertex_offsets = off_v[a * bpl..=(a + vb_layers) * bpl].to_vec();
+    let mut vert_base = vec![0u32; vb_layers * layer];
+    let mut positions = vec![[f32::NAN; 4]; (off_v[b * bpl] - off_v[a * bpl]) as usize];
+    mirror::mc_vertices(&vertices, &emit_samples, &vertex_offsets, &mut vert_base, &mut positions);
+    let triangles_params = TrianglesParams {
+        nx: nx32,
+        ny: ny32,
+        nz: nz32,
+        z_first: a as u32,
+        z_begin: a as u32,
+        n_layers: cell_layers as u32,
+        blocks_per_layer: bpl as u32,
+        vb_first: a as u32,
+        t_start: off_t[a * bpl],
+        level: field.level,
+    };
+    let triangle_offsets = off_t[a * bpl..=(a + cell_layers.max(1)) * bpl].to_vec();
+    let n_t = off_t[(a + cell_layers) * bpl] - off_t[a * bpl];
+    let mut triangles = vec![[u32::MAX; 4]; n_t as usize];
+    mirror::mc_triangles(
+        &triangles_params,
+        &emit_samples,
+        &table,
+        &triangle_offsets,
+        &vert_base,
+        &mut triangles,
+    );
+    assert!(!triangles.is_empty(), "{what}: an empty surface proves nothing");
+    Stages {
+        what: what.into(),
+        table,
+        classify,
+        classify_samples: samples,
+        block_counts,
+        vertices,
+        emit_samples,
+        vertex_offsets,
+        vert_base,
+        positions,
+        triangles_params,
+        triangle_offsets,
+        triangles,
+    }
+}
+
+/// A random i16 volume (samples on the level exercise the clamp).
+pub fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
+    let mut next = common::xorshift(seed);
+    let data: Vec<i16> = (0..dims.iter().product::<usize>())
+        .map(|_| (next() % 2000) as i16)
+        .collect();
+    Volume::new(dims, [0.7, 1.1, 1.3], [-3.0, 2.0, 5.0], VolumeData::I16(data)).unwrap()
+}
+
+/// The fixtures every kernel module runs: random volumes (levels between
+/// and on the samples), a label volume, an emission slab in the middle of
+/// the grid, and the real CT (headsq at the skin and bone levels).
+pub fn fixtures() -> Vec<Stages> {
+    let mut out = Vec::new();
+    for seed in 1..=3u64 {
+        let vol = random_volume(seed, [23, 17, 11]);
+        for level in [1000.5, 1000.0] {
+            let what = format!("random {seed} level {level}");
+            out.push(stages(&what, &vol, IsoSpec::Level(level), None));
+        }
+    }
+    let mut next = common::xorshift(9);
+    let data: Vec<u8> = (0..30 * 20 * 10).map(|_| (next() % 4) as u8).collect();
+    let labels = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
+    out.push(stages("labels", &labels, IsoSpec::Label(2.0), None));
+    let vol = random_volume(5, [40, 30, 24]);
+    out.push(stages("slab 7..15", &vol, IsoSpec::Level(1000.5), Some((7, 15))));
+    if let Some(vol) = common::real_volume("headsq/quarter.nhdr") {
+        for level in [500.0, 1150.0] {
+            out.push(stages(&format!("headsq {level}"), &vol, IsoSpec::Level(level), None));
+        }
+    }
+    out
+}
+
+/// Positions within `ulps` units in the last place per coordinate (0: bit
+/// for bit); the `w` lanes (edge ids) exactly.
+pub fn compare_positions(
+    what: &str,
+    cpu: &[[f32; 4]],
+    gpu: &[[f32; 4]],
+    ulps: u32,
+) -> Result<(), Mismatch> {
+    let close = |a: &[f32; 4], b: &[f32; 4]| {
+        a[3].to_bits() == b[3].to_bits()
+            && (0..3).all(|k| a[k].to_bits().abs_diff(b[k].to_bits()) <= ulps)
+    };
+    let bad: Vec<usize> = (0..cpu.len().max(gpu.len()))
+        .filter(|&i| match (cpu.get(i), gpu.get(i)) {
+            (Some(a), Some(b)) => !close(a, b),
+            _ => true,
+        })
+        .collect();
+    match bad.first() {
+        None => Ok(()),
+        Some(&i) => Err(Mismatch {
+            what: what.into(),
+            index: i,
+            expected: format!("{:?}", cpu.get(i)),
+            found: format!("{:?}", gpu.get(i)),
+            count: bad.len(),
+            total: cpu.len().max(gpu.len()),
+        }),
+    }
+}
+
+/// The production CPU path (bit rows, per-layer counts, chunk stitching) is
+/// the fast path beside the mirrors: the same vertices bit for bit, the
+/// same triangles, cells and groups as the three mirrors chained, on every
+/// fixture volume and on the real CT.
+#[test]
+fn mc_fast_cpu_path_equals_the_chained_mirrors() {
+    use chisel::surface::{cpu, gpu};
+    let mut cases = vec![
+        (random_volume(1, [23, 17, 11]), IsoSpec::Level(1000.0)),
+        (random_volume(5, [40, 30, 24]), IsoSpec::Level(1000.5)),
+    ];
+    if let Some(vol) = common::real_volume("headsq/quarter.nhdr") {
+        cases.push((vol.clone(), IsoSpec::Level(500.0)));
+        cases.push((vol, IsoSpec::Level(1150.0)));
+    }
+    for (vol, iso) in &cases {
+        for close in [false, true] {
+            let field = Field::new(vol, *iso, close).unwrap();
+            let fast = cpu::marching_cubes(&field).unwrap();
+            let mirrored = gpu::assemble(mirror::marching_cubes(&field).unwrap());
+            let what = format!("{iso:?} close {close}");
+            assert!(!fast.triangles.is_empty(), "{what}");
+            let bits = |p: &[[f32; 3]]| -> Vec<[u32; 3]> {
+                p.iter().map(|v| v.map(f32::to_bits)).collect()
+            };
+            assert_eq!(bits(&fast.positions), bits(&mirrored.positions), "{what}");
+            assert_eq!(fast.edges, mirrored.edges, "{what}");
+            assert_eq!(fast.triangles, mirrored.triangles, "{what}");
+            assert_eq!(fast.cells, mirrored.cells, "{what}");
+            assert_eq!(
+                (&fast.groups, fast.n_groups),
+                (&mirrored.groups, mirrored.n_groups),
+                "{what}"
+            );
+        }
+    }
+}

@@ -82,13 +82,8 @@ fn valid_files(dir: &Path) -> Vec<PathBuf> {
 fn mutated_files_never_panic() {
     let dir = tempfile::tempdir().unwrap();
     let files = valid_files(dir.path());
-    let mut s = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = move |n: usize| {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s % n.max(1) as u64) as usize
-    };
+    let mut bits = common::xorshift(0x9E37_79B9_7F4A_7C15);
+    let mut next = move |n: usize| (bits() % n.max(1) as u64) as usize;
     let (mut ok, mut err) = (0, 0);
     for path in &files {
         let original = std::fs::read(path).unwrap();

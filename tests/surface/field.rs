@@ -5,7 +5,7 @@ use chisel::surface::IsoSpec;
 use chisel::surface::field::{NativeSamples, SampleVisitor, Scalar};
 use chisel::volume::{Volume, VolumeData};
 
-use crate::xorshift;
+use crate::common;
 
 /// Every sample of the padded grid read through `NativeSamples` (x
 /// fastest, then y, then z).
@@ -37,7 +37,7 @@ impl SampleVisitor for AllSamples {
 fn field_rows_and_samples_match_layers() {
     let dims = [70, 5, 4];
     let n: usize = dims.iter().product();
-    let mut next = xorshift(77);
+    let mut next = common::xorshift(77);
     let raw: Vec<i64> = (0..n).map(|_| (next() % 9) as i64 - 4).collect();
     let volumes = [
         VolumeData::U8(raw.iter().map(|&v| (v + 4) as u8).collect()),

@@ -18,20 +18,10 @@ use chisel::volume::{Volume, VolumeData};
 
 // ---------------------------------------------------------------- fixtures
 
-fn xorshift(seed: u64) -> impl FnMut() -> u64 {
-    let mut s = seed.max(1);
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s
-    }
-}
-
 /// Seeded random u8 volume with values 0..=255, smoothed a little so that
 /// all case configurations and real components/cavities occur.
 fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
-    let mut next = xorshift(seed);
+    let mut next = common::xorshift(seed);
     let data: Vec<u8> = (0..dims.iter().product::<usize>())
         .map(|_| (next() % 256) as u8)
         .collect();

@@ -5,7 +5,7 @@ use std::collections::{HashMap, HashSet, VecDeque};
 use chisel::TriMesh;
 use chisel::mesh::{Orientation, Topology, orient_consistently};
 
-use crate::common::{icosphere, random_mesh};
+use crate::common::{icosphere, random_mesh, xorshift};
 
 /// Brute-force figures of a triangle soup, written independently of the
 /// library: hash maps, per-vertex BFS, BFS components.
@@ -161,21 +161,10 @@ fn random_soups_match_brute_force() {
     }
 }
 
-/// xorshift for the perforation tests.
-fn rng(seed: u64) -> impl FnMut() -> u64 {
-    let mut s = seed;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s
-    }
-}
-
 #[test]
 fn perforated_spheres_match_brute_force_and_directed_loops() {
     for seed in 1..=8u64 {
-        let mut next = rng(seed * 7919);
+        let mut next = xorshift(seed * 7919);
         let mut m = icosphere(2);
         m.triangles.retain(|_| !next().is_multiple_of(5));
         assert_matches_reference(&m, &format!("perforated {seed}"));

@@ -156,13 +156,7 @@ pub fn icosphere(n: u32) -> TriMesh {
 /// A seeded random soup of `n` triangles over `n_vertices` points in
 /// [-1, 1]³ (xorshift; reproducible, no external RNG).
 pub fn random_mesh(seed: u64, n_vertices: usize, n: usize) -> TriMesh {
-    let mut s = seed.max(1);
-    let mut next = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s
-    };
+    let mut next = xorshift(seed);
     let p = (0..n_vertices)
         .map(|_| {
             let mut c = || (next() % 2_000_001) as f32 / 1_000_000.0 - 1.0;
@@ -206,14 +200,16 @@ pub fn carved(
     chisel::voxel::DigitalObject::from_mask([d; 3], &mask, chisel::voxel::Frame::default()).unwrap()
 }
 
-/// A fixed xorshift64 sequence from `seed` (non-zero): test inputs that
-/// are the same on every run.
-pub fn xorshift(mut seed: u64) -> impl FnMut() -> u64 {
+/// A fixed xorshift64 sequence (shifts 13, 7, 17) from `seed`: test inputs
+/// that are the same on every run, and the one generator of the test
+/// fixtures. A zero seed, xorshift's fixed point, is taken as 1.
+pub fn xorshift(seed: u64) -> impl FnMut() -> u64 {
+    let mut s = seed.max(1);
     move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        seed
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        s
     }
 }
 

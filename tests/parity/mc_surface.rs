@@ -23,18 +23,8 @@ use chisel::volume::{Volume, VolumeData};
 
 use crate::common;
 
-fn xorshift(seed: u64) -> impl FnMut() -> u64 {
-    let mut s = seed.max(1);
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        s
-    }
-}
-
 fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
-    let mut next = xorshift(seed);
+    let mut next = common::xorshift(seed);
     let data: Vec<i16> = (0..dims.iter().product::<usize>())
         .map(|_| (next() % 2000) as i16)
         .collect();
@@ -154,7 +144,7 @@ fn mc_random_volumes() {
 #[test]
 fn mc_labels() {
     let Some(gpu) = common::gpu() else { return };
-    let mut next = xorshift(9);
+    let mut next = common::xorshift(9);
     let data: Vec<u8> = (0..30 * 20 * 10).map(|_| (next() % 4) as u8).collect();
     let vol = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
     check(gpu, "labels", &vol, IsoSpec::Label(2.0), true);

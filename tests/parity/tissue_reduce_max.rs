@@ -24,13 +24,8 @@ const TOL: Tolerance = Tolerance {
 type Inputs = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);
 
 fn inputs(n: usize, seed: u64) -> Inputs {
-    let mut s = seed;
-    let mut next = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s % 2_000_001) as f32 / 1_000_000.0 - 1.0
-    };
+    let mut bits = common::xorshift(seed);
+    let mut next = move || (bits() % 2_000_001) as f32 / 1_000_000.0 - 1.0;
     let mut v = Vec::with_capacity(n);
     let mut p = Vec::with_capacity(n);
     let mut q = Vec::with_capacity(n);

@@ -4,19 +4,15 @@
 //! timings and adapter, the CT head bone and the frog tissue labels against
 //! the data README, and clear errors on bad input.
 
-mod common;
-
 use std::path::Path;
-use std::process::Output;
 
 use chisel::Volume;
 use chisel::phantom::voxel;
 use chisel::volume::VolumeData;
 use serde_json::Value;
 
-fn chisel(args: &[&str]) -> Output {
-    common::run_chisel(env!("CARGO_BIN_EXE_chisel"), args)
-}
+use crate::common;
+use crate::support::{chisel, path_str};
 
 fn scan_json(args: &[&str]) -> Value {
     let mut all = vec!["scan"];
@@ -29,10 +25,6 @@ fn scan_json(args: &[&str]) -> Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("chisel {all:?}: {e}"))
-}
-
-fn path_str(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
 }
 
 /// Copies the object voxels (non-zero) of `src` into `dst` (dims `dims`)

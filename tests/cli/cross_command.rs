@@ -1,0 +1,257 @@
+//! Behaviour all commands share: clean errors (exit 1, never a panic) on
+//! missing or garbage input, output names and options checked before any
+//! work or output, and the permissions of the files written.
+
+use std::path::Path;
+
+use crate::common;
+use crate::support::{assert_clean_error, chisel, ok_json, path_str, plan_file};
+
+#[test]
+fn missing_and_garbage_inputs_are_clean_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.ply");
+    assert_clean_error(&["stats", path_str(&missing)], "missing.ply");
+    let garbage = dir.path().join("garbage.vtk");
+    std::fs::write(
+        &garbage,
+        b"# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 99999999999 float\n",
+    )
+    .unwrap();
+    assert_clean_error(&["stats", path_str(&garbage)], "garbage.vtk");
+    let vol = dir.path().join("bad.nhdr");
+    std::fs::write(&vol, b"NRRD0004\ndimension: 3\nsizes: 100000 100000 100000\ntype: short\nencoding: raw\ndata file: nothing.raw\n").unwrap();
+    assert_clean_error(&["stats", path_str(&vol)], "bad.nhdr");
+    let out = dir.path().join("x.png");
+    assert_clean_error(
+        &["render", path_str(&garbage), "-o", path_str(&out)],
+        "garbage.vtk",
+    );
+    assert!(!out.exists(), "no partial preview on failure");
+}
+
+/// Every command that draws a preview refuses a non-PNG name before it reads
+/// its input (the missing input is never reached).
+#[test]
+fn previews_must_be_png_names_checked_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (mesh, volume, jpg) = (p("missing.ply"), p("missing.nhdr"), p("look.jpg"));
+    let (out, pieces, plan) = (p("o.ply"), p("pieces"), plan_file("fran_chin_advance.toml"));
+    let runs: [Vec<&str>; 7] = [
+        vec!["render", &mesh, "-o", &jpg],
+        vec!["convert", &mesh, &out, "--preview", &jpg],
+        vec!["mc", &volume, "--level", "1", "-o", &out, "--preview", &jpg],
+        vec![
+            "cut",
+            &mesh,
+            "--sphere",
+            "0,0,0,1",
+            "-o",
+            &pieces,
+            "--preview",
+            &jpg,
+        ],
+        vec![
+            "relax",
+            &mesh,
+            "--plan",
+            &plan,
+            "-o",
+            &out,
+            "--preview",
+            &jpg,
+        ],
+        vec!["hull", &volume, "--threshold", "1", "--preview", &jpg],
+        vec![
+            "polyhedrize",
+            &volume,
+            "--threshold",
+            "1",
+            "--preview",
+            &jpg,
+        ],
+    ];
+    for args in runs {
+        let run = chisel(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("look.jpg: unsupported format: image extension `.jpg`")
+                && stderr.contains("name the file .png")
+                && !stderr.contains("missing"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(!Path::new(&jpg).exists());
+}
+
+/// Negative thresholds parse, and mistakes in outputs or options are
+/// reported before the work and before any output is written.
+#[test]
+fn volume_commands_check_their_options_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let ball = p("ball.nrrd");
+    let v = ok_json(&["phantom", "ball", "--r", "4", "-o", &ball, "--json"]);
+    assert_eq!(v["kind"], serde_json::json!({ "shape": "ball", "r": 4 }));
+    // Reports name the selection, and say when the ZKHs were not looked for.
+    let v = ok_json(&["hull", &ball, "--threshold", "1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["threshold"], 1.0);
+    assert_eq!(v["selection"]["component"], "largest");
+    assert!(v["zkh"].is_null(), "{v}");
+    assert_eq!(v["zkh_skipped"], "--no-zkh");
+    assert_eq!(v["candidates"]["kind"], "local26");
+    let v = ok_json(&["hull", &ball, "--threshold", "1", "--json"]);
+    assert_eq!(v["zkh"], serde_json::json!([]));
+    assert!(v["zkh_skipped"].is_null());
+    // A threshold below every sample selects them all (CT data in HU).
+    let v = ok_json(&["stats", &ball, "--threshold", "-5", "--json"]);
+    assert_eq!(v["threshold"]["voxels"], 216, "{v}");
+    assert_eq!(v["threshold"]["selection"], "value >= -5");
+    let fails = |args: &[&str], says: &str| {
+        let run = chisel(args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+    };
+    let (mesh, png) = (p("hull.ply"), p("hull.png"));
+    fails(
+        &[
+            "hull",
+            &ball,
+            "--threshold",
+            "1",
+            "-o",
+            &mesh,
+            "--preview",
+            &png,
+            "--view-up",
+            "1,0,0",
+            "--view-front",
+            "2,0,0",
+        ],
+        "must not be parallel",
+    );
+    assert!(!Path::new(&mesh).exists(), "no output before the check");
+    fails(
+        &[
+            "polyhedrize",
+            &ball,
+            "--threshold",
+            "1",
+            "-o",
+            &p("cells.ply"),
+        ],
+        "-o takes the binary cell list",
+    );
+    fails(
+        &[
+            "polyhedrize",
+            &ball,
+            "--threshold",
+            "1",
+            "--cells-json",
+            &p("cells.txt"),
+        ],
+        "name the file .json",
+    );
+    // A slice has no surface: --mesh is a usage error (exit 2).
+    let slice = ["polyhedrize", &ball, "--threshold", "1", "--slice", "3"];
+    let run = chisel(&[&slice[..], &["--mesh", &mesh]].concat());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("cannot be used with"), "{stderr}");
+    // A flat object (a 3 × 3 × 1 plate): no ZKH search, and no mesh to
+    // write, refused before the cell list is written.
+    let plate = p("plate.nrrd");
+    let v = chisel::volume::Volume::new(
+        [3, 3, 1],
+        [1.0; 3],
+        [0.0; 3],
+        chisel::volume::VolumeData::U8(vec![1; 9]),
+    )
+    .unwrap();
+    chisel::io::write_volume(Path::new(&plate), &v).unwrap();
+    let v = ok_json(&["hull", &plate, "--threshold", "1", "--json"]);
+    assert_eq!(v["zkh_skipped"], "flat hull: no inside", "{v}");
+    assert!(v["zkh"].is_null(), "{v}");
+    let cells = p("plate.cells");
+    fails(
+        &[
+            "polyhedrize",
+            &plate,
+            "--threshold",
+            "1",
+            "-o",
+            &cells,
+            "--mesh",
+            &mesh,
+        ],
+        "every shell is flat",
+    );
+    assert!(!Path::new(&cells).exists());
+    // Thresholds and vectors may start with a minus sign.
+    let v = ok_json(&["hull", &ball, "--threshold", "-1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["threshold"], -1.0);
+    fails(
+        &[
+            "hull",
+            &ball,
+            "--threshold",
+            "1",
+            "--preview",
+            &png,
+            "--view-up",
+            "-1,0,0",
+            "--view-front",
+            "-2,0,0",
+        ],
+        "must not be parallel",
+    );
+    // A slice is verified by its shells; no surface, so no ray-parity check.
+    let v = ok_json(&[&slice[..], &["--verify", "--json"]].concat());
+    assert_eq!(v["verified"], true, "{v}");
+    assert!(v["verify_ray_parity_mismatches"].is_null(), "{v}");
+    for command in ["scan", "stats"] {
+        fails(
+            &[
+                command,
+                &ball,
+                "--threshold",
+                "1",
+                "--report",
+                &p("nodir/r.json"),
+            ],
+            "folder",
+        );
+    }
+    fails(&["convert", &ball, &p("x.raw")], "volume extension `.raw`");
+    fails(
+        &["convert", &ball, &p("x")],
+        "volume file name without extension",
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn outputs_are_world_readable_files() {
+    use std::os::unix::fs::PermissionsExt;
+    let Some(dir) = common::data_dir() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let ply = tmp.path().join("fran.ply");
+    let out = chisel(&[
+        "convert",
+        path_str(&dir.join("fran_cut.vtk")),
+        path_str(&ply),
+    ]);
+    assert!(out.status.success());
+    let mode = std::fs::metadata(&ply).unwrap().permissions().mode();
+    assert_eq!(
+        mode & 0o044,
+        0o044,
+        "mode {mode:o}: group/other cannot read the output"
+    );
+}

@@ -1,0 +1,23 @@
+//! End-to-end tests of the `chisel` binary: every command on real data,
+//! JSON reports, exit codes, and clear errors (never a panic) on bad files.
+//!
+//! One binary, one module per command (`scan` included), and
+//! `cross_command` for what all commands share; `support` runs the binary.
+
+#[path = "../common/mod.rs"]
+mod common;
+mod support;
+
+mod bench;
+mod convert;
+mod cross_command;
+mod cut;
+mod demo;
+mod hull;
+mod info;
+mod mc;
+mod polyhedrize;
+mod relax;
+mod render;
+mod scan;
+mod stats;

@@ -1,0 +1,38 @@
+//! Locating a cut, the first phase of [`super::cut`]: takes a mesh, a
+//! prepared knife and (for the tree) the mesh's forest, and returns a
+//! [`Located`](super::Located): the crossed triangles ascending and their
+//! cut points, the same from the tree walk ([`tree`]) and the full scan
+//! ([`scan`]), both finished by [`finish`].
+
+mod finish;
+mod scan;
+mod tree;
+
+use glam::Vec3;
+
+use super::knife::Analytic;
+pub(crate) use scan::locate_scan_prepared;
+pub(crate) use tree::locate_prepared;
+
+/// One end of a triangle edge: vertex id, position, side value.
+type End = (u32, Vec3, f64);
+
+/// The corners of the triangle behind `item`, with their side values.
+#[inline(always)]
+fn ends<T: Copy, A: Analytic>(corner: impl Fn(T, usize) -> (u32, Vec3), k: A, item: T) -> [End; 3] {
+    std::array::from_fn(|c| {
+        let (v, q) = corner(item, c);
+        (v, q, k.eval(q.as_dvec3()))
+    })
+}
+
+/// Whether a bounded knife (a rectangle) reaches the crossing of one of
+/// the triangle's edges whose ends change side; tree and scan both decide
+/// here.
+fn knife_reaches<A: Analytic>(k: A, ends: [End; 3]) -> bool {
+    (0..3).any(|e| {
+        let (x, y) = (ends[e], ends[(e + 1) % 3]);
+        let ((_, a, fa), (_, b, fb)) = if x.0 < y.0 { (x, y) } else { (y, x) };
+        k.crossing_from(a, b, fa, fb).is_some()
+    })
+}

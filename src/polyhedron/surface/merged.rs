@@ -1,198 +1,24 @@
-//! The single merged surface of a polyhedron (seed 003 §4.4.1
-//! "Zusammenfügen"), by exact boundary evaluation.
-//!
-//! When sibling shells have disjoint interiors
-//! ([`super::PolyhedronSummary::volume_exact`]) the indicator of the object
-//! region is `Σ sign_i·χ(H_i)` over the 3-D shells, so its boundary is the
-//! 2-chain `Σ sign_i·∂H_i` (background faces reversed). Per supporting plane
-//! the faces' multiplicities add up: coplanar overlapping pieces cancel (the
-//! marked faces of Def. PR removed, the child's faces joined in); what is
-//! left is cut into faces, each an outer loop with its holes, outward for the
-//! region. Loops are then split where a neighbouring face has an edge
-//! endpoint on their edge (T-junctions), so every edge is used as often in
-//! one direction as in the other, and faces are triangulated by ear
-//! clipping. Every face is also split into convex faces by the merges of
-//! Theorem KE (§4.5.6, [`MergedSurface::convex_faces`]). Every predicate
-//! is exact integer arithmetic on combinatorial coordinates (voxel centres
-//! odd); no epsilons, no rounding.
-//!
-//! Lower-dimensional and flat shells carry no volume (they label voxels on
-//! the surface) and are left out.
+//! Building the merged surface: takes a [`Polyhedron`] whose sibling shells
+//! are separated and returns its [`MergedSurface`] (boundary evaluation per
+//! supporting plane, face loops, T-junctions, the closedness check and the
+//! triangulation). Holds this phase's `impl Polyhedron`
+//! ([`Polyhedron::merged_surface`]).
 
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, HashMap};
 
-use crate::foundation::UnionFind;
-use crate::foundation::exact::{P2, cross2, det, dot2, gcd, orient2, sub2};
-use crate::mesh::{ScalarField, TriMesh};
-use crate::voxel::Frame;
+use crate::foundation::exact::{P2, cross2, dot2, gcd, orient2, sub2};
+use crate::polyhedron::{Polyhedron, Role};
 
-use super::{Polyhedron, Role};
-
-/// Planar coordinates: a plane point with its dominant axis dropped.
-
-/// One face of a [`MergedSurface`]: a planar region, possibly with holes.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct MergedFace {
-    /// Outward normal for the region, primitive (gcd 1).
-    pub normal: [i64; 3],
-    /// `normal·v` for every vertex `v` of the face.
-    pub offset: i64,
-    /// Vertex cycles (indices into [`MergedSurface::vertices`]): the outer
-    /// loop first, counter-clockwise seen from outside, then the holes,
-    /// clockwise. A loop may pass through a vertex twice (a pinch).
-    pub loops: Vec<Vec<u32>>,
-}
-
-/// One convex piece of a [`MergedFace`] ([`MergedSurface::convex_faces`]).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ConvexFace {
-    /// Index of the merged face (into [`MergedSurface::faces`]) it lies in.
-    pub face: u32,
-    /// Vertex cycle (indices into [`MergedSurface::vertices`]),
-    /// counter-clockwise seen from outside, at least 3 corners, every
-    /// corner convex or straight (straight corners are kept: loop vertices
-    /// and T-junctions that neighbouring faces share).
-    pub vertices: Vec<u32>,
-}
-
-/// The merged surface: one closed, consistently oriented polyhedral
-/// surface of the object region (possibly several components, e.g. around
-/// a cavity; edges at pinch vertices may be used by four faces).
-#[derive(Debug, Clone)]
-pub struct MergedSurface {
-    /// Vertices, combinatorial coordinates (voxel centres odd).
-    pub vertices: Vec<[i64; 3]>,
-    /// Faces, ordered by canonical supporting plane.
-    pub faces: Vec<MergedFace>,
-    /// Exact triangulation of the faces, outward winding (indices into
-    /// [`MergedSurface::vertices`]); every face-loop vertex is a corner.
-    pub triangles: Vec<[u32; 3]>,
-    /// Per vertex, the smallest depth of a shell having it as a hull vertex
-    /// (every merged vertex is one).
-    pub vertex_depth: Vec<u32>,
-    /// Per triangle, the face it triangulates (index into
-    /// [`MergedSurface::faces`]).
-    pub triangle_faces: Vec<u32>,
-    /// Per face, the smallest depth of a shell with a face covering the
-    /// centroid of the face's first triangle: the depth of the shell the
-    /// face comes from, also where it shares vertices with shells of other
-    /// depths (per-vertex depths blend there). Where coplanar faces of
-    /// shells of different depths join into one face, that point decides.
-    pub face_depth: Vec<u32>,
-    /// Every face split into convex faces (Theorem KE, §4.5.6), ordered by
-    /// face: starting from the face's triangles, two pieces sharing a
-    /// diagonal are merged when [`theorem_ke`] says the union stays convex.
-    /// The merges are greedy (Hertel–Mehlhorn style, one pass over the
-    /// diagonals): every diagonal left is essential, so a face without
-    /// holes with `r` reflex corners gets at most `2r + 1` convex faces,
-    /// at most four times the minimum (any convex partition needs
-    /// `⌈r/2⌉ + 1`). Not optimal, and no such bound is claimed for faces
-    /// with holes. The convex faces of a face tile it exactly: they meet
-    /// only along whole edges and their areas sum to the face's.
-    pub convex_faces: Vec<ConvexFace>,
-}
-
-impl MergedSurface {
-    /// Faces, a face with holes counted once (seed Table 8.7, "with holes").
-    pub fn n_faces(&self) -> usize {
-        self.faces.len()
-    }
-
-    /// Faces that have at least one hole.
-    pub fn n_faces_with_holes(&self) -> usize {
-        self.faces.iter().filter(|f| f.loops.len() > 1).count()
-    }
-
-    /// Faces when each face with `h` holes counts as `h + 1` simple faces
-    /// (seed Table 8.7, "split").
-    pub fn n_faces_split(&self) -> usize {
-        self.faces.iter().map(|f| f.loops.len()).sum()
-    }
-
-    /// Convex faces ([`MergedSurface::convex_faces`]), at least
-    /// [`MergedSurface::n_faces_split`].
-    pub fn n_convex_faces(&self) -> usize {
-        self.convex_faces.len()
-    }
-
-    /// 6·volume enclosed, combinatorial units (one voxel = 8 units, so
-    /// 48 per voxel), exact from the triangles.
-    pub fn volume6(&self) -> i128 {
-        self.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|v| self.vertices[v as usize]);
-                det(a, b, c)
-            })
-            .sum()
-    }
-
-    /// Enclosed volume in voxel units (`volume6 / 48`: combinatorial
-    /// coordinates are doubled), exact up to the final division.
-    pub fn volume_voxels(&self) -> f64 {
-        self.volume6() as f64 / 48.0
-    }
-
-    /// Surface area in voxel units: Σ |(b − a) × (c − a)| / 8 over the
-    /// triangles (exact `i128` cross products, one square root each).
-    pub fn area_voxels(&self) -> f64 {
-        self.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|v| self.vertices[v as usize].map(i128::from));
-                let (u, w) = (
-                    [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
-                    [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
-                );
-                let n = [
-                    u[1] * w[2] - u[2] * w[1],
-                    u[2] * w[0] - u[0] * w[2],
-                    u[0] * w[1] - u[1] * w[0],
-                ];
-                ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) as f64).sqrt() / 8.0
-            })
-            .sum()
-    }
-
-    /// The triangles as a mesh in world units (`frame`), outward winding;
-    /// scalar `depth` per vertex ([`MergedSurface::vertex_depth`]).
-    pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
-        let positions = self.vertices.iter().map(|&v| frame.world_f32(v)).collect();
-        let mut mesh = TriMesh::new(positions, self.triangles.clone())?;
-        mesh.scalars.push(ScalarField {
-            name: "depth".into(),
-            values: self.vertex_depth.iter().map(|&d| d as f32).collect(),
-        });
-        mesh.validate()?;
-        Ok(mesh)
-    }
-
-    /// The triangles as a mesh for pictures: each with its own three
-    /// vertices and the scalar `depth` of its face
-    /// ([`MergedSurface::face_depth`]), so colours do not blend across
-    /// faces. Not welded: write [`MergedSurface::to_mesh`] instead.
-    pub fn to_face_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
-        let positions = (self.triangles.iter())
-            .flat_map(|t| t.map(|v| frame.world_f32(self.vertices[v as usize])))
-            .collect();
-        let triangles = (0..self.triangles.len() as u32)
-            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
-            .collect();
-        let mut mesh = TriMesh::new(positions, triangles)?;
-        mesh.scalars.push(ScalarField {
-            name: "depth".into(),
-            values: (self.triangle_faces.iter())
-                .flat_map(|&f| [self.face_depth[f as usize] as f32; 3])
-                .collect(),
-        });
-        mesh.validate()?;
-        Ok(mesh)
-    }
-}
+use super::convex_faces::convex_faces_of;
+use super::polygon::{
+    area2, ccw_angle_less, clip_ears, contains, find_bridge, project, split_triangle,
+    strictly_between,
+};
+use super::{MergedFace, MergedSurface};
 
 impl Polyhedron {
-    /// The seed's single merged surface (module docs).
+    /// The seed's single merged surface ([module docs](super)).
     ///
     /// Errors: [`crate::Error::InvalidInput`] when sibling shells are not
     /// proven separated (disjoint interiors, no common face area), and — for a
@@ -335,33 +161,6 @@ impl VertexTable {
         })
     }
 }
-
-/// `p` with the dominant axis of `n` dropped, ordered so that
-/// counter-clockwise about `n` is counter-clockwise in the plane.
-fn project(p: [i64; 3], n: [i64; 3]) -> P2 {
-    let k = (0..3)
-        .max_by_key(|&a| (n[a].abs(), Reverse(a)))
-        .unwrap_or(0);
-    let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-    if n[k] > 0 { [p[i], p[j]] } else { [p[j], p[i]] }
-}
-
-
-/// Whether `q` lies strictly inside segment `a b`.
-fn strictly_between(a: P2, b: P2, q: P2) -> bool {
-    orient2(a, b, q) == 0 && dot2(sub2(q, a), sub2(b, a)) > 0 && dot2(sub2(q, b), sub2(a, b)) > 0
-}
-
-/// Twice the signed area of a loop.
-fn area2(lp: &[usize], pos: &[P2]) -> i128 {
-    (0..lp.len())
-        .map(|k| {
-            let (a, b) = (pos[lp[k]], pos[lp[(k + 1) % lp.len()]]);
-            i128::from(a[0]) * i128::from(b[1]) - i128::from(a[1]) * i128::from(b[0])
-        })
-        .sum()
-}
-
 
 /// Boundary evaluation on one plane (canonical normal `n`, offset `d`):
 /// the faces of multiplicity +1 (outward `n`) and −1 (outward `−n`).
@@ -542,27 +341,6 @@ fn multiplicity_left(a: usize, b: usize, cycles: &[(i64, Vec<usize>)], p2: &[P2]
     m
 }
 
-/// Whether direction `d` is in the sector from `a` counter-clockwise to
-/// `b` (both ends excluded).
-fn in_sector(a: [i128; 2], b: [i128; 2], d: [i128; 2]) -> bool {
-    if cross2(a, b) > 0 {
-        cross2(a, d) > 0 && cross2(d, b) > 0
-    } else {
-        !(cross2(b, d) >= 0 && cross2(d, a) >= 0)
-    }
-}
-
-/// Counter-clockwise angle from `r` to `d` as a sortable class: half-turn
-/// (0 for [0, π), 1 for [π, 2π)), compared within a half by cross products.
-fn ccw_angle_less(r: [i128; 2], d1: [i128; 2], d2: [i128; 2]) -> bool {
-    let half = |d: [i128; 2]| {
-        let c = cross2(r, d);
-        u8::from(!(c > 0 || (c == 0 && dot2(r, d) > 0)))
-    };
-    let (h1, h2) = (half(d1), half(d2));
-    h1 < h2 || (h1 == h2 && cross2(d1, d2) > 0)
-}
-
 /// Loops of a set of directed edges with the region on their left
 /// (counter-clockwise outer loops, clockwise holes), grouped into faces:
 /// each outer loop first, then the holes it is the smallest container of.
@@ -639,25 +417,6 @@ fn faces_of_edges(
     Ok(faces)
 }
 
-/// Exact crossing parity of the point `t` (doubled coordinates, on no edge)
-/// for the loop `lp`.
-fn contains(lp: &[usize], q: &[P2], t: P2) -> bool {
-    let mut inside = false;
-    for k in 0..lp.len() {
-        let (a, b) = (
-            q[lp[k]].map(|c| 2 * c),
-            q[lp[(k + 1) % lp.len()]].map(|c| 2 * c),
-        );
-        if (a[1] > t[1]) != (b[1] > t[1]) {
-            let o = orient2(a, b, t);
-            if (b[1] > a[1]) == (o > 0) {
-                inside = !inside;
-            }
-        }
-    }
-    inside
-}
-
 /// Inserts into every loop edge the endpoints of the other loop edges on
 /// the same line strictly inside it (T-junctions between neighbouring
 /// faces). Lines are keyed by their Plücker coordinates (canonical
@@ -724,7 +483,6 @@ fn split_t_junctions(vertices: &[[i64; 3]], faces: &mut [MergedFace]) {
         }
     }
 }
-
 
 /// Every undirected edge is used as often in each direction (the chain is
 /// closed): the exact watertightness check.
@@ -815,252 +573,3 @@ fn triangulate(face: &MergedFace, vertices: &[[i64; 3]]) -> crate::Result<Vec<[u
     }
     Ok(out.iter().map(|t| t.map(|i| ids[i])).collect())
 }
-
-/// A vertex of `poly` (position in it) that the hole vertex `hole[km]` (the
-/// rightmost) sees: the segment leaves both into the region and meets no
-/// other edge or vertex of the polygon or of any hole.
-fn find_bridge(
-    poly: &[usize],
-    hole: &[usize],
-    km: usize,
-    rest: &[Vec<usize>],
-    pos: &[P2],
-) -> Option<usize> {
-    let m = pos[hole[km]];
-    let mut cands: Vec<usize> = (0..poly.len()).collect();
-    cands.sort_by_key(|&k| {
-        let d = sub2(pos[poly[k]], m);
-        (dot2(d, d), k)
-    });
-    let ring = |l: &[usize]| -> Vec<(P2, P2)> {
-        (0..l.len())
-            .map(|k| (pos[l[k]], pos[l[(k + 1) % l.len()]]))
-            .collect()
-    };
-    let mut edges = ring(poly);
-    edges.extend(ring(hole));
-    for h in rest {
-        edges.extend(ring(h));
-    }
-    let (hp, hn) = (
-        pos[hole[(km + hole.len() - 1) % hole.len()]],
-        pos[hole[(km + 1) % hole.len()]],
-    );
-    cands.into_iter().find(|&k| {
-        let p = pos[poly[k]];
-        let (pp, pn) = (
-            pos[poly[(k + poly.len() - 1) % poly.len()]],
-            pos[poly[(k + 1) % poly.len()]],
-        );
-        p != m
-            && in_sector(sub2(pn, p), sub2(pp, p), sub2(m, p))
-            && in_sector(sub2(hn, m), sub2(hp, m), sub2(p, m))
-            && !edges.iter().any(|&(u, w)| {
-                if strictly_between(m, p, u) || strictly_between(m, p, w) {
-                    return true;
-                }
-                if [u, w].iter().any(|&x| x == m || x == p) {
-                    return false;
-                }
-                let proper = orient2(m, p, u).signum() * orient2(m, p, w).signum() < 0
-                    && orient2(u, w, m).signum() * orient2(u, w, p).signum() < 0;
-                proper || strictly_between(u, w, m) || strictly_between(u, w, p)
-            })
-    })
-}
-
-/// Ear clipping of the weakly simple polygon `poly` (occurrences into
-/// `pos`, counter-clockwise). Returns the triangles (occurrences) and the
-/// occurrences dropped as straight angles, spikes or repeats; `None` when
-/// no ear is found.
-fn clip_ears(poly: &[usize], pos: &[P2]) -> Option<(Vec<[usize; 3]>, Vec<usize>)> {
-    let n = poly.len();
-    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
-    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
-    let p = |i: usize| pos[poly[i]];
-    let (mut tris, mut dropped) = (Vec::new(), Vec::new());
-    let (mut remaining, mut cur, mut stall) = (n, 0usize, 0usize);
-    while remaining >= 3 {
-        let (a, c) = (prev[cur], next[cur]);
-        let o = orient2(p(a), p(cur), p(c));
-        let ear = o > 0 && (remaining == 3 || is_ear(a, cur, c, &next, &prev, &p));
-        if o == 0 || ear {
-            if ear {
-                tris.push([poly[a], poly[cur], poly[c]]);
-            } else {
-                dropped.push(poly[cur]);
-            }
-            next[a] = c;
-            prev[c] = a;
-            remaining -= 1;
-            cur = a;
-            stall = 0;
-            continue;
-        }
-        cur = c;
-        stall += 1;
-        if stall > remaining {
-            return None;
-        }
-    }
-    Some((tris, dropped))
-}
-
-/// Whether `a b c` (counter-clockwise) is an ear: no other remaining
-/// vertex in the closed triangle, and no edge leaving a repeat of a corner
-/// into it or along the diagonal.
-fn is_ear(
-    a: usize,
-    b: usize,
-    c: usize,
-    next: &[usize],
-    prev: &[usize],
-    p: &impl Fn(usize) -> P2,
-) -> bool {
-    let (pa, pb, pc) = (p(a), p(b), p(c));
-    let corners = [(pa, pb, pc), (pb, pc, pa), (pc, pa, pb)];
-    let mut j = next[c];
-    while j != a {
-        let q = p(j);
-        if let Some(&(x, y, z)) = corners.iter().find(|k| k.0 == q) {
-            let (u, w) = (sub2(y, x), sub2(z, x));
-            for d in [sub2(p(prev[j]), q), sub2(p(next[j]), q)] {
-                let along = |e: [i128; 2]| cross2(e, d) == 0 && dot2(e, d) > 0;
-                let diagonal = (x == pa && along(w)) || (x == pc && along(u));
-                if diagonal || (cross2(u, d) > 0 && cross2(d, w) > 0) {
-                    return false;
-                }
-            }
-        } else if orient2(pa, pb, q) >= 0 && orient2(pb, pc, q) >= 0 && orient2(pc, pa, q) >= 0 {
-            return false;
-        }
-        j = next[j];
-    }
-    true
-}
-
-/// Splits triangle `t` at the dropped vertices strictly inside its edges.
-fn split_triangle(t: [usize; 3], dropped: &[usize], pos: &[P2], out: &mut Vec<[usize; 3]>) {
-    for k in 0..3 {
-        let (u, w, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-        if let Some(&x) = dropped
-            .iter()
-            .find(|&&x| strictly_between(pos[u], pos[w], pos[x]))
-        {
-            split_triangle([u, x, o], dropped, pos, out);
-            split_triangle([x, w, o], dropped, pos, out);
-            return;
-        }
-    }
-    out.push(t);
-}
-
-/// Theorem KE (seed 003 §4.5.6): two coplanar convex faces F1 and F2
-/// sharing the edge E = P1P2 merge into a convex face when the points
-/// S1 = E1 ∩ line(P1, P2) and S2 = E2 ∩ line(P1, P2) lie on the closed
-/// segment [P1, P2], where E1 joins F1's other neighbour of P1 (`p1v`) to
-/// F2's other neighbour of P1 (`p2n`), and E2 joins F2's other neighbour
-/// of P2 (`p2v`) to F1's other neighbour of P2 (`p1n`). Planar
-/// coordinates, counter-clockwise seen from outside: F1 runs
-/// `p1v → p1 → p2 → p1n`, F2 runs `p2v → p2 → p1 → p2n`.
-///
-/// Equivalent to both ends of E staying convex or straight corners of the
-/// union; S1 = P1 (`p1v`, P1, `p2n` collinear) is accepted. Exact: S1 =
-/// P1 + t·(P2 − P1) with t a ratio of i128 cross products, compared with
-/// 0 and 1 without division. E1 parallel to E (no intersection) refuses.
-pub fn theorem_ke(
-    p1: [i64; 2],
-    p2: [i64; 2],
-    p1v: [i64; 2],
-    p1n: [i64; 2],
-    p2v: [i64; 2],
-    p2n: [i64; 2],
-) -> bool {
-    let on_edge = |a: P2, b: P2| {
-        let ab = sub2(b, a);
-        let (num, den) = (cross2(sub2(a, p1), ab), cross2(sub2(p2, p1), ab));
-        match den.signum() {
-            1 => 0 <= num && num <= den,
-            -1 => den <= num && num <= 0,
-            _ => false,
-        }
-    };
-    on_edge(p1v, p2n) && on_edge(p2v, p1n)
-}
-
-/// The convex faces of face `face` (outward `normal`) from its triangles
-/// (counter-clockwise about `normal`): one greedy pass over the shared
-/// diagonals in triangle order, merging the two pieces on either side when
-/// [`theorem_ke`] holds. Pieces are kept as cycles of half-edges, so a
-/// merge relinks four pointers.
-fn convex_faces_of(
-    face: u32,
-    normal: [i64; 3],
-    tris: &[[u32; 3]],
-    vertices: &[[i64; 3]],
-) -> Vec<ConvexFace> {
-    // Half-edge h runs from corner h % 3 of triangle h / 3 to the next one.
-    let n = 3 * tris.len();
-    let from = |h: usize| tris[h / 3][h % 3];
-    let to = |h: usize| tris[h / 3][(h + 1) % 3];
-    let mut next: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 1) % 3).collect();
-    let mut prev: Vec<usize> = (0..n).map(|h| h / 3 * 3 + (h + 2) % 3).collect();
-    let mut piece = UnionFind::<usize>::with_len(tris.len());
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for h in 0..n {
-        by_edge.entry((from(h), to(h))).or_default().push(h);
-    }
-    let pos = |v: u32| project(vertices[v as usize], normal);
-    let mut alive = vec![true; n];
-    for h in 0..n {
-        let (u, v) = (from(h), to(h));
-        let (Some([_]), Some(&[g])) = (
-            by_edge.get(&(u, v)).map(Vec::as_slice),
-            by_edge.get(&(v, u)).map(Vec::as_slice),
-        ) else {
-            continue;
-        };
-        if u > v {
-            continue;
-        }
-        let (ph, pg) = (piece.find(h / 3), piece.find(g / 3));
-        if ph == pg {
-            continue;
-        }
-        let (p1v, p1n) = (pos(from(prev[h])), pos(to(next[h])));
-        let (p2v, p2n) = (pos(from(prev[g])), pos(to(next[g])));
-        if !theorem_ke(pos(u), pos(v), p1v, p1n, p2v, p2n) {
-            continue;
-        }
-        let (hp, hn, gp, gn) = (prev[h], next[h], prev[g], next[g]);
-        next[hp] = gn;
-        prev[gn] = hp;
-        next[gp] = hn;
-        prev[hn] = gp;
-        alive[h] = false;
-        alive[g] = false;
-        piece.union(ph, pg);
-    }
-    let mut out = Vec::new();
-    for start in 0..n {
-        if !alive[start] {
-            continue;
-        }
-        let mut cycle = Vec::new();
-        let mut h = start;
-        loop {
-            alive[h] = false;
-            cycle.push(from(h));
-            h = next[h];
-            if h == start {
-                break;
-            }
-        }
-        out.push(ConvexFace {
-            face,
-            vertices: cycle,
-        });
-    }
-    out
-}
-

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::kdtree::KdTree;
-use super::plan::Selector;
+use super::selector::Selector;
 use crate::mesh::{Csr, TriMesh};
 use crate::{Error, Result};
 

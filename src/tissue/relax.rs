@@ -25,7 +25,7 @@ use std::time::Instant;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::chebyshev::{self, ChebyshevCoefficients};
+use super::chebyshev::{self, ChebyshevCoefficients, Spectrum};
 use super::cpu::{self, StepParams};
 use super::explicit;
 use super::gpu::GpuStepper;
@@ -100,6 +100,11 @@ pub struct RelaxOptions {
     /// External forces f_i, one per free node (epidermis then subcutis);
     /// `None` = 0 (the seed's normal case).
     pub external_forces: Option<Vec<Vec3>>,
+    /// The Chebyshev solver's spectral bounds of this network; `None` =
+    /// estimated for this relaxation ([`chebyshev::estimate_spectrum`]).
+    /// Callers that relax one network several times estimate once and pass
+    /// it: the same coefficients every time, and the estimate paid once.
+    pub spectrum: Option<Spectrum>,
 }
 
 impl Default for RelaxOptions {
@@ -114,6 +119,7 @@ impl Default for RelaxOptions {
             max_iterations: 100_000,
             check_every: 25,
             external_forces: None,
+            spectrum: None,
         }
     }
 }
@@ -324,7 +330,10 @@ impl Setup {
                 )
             }
             Solver::Chebyshev => {
-                let coef = ChebyshevCoefficients::new(net.spectrum());
+                let spectrum = opts
+                    .spectrum
+                    .unwrap_or_else(|| chebyshev::estimate_spectrum(net));
+                let coef = ChebyshevCoefficients::new(spectrum);
                 (
                     StepParams {
                         n_free,

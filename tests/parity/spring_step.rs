@@ -9,6 +9,7 @@
 use chisel::Backend;
 use chisel::gpu::Gpu;
 use chisel::parity::{Tolerance, compare_exact, compare_vec, find_sentinel};
+use chisel::tissue::chebyshev::{Spectrum, estimate_spectrum};
 use chisel::tissue::cpu::{self, StepParams};
 use chisel::tissue::phantom::FRAN_CHIN_ADVANCE_TOML;
 use chisel::tissue::{
@@ -80,6 +81,12 @@ pub fn moved_bone(net: &SpringNetwork, share: f32) -> Vec<[f32; 4]> {
         .collect()
 }
 
+/// The Chebyshev runs of both backends share one spectrum estimate (the
+/// same coefficients), as `chisel bench relax` does.
+fn one_spectrum(net: &SpringNetwork, solver: Solver) -> Option<Spectrum> {
+    (solver == Solver::Chebyshev).then(|| estimate_spectrum(net))
+}
+
 /// Positions after `n` iterations on both backends agree within the
 /// derived bound; a corrupted GPU coordinate is caught (negative control);
 /// the NaN-prefilled second position buffer leaves no sentinel behind.
@@ -104,6 +111,7 @@ pub fn check_iterations(gpu: &Gpu, solver: Solver, n: u32) {
         let bone = moved_bone(&net, share);
         let opts = RelaxOptions {
             solver,
+            spectrum: one_spectrum(&net, solver),
             ..RelaxOptions::default()
         };
         let a = iterate(&net, &bone, &opts, n, Backend::Cpu).unwrap();
@@ -166,6 +174,7 @@ pub fn check_stop_status(gpu: &Gpu, solver: Solver) {
         .unwrap();
         let opts = RelaxOptions {
             solver,
+            spectrum: one_spectrum(&net, solver),
             ..RelaxOptions::default()
         };
         let a = relax(&net, &plan, &opts, Backend::Cpu).unwrap();

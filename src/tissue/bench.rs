@@ -11,7 +11,8 @@ use super::chebyshev::{self, Spectrum};
 use super::cpu::Lanes;
 use super::network::SpringNetwork;
 use super::plan::ResolvedPlan;
-use super::relax::{RelaxOptions, Simulation, Solver, Status, relax};
+use super::relax::{Simulation, Status, relax};
+use super::stepper::{RelaxOptions, Solver, bone_displacements};
 use crate::Result;
 use crate::parity::Backend;
 
@@ -167,7 +168,7 @@ pub fn increment_bone(net: &SpringNetwork, increment: &ResolvedPlan) -> Vec<[f32
 /// list). Each file is written atomically.
 pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<()> {
     use crate::io::write_atomic;
-    let u_bone = super::relax::bone_displacements(net, bone)?;
+    let u_bone = bone_displacements(net.bone_rest(), bone)?;
     std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let w = 1.0 / net.params.mass;
     let mut u = vec![[0.0, 0.0, 0.0, w]; net.n_free];

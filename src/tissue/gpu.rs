@@ -9,7 +9,7 @@ use glam::Vec4;
 
 use super::cpu::StepParams;
 use super::network::{SpringCsr, SpringNetwork};
-use super::relax::{Probe, Setup, Solver, Stepper};
+use super::stepper::{Probe, Setup, Solver, Stepper, absolute, bone_displacements};
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::{Error, Result};
 
@@ -380,18 +380,7 @@ impl<'g> GpuStepper<'g> {
 impl Stepper for GpuStepper<'_> {
     fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
         let bone_rest = &self.rest[(self.n_free as usize).min(self.rest.len())..];
-        if bone.len() != bone_rest.len() {
-            return Err(Error::InvalidInput(format!(
-                "{} bone positions for {} bone nodes",
-                bone.len(),
-                bone_rest.len()
-            )));
-        }
-        let data: Vec<[f32; 4]> = bone
-            .iter()
-            .zip(bone_rest)
-            .map(|(b, r)| [b[0] - r[0], b[1] - r[1], b[2] - r[2], 0.0])
-            .collect();
+        let data = bone_displacements(bone_rest, bone)?;
         if data.is_empty() {
             return Ok(());
         }
@@ -444,11 +433,7 @@ impl Stepper for GpuStepper<'_> {
 
     fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
         let state = self.pos[self.cur].read(self.gpu)?;
-        Ok(state
-            .iter()
-            .zip(&self.rest)
-            .map(|(u, r)| [r[0] + u[0], r[1] + u[1], r[2] + u[2], u[3]])
-            .collect())
+        Ok(absolute(&self.rest, &state))
     }
 }
 

@@ -33,6 +33,7 @@
 pub mod bench;
 pub mod chebyshev;
 pub mod cpu;
+mod cpu_stepper;
 pub mod ct;
 pub mod explicit;
 pub mod fragments;
@@ -44,6 +45,7 @@ pub mod phantom;
 pub mod plan;
 pub mod relax;
 pub mod selector;
+pub mod stepper;
 
 pub use ct::{CtLayers, CtParams, layers_from_ct};
 pub use fragments::{BoneCut, CutBone, Fragments, KnifeSpec, cut_bone};
@@ -53,7 +55,7 @@ pub use network::{
 };
 pub use plan::{Iterations, Plan, ResolvedPlan, Rotation, Step};
 pub use relax::{
-    IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,
-    iterate, relax,
+    IncrementReport, RelaxReport, Simulation, Status, StepProbe, StepReport, iterate, relax,
 };
 pub use selector::Selector;
+pub use stepper::{RelaxOptions, Solver};

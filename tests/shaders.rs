@@ -309,12 +309,12 @@ fn host(kernel: Kernel) -> Host {
                 ),
             }
         }
-        Kernel::SpringStep | Kernel::SpringChebyshev => Host {
+        Kernel::SpringStep => Host {
             bindings: tissue::STEP_BINDINGS,
             wg_size: tissue::WG_SIZE,
             consts: &[],
             params: (
-                encase_bytes(&tissue::Params {
+                encase_bytes(&tissue::SpringStepParams {
                     n_free: 0xD1,
                     use_forces: 0xD2,
                     dt: f32::from_bits(0xD3),
@@ -322,25 +322,37 @@ fn host(kernel: Kernel) -> Host {
                     gain: f32::from_bits(0xD5),
                     isotropy: f32::from_bits(0xD6),
                 }),
-                if kernel == Kernel::SpringStep {
-                    vec![
-                        ("n_free", 0xD1),
-                        ("use_forces", 0xD2),
-                        ("dt", 0xD3),
-                        ("damping", 0xD4),
-                        ("gain", 0xD5),
-                        ("isotropy", 0xD6),
-                    ]
-                } else {
-                    vec![
-                        ("n_free", 0xD1),
-                        ("use_forces", 0xD2),
-                        ("h", 0xD3),
-                        ("momentum", 0xD4),
-                        ("gain", 0xD5),
-                        ("isotropy", 0xD6),
-                    ]
-                },
+                vec![
+                    ("n_free", 0xD1),
+                    ("use_forces", 0xD2),
+                    ("dt", 0xD3),
+                    ("damping", 0xD4),
+                    ("gain", 0xD5),
+                    ("isotropy", 0xD6),
+                ],
+            ),
+        },
+        Kernel::SpringChebyshev => Host {
+            bindings: tissue::STEP_BINDINGS,
+            wg_size: tissue::WG_SIZE,
+            consts: &[],
+            params: (
+                encase_bytes(&tissue::SpringChebyshevParams {
+                    n_free: 0xD1,
+                    use_forces: 0xD2,
+                    h: f32::from_bits(0xD3),
+                    momentum: f32::from_bits(0xD4),
+                    gain: f32::from_bits(0xD5),
+                    isotropy: f32::from_bits(0xD6),
+                }),
+                vec![
+                    ("n_free", 0xD1),
+                    ("use_forces", 0xD2),
+                    ("h", 0xD3),
+                    ("momentum", 0xD4),
+                    ("gain", 0xD5),
+                    ("isotropy", 0xD6),
+                ],
             ),
         },
         Kernel::TissueReduceMax => Host {

@@ -799,7 +799,9 @@ fn block_solve_inverts_the_preconditioner_block() {
 /// 15, the last of the table) and external forces.
 #[test]
 fn mirror_lanes_equal_the_scalar_loop() {
-    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams, VELOCITY_FLUSH};
+    use chisel::tissue::cpu::{
+        Lanes, SpringChebyshevParams, SpringGather, SpringStepParams, VELOCITY_FLUSH,
+    };
     let widths: Vec<Lanes> = Lanes::ALL
         .into_iter()
         .filter(|l| l.is_available())
@@ -874,26 +876,43 @@ fn mirror_lanes_equal_the_scalar_loop() {
             .into_iter()
             .flat_map(|c| widths.iter().map(move |l| (c, l)))
         {
-            let params = StepParams {
-                n_free: n_free as u32,
-                use_forces: true,
+            // The parameters of both kernels (their fields by name).
+            struct Params {
+                dt: f32,
+                damping: f32,
+                gain: f32,
+                isotropy: f32,
+            }
+            let params = Params {
                 dt: 0.05,
                 damping: if chebyshev { 0.9 } else { 0.5 },
                 gain: 1.7,
                 isotropy: 0.1,
-                materials: mats,
             };
             let (mut out, mut v_out) = (pos.clone(), vel.clone());
             let gather = SpringGather::new(&net.csr, n_free, lanes).unwrap();
             assert_eq!(gather.lanes(), lanes);
-            let kernel = if chebyshev {
-                SpringGather::spring_chebyshev
+            if chebyshev {
+                let p = SpringChebyshevParams {
+                    n_free: n_free as u32,
+                    use_forces: true,
+                    h: params.dt,
+                    momentum: params.damping,
+                    gain: params.gain,
+                    isotropy: params.isotropy,
+                    materials: mats,
+                };
+                gather.spring_chebyshev(&p, &net.rest, &forces, &pos, &mut out, &mut v_out);
             } else {
-                SpringGather::spring_step
-            };
-            kernel(
-                &gather, &params, &net.rest, &forces, &pos, &mut out, &mut v_out,
-            );
+                let p = SpringStepParams {
+                    n_free: n_free as u32,
+                    use_forces: true,
+                    dt: params.dt,
+                    damping: params.damping,
+                    materials: mats,
+                };
+                gather.spring_step(&p, &net.rest, &forces, &pos, &mut out, &mut v_out);
+            }
             let mut loaded = false;
             for i in 0..n_free {
                 let (g, b) = scalar_gather(&net, &pos, &mats, i, params.isotropy);
@@ -1121,7 +1140,7 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_fran_cut() {
 #[test]
 fn mirror_widths_agree_on_fran_cut() {
     use chisel::tissue::chebyshev::BLOCK_ISOTROPY;
-    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams};
+    use chisel::tissue::cpu::{Lanes, SpringChebyshevParams, SpringGather, SpringStepParams};
     let Some(face) = common::real_mesh("fran_cut.vtk") else {
         return;
     };
@@ -1139,16 +1158,24 @@ fn mirror_widths_agree_on_fran_cut() {
         .into_iter()
         .filter(|l| l.is_available())
         .collect();
+    let dt = explicit::choose_dt(&net, None, false).unwrap();
+    let step = SpringStepParams {
+        n_free: nf as u32,
+        use_forces: false,
+        dt,
+        damping: net.params.damping,
+        materials: mats,
+    };
+    let chebyshev_params = SpringChebyshevParams {
+        n_free: nf as u32,
+        use_forces: false,
+        h: dt,
+        momentum: 0.9,
+        gain: 0.5,
+        isotropy: BLOCK_ISOTROPY,
+        materials: mats,
+    };
     for chebyshev in [false, true] {
-        let params = StepParams {
-            n_free: nf as u32,
-            use_forces: false,
-            dt: explicit::choose_dt(&net, None, false).unwrap(),
-            damping: if chebyshev { 0.9 } else { net.params.damping },
-            gain: 0.5,
-            isotropy: BLOCK_ISOTROPY,
-            materials: mats,
-        };
         let states: Vec<_> = widths
             .iter()
             .map(|&lanes| {
@@ -1157,9 +1184,16 @@ fn mirror_widths_agree_on_fran_cut() {
                 let mut vel = vec![[0.0f32; 4]; nf];
                 for _ in 0..30 {
                     if chebyshev {
-                        gather.spring_chebyshev(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                        gather.spring_chebyshev(
+                            &chebyshev_params,
+                            &net.rest,
+                            &[],
+                            &a,
+                            &mut b,
+                            &mut vel,
+                        );
                     } else {
-                        gather.spring_step(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                        gather.spring_step(&step, &net.rest, &[], &a, &mut b, &mut vel);
                     }
                     std::mem::swap(&mut a, &mut b);
                 }

@@ -4,7 +4,7 @@
 
 use super::cpu;
 use super::network::SpringNetwork;
-use super::stepper::{Probe, Setup, Solver, Stepper, absolute, bone_displacements};
+use super::stepper::{Probe, Setup, StepKernel, Stepper, absolute, bone_displacements};
 use crate::Result;
 
 /// The CPU mirror as a [`Stepper`].
@@ -41,19 +41,15 @@ impl<'a> CpuStepper<'a> {
         } else {
             (&b[0], &mut a[0])
         };
-        let kernel = match self.setup.solver {
-            Solver::Explicit => cpu::SpringGather::spring_step,
-            Solver::Chebyshev => cpu::SpringGather::spring_chebyshev,
-        };
-        kernel(
-            &self.gather,
-            &self.setup.params,
-            &self.net.rest,
-            &self.setup.forces,
-            src,
-            dst,
-            &mut self.vel,
-        );
+        let (rest, forces) = (&self.net.rest, &self.setup.forces);
+        match &self.setup.kernel {
+            StepKernel::SpringStep(p) => {
+                (self.gather).spring_step(p, rest, forces, src, dst, &mut self.vel);
+            }
+            StepKernel::SpringChebyshev(p) => {
+                (self.gather).spring_chebyshev(p, rest, forces, src, dst, &mut self.vel);
+            }
+        }
         self.cur ^= 1;
     }
 }

@@ -8,7 +8,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::chebyshev::{self, ChebyshevCoefficients, Spectrum};
-use super::cpu::StepParams;
+use super::cpu::{SpringChebyshevParams, SpringStepParams};
 use super::explicit;
 use super::network::SpringNetwork;
 use crate::{Error, Result};
@@ -120,11 +120,38 @@ pub(crate) trait Stepper {
     fn positions(&mut self) -> Result<Vec<[f32; 4]>>;
 }
 
+/// The kernel one iteration of a solver runs, with its parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum StepKernel {
+    /// [`Solver::Explicit`]: `spring_step`.
+    SpringStep(SpringStepParams),
+    /// [`Solver::Chebyshev`]: `spring_chebyshev`.
+    SpringChebyshev(SpringChebyshevParams),
+}
+
+impl StepKernel {
+    /// The dispatch size.
+    pub fn n_free(&self) -> u32 {
+        match self {
+            StepKernel::SpringStep(p) => p.n_free,
+            StepKernel::SpringChebyshev(p) => p.n_free,
+        }
+    }
+
+    /// The material table rows.
+    pub fn materials(&self) -> &[[f32; 4]; 16] {
+        match self {
+            StepKernel::SpringStep(p) => &p.materials,
+            StepKernel::SpringChebyshev(p) => &p.materials,
+        }
+    }
+}
+
 /// Everything both backends share: kernel parameters and initial state.
 #[derive(Debug, Clone)]
 pub(crate) struct Setup {
     pub solver: Solver,
-    pub params: StepParams,
+    pub kernel: StepKernel,
     /// Initial state: #nodes displacements from rest (zero) with the
     /// solver's w lane (the kernels' `pos_in`).
     pub positions: Vec<[f32; 4]>,
@@ -177,22 +204,21 @@ impl Setup {
         };
         let materials = net.material_table();
         let mut positions = vec![[0.0f32; 4]; net.n_nodes()];
-        let (params, chebyshev) = match opts.solver {
+        let use_forces = opts.external_forces.is_some();
+        let (kernel, chebyshev) = match opts.solver {
             Solver::Explicit => {
                 let w = 1.0 / net.params.mass;
                 for p in &mut positions[..net.n_free] {
                     p[3] = w;
                 }
                 (
-                    StepParams {
+                    StepKernel::SpringStep(SpringStepParams {
                         n_free,
-                        use_forces: opts.external_forces.is_some(),
+                        use_forces,
                         dt,
                         damping: net.params.damping,
-                        gain: 0.0,
-                        isotropy: 0.0,
                         materials,
-                    },
+                    }),
                     None,
                 )
             }
@@ -202,22 +228,22 @@ impl Setup {
                     .unwrap_or_else(|| chebyshev::estimate_spectrum(net));
                 let coef = ChebyshevCoefficients::new(spectrum);
                 (
-                    StepParams {
+                    StepKernel::SpringChebyshev(SpringChebyshevParams {
                         n_free,
-                        use_forces: opts.external_forces.is_some(),
-                        dt,
-                        damping: coef.momentum as f32,
+                        use_forces,
+                        h: dt,
+                        momentum: coef.momentum as f32,
                         gain: (coef.step / dt as f64) as f32,
                         isotropy: chebyshev::BLOCK_ISOTROPY,
                         materials,
-                    },
+                    }),
                     Some(coef),
                 )
             }
         };
         Ok(Setup {
             solver: opts.solver,
-            params,
+            kernel,
             positions,
             forces,
             dt,

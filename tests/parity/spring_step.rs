@@ -10,7 +10,7 @@ use chisel::Backend;
 use chisel::gpu::Gpu;
 use chisel::parity::{Tolerance, compare_exact, compare_vec, find_sentinel};
 use chisel::tissue::chebyshev::{Spectrum, estimate_spectrum};
-use chisel::tissue::cpu::{self, StepParams};
+use chisel::tissue::cpu::{self, SpringChebyshevParams, SpringStepParams};
 use chisel::tissue::phantom::FRAN_CHIN_ADVANCE_TOML;
 use chisel::tissue::{
     Fragments, Material, NetworkParams, Plan, RelaxOptions, Solver, SpringNetwork, Status,
@@ -236,37 +236,50 @@ pub fn check_single_step(gpu: &Gpu, solver: Solver) {
         for (row, m) in materials.iter_mut().zip(&net.materials) {
             *row = m.table_row();
         }
-        let params = StepParams {
-            n_free: net.n_free as u32,
-            use_forces: true,
-            dt,
-            damping: if solver == Solver::Explicit {
-                0.5
-            } else {
-                0.95
-            },
-            gain: 2.0 / dt,
-            isotropy: chisel::tissue::chebyshev::BLOCK_ISOTROPY,
-            materials,
-        };
         let mut cpu_pos = pos.clone();
         let mut cpu_vel = vel.clone();
-        let kernel = match solver {
-            Solver::Explicit => cpu::spring_step,
-            Solver::Chebyshev => cpu::spring_chebyshev,
-        };
-        kernel(
-            &params,
-            &net.csr,
-            &net.rest,
-            &forces,
-            &pos,
-            &mut cpu_pos,
-            &mut cpu_vel,
-        );
-        let (gpu_pos, gpu_vel) = tissue_gpu::step_once(
-            gpu, solver, &params, &net.csr, &net.rest, &forces, &pos, &vel,
-        )
+        let (gpu_pos, gpu_vel) = match solver {
+            Solver::Explicit => {
+                let params = SpringStepParams {
+                    n_free: net.n_free as u32,
+                    use_forces: true,
+                    dt,
+                    damping: 0.5,
+                    materials,
+                };
+                cpu::spring_step(
+                    &params,
+                    &net.csr,
+                    &net.rest,
+                    &forces,
+                    &pos,
+                    &mut cpu_pos,
+                    &mut cpu_vel,
+                );
+                tissue_gpu::spring_step(gpu, &params, &net.csr, &net.rest, &forces, &pos, &vel)
+            }
+            Solver::Chebyshev => {
+                let params = SpringChebyshevParams {
+                    n_free: net.n_free as u32,
+                    use_forces: true,
+                    h: dt,
+                    momentum: 0.95,
+                    gain: 2.0 / dt,
+                    isotropy: chisel::tissue::chebyshev::BLOCK_ISOTROPY,
+                    materials,
+                };
+                cpu::spring_chebyshev(
+                    &params,
+                    &net.csr,
+                    &net.rest,
+                    &forces,
+                    &pos,
+                    &mut cpu_pos,
+                    &mut cpu_vel,
+                );
+                tissue_gpu::spring_chebyshev(gpu, &params, &net.csr, &net.rest, &forces, &pos, &vel)
+            }
+        }
         .unwrap();
         assert_eq!(find_sentinel(&gpu_pos, [f32::NAN; 4]), None, "{name}");
         let what = format!("{} {name} one step", solver.name());

@@ -170,21 +170,38 @@ impl<'a> SpringGather<'a> {
 /// coordinate of any mesh in any unit.
 pub const VELOCITY_FLUSH: f32 = 1e-30;
 
-/// Uniform parameters shared by the step kernels (`StepParams` in WGSL).
+/// Parameters of `spring_step.wgsl` (its `Params`, the fields it reads,
+/// and its `Materials` table).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StepParams {
+pub struct SpringStepParams {
     /// Number of free nodes (the dispatch size).
     pub n_free: u32,
     /// Whether `forces` holds external forces (otherwise f_i = 0).
     pub use_forces: bool,
-    /// `spring_step`: Δt. `spring_chebyshev`: the pseudo-time step h.
+    /// Δt.
     pub dt: f32,
-    /// `spring_step`: damping γ. `spring_chebyshev`: momentum β.
+    /// Damping γ.
     pub damping: f32,
-    /// `spring_chebyshev` only: gain α/h on the preconditioned residual.
+    /// Material table rows `[c1, c2 − c1, knee, c_max]`.
+    pub materials: [[f32; 4]; 16],
+}
+
+/// Parameters of `spring_chebyshev.wgsl` (its `Params` and its `Materials`
+/// table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringChebyshevParams {
+    /// Number of free nodes (the dispatch size).
+    pub n_free: u32,
+    /// Whether `forces` holds external forces (otherwise f_i = 0).
+    pub use_forces: bool,
+    /// The pseudo-time step h.
+    pub h: f32,
+    /// Momentum β.
+    pub momentum: f32,
+    /// Gain α/h on the preconditioned residual.
     pub gain: f32,
-    /// `spring_chebyshev` only: η, the least stiffness across a spring in
-    /// the preconditioner blocks as a share of c_max.
+    /// η, the least stiffness across a spring in the preconditioner blocks
+    /// as a share of c_max.
     pub isotropy: f32,
     /// Material table rows `[c1, c2 − c1, knee, c_max]`.
     pub materials: [[f32; 4]; 16],
@@ -360,6 +377,15 @@ impl Update {
     }
 }
 
+/// The uniforms both step kernels read besides their update's.
+struct Uniforms<'p> {
+    n_free: u32,
+    use_forces: bool,
+    /// η (`spring_chebyshev` only; not read by the gather without blocks).
+    isotropy: f32,
+    materials: &'p [[f32; 4]; 16],
+}
+
 /// Runs one step of `update` over the free nodes, in groups of
 /// `gather`'s width (`BLOCKS`: the gather builds the preconditioner blocks);
 /// the nodes a rayon task holds past its last whole group, and those past
@@ -369,7 +395,7 @@ impl Update {
 #[inline(always)]
 fn for_free_nodes<const BLOCKS: bool>(
     gather: &SpringGather<'_>,
-    p: &StepParams,
+    p: &Uniforms<'_>,
     update: Update,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
@@ -399,7 +425,7 @@ fn for_free_nodes<const BLOCKS: bool>(
                     pos_in,
                     forces,
                     use_forces: p.use_forces,
-                    materials: &p.materials,
+                    materials: p.materials,
                     isotropy: p.isotropy,
                     update,
                 };
@@ -411,7 +437,7 @@ fn for_free_nodes<const BLOCKS: bool>(
             for i in (first + done..first + len).step_by(LANES) {
                 let lanes = LANES.min(first + len - i);
                 let ([gx, gy, gz], blocks) =
-                    gather_group::<BLOCKS>(i, lanes, csr, rest, pos_in, &p.materials, p.isotropy);
+                    gather_group::<BLOCKS>(i, lanes, csr, rest, pos_in, p.materials, p.isotropy);
                 for t in 0..lanes {
                     let p_i = pos_in[i + t];
                     let f = if p.use_forces {
@@ -446,7 +472,7 @@ fn for_free_nodes<const BLOCKS: bool>(
 /// Arranges `csr` for [`Lanes::best`] on every call: to step many times,
 /// build a [`SpringGather`] once.
 pub fn spring_step(
-    p: &StepParams,
+    p: &SpringStepParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
@@ -464,7 +490,7 @@ pub fn spring_step(
 /// read); `v` holds the last update divided by h. Arranges `csr` on every
 /// call, as [`spring_step`].
 pub fn spring_chebyshev(
-    p: &StepParams,
+    p: &SpringChebyshevParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
@@ -480,7 +506,7 @@ impl SpringGather<'_> {
     /// [`spring_step`] on this gather's CSR.
     pub fn spring_step(
         &self,
-        p: &StepParams,
+        p: &SpringStepParams,
         rest: &[[f32; 4]],
         forces: &[[f32; 4]],
         pos_in: &[[f32; 4]],
@@ -491,13 +517,19 @@ impl SpringGather<'_> {
             dt: p.dt,
             gamma: p.damping,
         };
-        for_free_nodes::<false>(self, p, update, rest, forces, pos_in, pos_out, vel);
+        let b = Uniforms {
+            n_free: p.n_free,
+            use_forces: p.use_forces,
+            isotropy: 0.0,
+            materials: &p.materials,
+        };
+        for_free_nodes::<false>(self, &b, update, rest, forces, pos_in, pos_out, vel);
     }
 
     /// [`spring_chebyshev`] on this gather's CSR.
     pub fn spring_chebyshev(
         &self,
-        p: &StepParams,
+        p: &SpringChebyshevParams,
         rest: &[[f32; 4]],
         forces: &[[f32; 4]],
         pos_in: &[[f32; 4]],
@@ -505,11 +537,17 @@ impl SpringGather<'_> {
         vel: &mut [[f32; 4]],
     ) {
         let update = Update::Chebyshev {
-            h: p.dt,
-            beta: p.damping,
+            h: p.h,
+            beta: p.momentum,
             gain: p.gain,
         };
-        for_free_nodes::<true>(self, p, update, rest, forces, pos_in, pos_out, vel);
+        let b = Uniforms {
+            n_free: p.n_free,
+            use_forces: p.use_forces,
+            isotropy: p.isotropy,
+            materials: &p.materials,
+        };
+        for_free_nodes::<true>(self, &b, update, rest, forces, pos_in, pos_out, vel);
     }
 }
 

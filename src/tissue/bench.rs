@@ -8,7 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::chebyshev::{self, Spectrum};
-use super::cpu::Lanes;
+use super::cpu::fast::Lanes;
 use super::network::SpringNetwork;
 use super::plan::ResolvedPlan;
 use super::relax::{Simulation, Status, relax};

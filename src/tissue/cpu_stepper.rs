@@ -1,8 +1,10 @@
-//! The CPU mirrors as a [`Stepper`]: the state in host memory, one
-//! [`cpu::SpringGather`] arranged per network, the convergence probe by
+//! The CPU as a [`Stepper`]: the state in host memory, the step kernels'
+//! fast path ([`SpringGather`], equal to the mirrors bit for bit) arranged
+//! once per network, the convergence probe by
 //! [`cpu::tissue_reduce_max`].
 
 use super::cpu;
+use super::cpu::fast::SpringGather;
 use super::network::SpringNetwork;
 use super::stepper::{Probe, Setup, StepKernel, Stepper, absolute, bone_displacements};
 use crate::Result;
@@ -11,7 +13,7 @@ use crate::Result;
 #[derive(Debug)]
 pub(crate) struct CpuStepper<'a> {
     net: &'a SpringNetwork,
-    gather: cpu::SpringGather<'a>,
+    gather: SpringGather<'a>,
     setup: Setup,
     pos: [Vec<[f32; 4]>; 2],
     cur: usize,
@@ -24,7 +26,7 @@ impl<'a> CpuStepper<'a> {
         let pos = [setup.positions.clone(), setup.positions.clone()];
         CpuStepper {
             net,
-            gather: cpu::SpringGather::best(&net.csr, net.n_free),
+            gather: SpringGather::best(&net.csr, net.n_free),
             vel: vec![[0.0; 4]; net.n_free],
             snap: setup.positions[..net.n_free].to_vec(),
             setup,

@@ -29,6 +29,7 @@ use chisel::gpu::Gpu;
 use chisel::tissue::bench::{
     Machine, approach_equilibrium, increment_bone, process_cpu_seconds, time_to_equilibrium,
 };
+use chisel::tissue::chebyshev::estimate_spectrum;
 use chisel::tissue::phantom::{FRAN_CHIN_ADVANCE_TOML, FRAN_GRID, refine_grid};
 use chisel::tissue::{
     Fragments, NetworkParams, Plan, RelaxOptions, ResolvedPlan, Simulation, Solver, SpringNetwork,
@@ -118,8 +119,10 @@ fn main() {
             group.measurement_time(Duration::from_secs(if quick() { 2 } else { 6 }));
             group.warm_up_time(Duration::from_millis(500));
             group.throughput(Throughput::Elements(net.n_free as u64));
+            // One spectrum estimate for both backends.
             let opts = RelaxOptions {
                 solver,
+                spectrum: (solver == Solver::Chebyshev).then(|| estimate_spectrum(net)),
                 ..RelaxOptions::default()
             };
             let mut backends: Vec<(&'static str, Backend<'_>)> = vec![("cpu", Backend::Cpu)];
@@ -217,7 +220,7 @@ fn main() {
             }
         }
         if !within_only {
-            time_to_equilibrium(net, &plan, &runs, 40_000, |r| {
+            time_to_equilibrium(net, &plan, &runs, 40_000, None, |r| {
                 eprintln!(
                     "{label:>8} {:>10} {:>6} {:>10} {:>10} {:>10.3} {:>14.3}",
                     r.solver.name(),
@@ -256,7 +259,7 @@ fn within_one_percent(net: &SpringNetwork, refined: usize, gpu: &Option<Gpu>, wi
         runs.extend([Solver::Explicit, Solver::Chebyshev].map(|s| (s, Backend::Gpu(g))));
     }
     let mut explicit_seconds = None;
-    let eq = approach_equilibrium(net, &plan, &runs, 0.01, 25_000, |a| {
+    let eq = approach_equilibrium(net, &plan, &runs, 0.01, 25_000, None, |a| {
         if a.backend == "cpu" && a.solver == Solver::Explicit && a.reached {
             explicit_seconds = Some(a.seconds);
         }

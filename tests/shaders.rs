@@ -371,7 +371,7 @@ fn tissue_params_sample(kernel: Kernel) -> Sample {
     let f = f32::from_bits;
     match kernel {
         Kernel::SpringStep => (
-            encase_bytes(&tissue::Params {
+            encase_bytes(&tissue::SpringStepParams {
                 n_free: 0xD1,
                 use_forces: 0xD2,
                 dt: f(0xD3),
@@ -389,11 +389,11 @@ fn tissue_params_sample(kernel: Kernel) -> Sample {
             ],
         ),
         Kernel::SpringChebyshev => (
-            encase_bytes(&tissue::Params {
+            encase_bytes(&tissue::SpringChebyshevParams {
                 n_free: 0xD1,
                 use_forces: 0xD2,
-                dt: f(0xD3),
-                damping: f(0xD4),
+                h: f(0xD3),
+                momentum: f(0xD4),
                 gain: f(0xD5),
                 isotropy: f(0xD6),
             }),

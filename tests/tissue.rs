@@ -706,53 +706,6 @@ fn mirror_tracks_oracle() {
     assert!(stretched);
 }
 
-/// g_i of eq. 4.4 for node `i` and the `spring_chebyshev` block B_i
-/// (`[b00, b11, b22, b01, b02, b12]`, η = `eta`), one spring at a time in
-/// CSR order: the kernels' loop written out plainly (the mirror runs four
-/// nodes as SIMD lanes and must give these bits exactly).
-fn scalar_gather(
-    net: &SpringNetwork,
-    pos: &[[f32; 4]],
-    mats: &[[f32; 4]; 16],
-    i: usize,
-    eta: f32,
-) -> ([f32; 3], [f32; 6]) {
-    let (x0, u) = (net.rest[i], pos[i]);
-    let mut g = [0.0f32; 3];
-    let (mut b, mut iso) = ([0.0f32; 6], 0.0f32);
-    let (s, e) = (net.csr.offsets[i] as usize, net.csr.offsets[i + 1] as usize);
-    for &en in &net.csr.entries[s..e] {
-        let j = (en & 0x0fff_ffff) as usize;
-        let m = mats[(en >> 28) as usize];
-        let d0: [f32; 3] = std::array::from_fn(|c| x0[c] - net.rest[j][c]);
-        let l = (d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]).sqrt();
-        let r: [f32; 3] = std::array::from_fn(|c| d0[c] + (u[c] - pos[j][c]));
-        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
-        if len > 0.0 {
-            let ext = len - l;
-            let s = (m[0] * ext + m[1] * (ext - m[2] * l).max(0.0)) / len;
-            for c in 0..3 {
-                g[c] += s * r[c];
-            }
-            let across = (eta * m[3]).max(s);
-            let q = (m[3] - across) / (len * len);
-            for (c, (x, y)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
-                .into_iter()
-                .enumerate()
-            {
-                b[c] += q * r[x] * r[y];
-            }
-            iso += across;
-        } else {
-            iso += m[3];
-        }
-    }
-    for bc in &mut b[..3] {
-        *bc += iso;
-    }
-    (g, b)
-}
-
 /// `block_solve` inverts the 3 × 3 block: B⁻¹(B x) = x to f32 accuracy for
 /// SPD blocks of condition up to ~10³ and any scale (1e-6 to 1e6), and a
 /// block of zero trace (a node without springs) gives 0.
@@ -791,22 +744,21 @@ fn block_solve_inverts_the_preconditioner_block() {
     assert_eq!(block_solve([0.0; 6], [1.0, 2.0, 3.0]), [0.0; 3]);
 }
 
-/// The step mirrors equal the plain per-node loop bit for bit at every
-/// gather width this CPU has (in CI on x86-64 at least 4 and 8), for free
+/// The step kernels' fast path equals their mirrors (the plain per-node
+/// loops) bit for bit at every gather width this CPU has (detected at run
+/// time: 4 everywhere, 8 with AVX2, 16 with AVX-512), for free
 /// node counts that fill no whole lane group, rows of 0 to many springs
 /// (lanes ending at different k, inside and past the interleaved steps of
 /// a wide group), a zero-length spring, three materials (one of them id
 /// 15, the last of the table) and external forces.
 #[test]
-fn mirror_lanes_equal_the_scalar_loop() {
-    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams, VELOCITY_FLUSH};
+fn fast_path_equals_the_mirror() {
+    use chisel::tissue::cpu::fast::{Lanes, SpringGather};
+    use chisel::tissue::cpu::{self, SpringChebyshevParams, SpringStepParams};
     let widths: Vec<Lanes> = Lanes::ALL
         .into_iter()
         .filter(|l| l.is_available())
         .collect();
-    if cfg!(target_arch = "x86_64") && common::is_ci() {
-        assert!(widths.contains(&Lanes::Eight), "CI machines have AVX2");
-    }
     for l in Lanes::ALL.into_iter().filter(|l| !l.is_available()) {
         eprintln!("this CPU lacks {}: not tested here", l.name());
     }
@@ -874,50 +826,100 @@ fn mirror_lanes_equal_the_scalar_loop() {
             .into_iter()
             .flat_map(|c| widths.iter().map(move |l| (c, l)))
         {
-            let params = StepParams {
-                n_free: n_free as u32,
-                use_forces: true,
+            // The parameters of both kernels (their fields by name).
+            struct Params {
+                dt: f32,
+                damping: f32,
+                gain: f32,
+                isotropy: f32,
+            }
+            let params = Params {
                 dt: 0.05,
                 damping: if chebyshev { 0.9 } else { 0.5 },
                 gain: 1.7,
                 isotropy: 0.1,
+            };
+            let chebyshev_params = SpringChebyshevParams {
+                n_free: n_free as u32,
+                use_forces: true,
+                h: params.dt,
+                momentum: params.damping,
+                gain: params.gain,
+                isotropy: params.isotropy,
                 materials: mats,
             };
-            let (mut out, mut v_out) = (pos.clone(), vel.clone());
-            let gather = SpringGather::new(&net.csr, n_free, lanes).unwrap();
-            assert_eq!(gather.lanes(), lanes);
-            let kernel = if chebyshev {
-                SpringGather::spring_chebyshev
-            } else {
-                SpringGather::spring_step
+            let step_params = SpringStepParams {
+                n_free: n_free as u32,
+                use_forces: true,
+                dt: params.dt,
+                damping: params.damping,
+                materials: mats,
             };
-            kernel(
-                &gather, &params, &net.rest, &forces, &pos, &mut out, &mut v_out,
-            );
-            let mut loaded = false;
-            for i in 0..n_free {
-                let (g, b) = scalar_gather(&net, &pos, &mats, i, params.isotropy);
-                let d: [f32; 3] = std::array::from_fn(|c| forces[i][c] - g[c]);
-                let r = chisel::tissue::cpu::block_solve(b, d);
-                loaded |= g.iter().any(|&c| c != 0.0);
-                for c in 0..3 {
-                    let v = vel[i][c];
-                    let raw = if chebyshev {
-                        params.damping * v + params.gain * r[c]
-                    } else {
-                        v + params.dt * ((forces[i][c] - params.damping * v - g[c]) * pos[i][3])
-                    };
-                    let v2 = if raw.abs() < VELOCITY_FLUSH { 0.0 } else { raw };
-                    let u2 = pos[i][c] + params.dt * v2;
-                    let what = format!(
-                        "{}: n_free {n_free}, chebyshev {chebyshev}, node {i}, axis {c}",
-                        lanes.name()
-                    );
-                    assert_eq!(v_out[i][c].to_bits(), v2.to_bits(), "velocity: {what}");
-                    assert_eq!(out[i][c].to_bits(), u2.to_bits(), "position: {what}");
+            // Fast path and mirror from the same inputs; `forces` and
+            // `vel` zero: the springs alone (their loading).
+            let run = |fast: bool, forces: &[[f32; 4]], vel: &[[f32; 4]]| {
+                let (mut out, mut v_out) = (pos.clone(), vel.to_vec());
+                let gather = SpringGather::new(&net.csr, n_free, lanes).unwrap();
+                assert_eq!(gather.lanes(), lanes);
+                let (rest, csr) = (&net.rest, &net.csr);
+                match (chebyshev, fast) {
+                    (true, true) => gather.spring_chebyshev(
+                        &chebyshev_params,
+                        rest,
+                        forces,
+                        &pos,
+                        &mut out,
+                        &mut v_out,
+                    ),
+                    (true, false) => cpu::spring_chebyshev(
+                        &chebyshev_params,
+                        csr,
+                        rest,
+                        forces,
+                        &pos,
+                        &mut out,
+                        &mut v_out,
+                    ),
+                    (false, true) => {
+                        gather.spring_step(&step_params, rest, forces, &pos, &mut out, &mut v_out)
+                    }
+                    (false, false) => cpu::spring_step(
+                        &step_params,
+                        csr,
+                        rest,
+                        forces,
+                        &pos,
+                        &mut out,
+                        &mut v_out,
+                    ),
                 }
-                assert_eq!(out[i][3].to_bits(), pos[i][3].to_bits());
+                (out, v_out)
+            };
+            let (out, v_out) = run(true, &forces, &vel);
+            let (m_out, m_vel) = run(false, &forces, &vel);
+            for i in 0..n {
+                let what = format!(
+                    "{}: n_free {n_free}, chebyshev {chebyshev}, node {i}",
+                    lanes.name()
+                );
+                assert_eq!(
+                    out[i].map(f32::to_bits),
+                    m_out[i].map(f32::to_bits),
+                    "position: {what}"
+                );
+                if i < n_free {
+                    assert_eq!(
+                        v_out[i].map(f32::to_bits),
+                        m_vel[i].map(f32::to_bits),
+                        "velocity: {what}"
+                    );
+                }
             }
+            let zero = vec![[0.0f32; 4]; n_free];
+            let loaded = run(false, &zero, &zero)
+                .1
+                .iter()
+                .any(|v| v[..3] != [0.0; 3]);
             assert!(loaded, "the springs must be loaded");
             // Only the free nodes are written.
             assert_eq!(&out[n_free..], &pos[n_free..]);
@@ -1115,13 +1117,14 @@ fn chebyshev_reaches_the_explicit_equilibrium_on_fran_cut() {
 }
 
 /// On fran_cut's network (real data) with the bone advanced 2 mm, every
-/// gather width this CPU has gives the same bits through 30 iterations of
-/// each solver (the interleaved rows of 8 and 16 nodes, the tails past them
-/// and the four-lane rest of each rayon task all take part).
+/// gather width this CPU has gives the mirror's bits through 30 iterations
+/// of each solver (the interleaved rows of 8 and 16 nodes, the tails past
+/// them and the four-lane rest of each rayon task all take part).
 #[test]
-fn mirror_widths_agree_on_fran_cut() {
+fn fast_path_equals_the_mirror_on_fran_cut() {
     use chisel::tissue::chebyshev::BLOCK_ISOTROPY;
-    use chisel::tissue::cpu::{Lanes, SpringGather, StepParams};
+    use chisel::tissue::cpu::fast::{Lanes, SpringGather};
+    use chisel::tissue::cpu::{self, SpringChebyshevParams, SpringStepParams};
     let Some(face) = common::real_mesh("fran_cut.vtk") else {
         return;
     };
@@ -1139,16 +1142,24 @@ fn mirror_widths_agree_on_fran_cut() {
         .into_iter()
         .filter(|l| l.is_available())
         .collect();
+    let dt = explicit::choose_dt(&net, None, false).unwrap();
+    let step = SpringStepParams {
+        n_free: nf as u32,
+        use_forces: false,
+        dt,
+        damping: net.params.damping,
+        materials: mats,
+    };
+    let chebyshev_params = SpringChebyshevParams {
+        n_free: nf as u32,
+        use_forces: false,
+        h: dt,
+        momentum: 0.9,
+        gain: 0.5,
+        isotropy: BLOCK_ISOTROPY,
+        materials: mats,
+    };
     for chebyshev in [false, true] {
-        let params = StepParams {
-            n_free: nf as u32,
-            use_forces: false,
-            dt: explicit::choose_dt(&net, None, false).unwrap(),
-            damping: if chebyshev { 0.9 } else { net.params.damping },
-            gain: 0.5,
-            isotropy: BLOCK_ISOTROPY,
-            materials: mats,
-        };
         let states: Vec<_> = widths
             .iter()
             .map(|&lanes| {
@@ -1157,15 +1168,36 @@ fn mirror_widths_agree_on_fran_cut() {
                 let mut vel = vec![[0.0f32; 4]; nf];
                 for _ in 0..30 {
                     if chebyshev {
-                        gather.spring_chebyshev(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                        gather.spring_chebyshev(
+                            &chebyshev_params,
+                            &net.rest,
+                            &[],
+                            &a,
+                            &mut b,
+                            &mut vel,
+                        );
                     } else {
-                        gather.spring_step(&params, &net.rest, &[], &a, &mut b, &mut vel);
+                        gather.spring_step(&step, &net.rest, &[], &a, &mut b, &mut vel);
                     }
                     std::mem::swap(&mut a, &mut b);
                 }
                 (a, vel)
             })
             .collect();
+        let mirror = {
+            let (mut a, mut b) = (start.clone(), start.clone());
+            let mut vel = vec![[0.0f32; 4]; nf];
+            for _ in 0..30 {
+                if chebyshev {
+                    let p = &chebyshev_params;
+                    cpu::spring_chebyshev(p, &net.csr, &net.rest, &[], &a, &mut b, &mut vel);
+                } else {
+                    cpu::spring_step(&step, &net.csr, &net.rest, &[], &a, &mut b, &mut vel);
+                }
+                std::mem::swap(&mut a, &mut b);
+            }
+            (a, vel)
+        };
         let moved = states[0].0[..nf]
             .iter()
             .filter(|u| u[..3] != [0.0; 3])
@@ -1174,13 +1206,12 @@ fn mirror_widths_agree_on_fran_cut() {
             moved > nf / 4,
             "the bone move must load the network: {moved} of {nf} moved"
         );
-        for (lanes, (u, v)) in widths.iter().zip(&states).skip(1) {
+        for (lanes, (u, v)) in widths.iter().zip(&states) {
             let bits = |x: &[[f32; 4]]| x.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
             assert!(
-                bits(u) == bits(&states[0].0) && bits(v) == bits(&states[0].1),
-                "{} differs from {} (chebyshev {chebyshev})",
+                bits(u) == bits(&mirror.0) && bits(v) == bits(&mirror.1),
+                "{} differs from the mirror (chebyshev {chebyshev})",
                 lanes.name(),
-                widths[0].name()
             );
         }
     }

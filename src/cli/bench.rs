@@ -15,6 +15,7 @@ use crate::tissue::bench::{
     Machine, approach_equilibrium, export_network, increment_bone, iteration_rate,
     time_to_equilibrium,
 };
+use crate::tissue::chebyshev::estimate_spectrum;
 use crate::tissue::phantom::refine_grid;
 use crate::tissue::{Fragments, NetworkParams, Plan, ResolvedPlan, Solver, SpringNetwork};
 
@@ -202,7 +203,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         let spectrum = args
             .solver
             .contains(&Solver::Chebyshev)
-            .then(|| net.spectrum());
+            .then(|| estimate_spectrum(&net));
         let spectrum_seconds = spectrum.map(|_| t.elapsed().as_secs_f64());
         global.note(format!(
             "network ×{factor}: {} nodes ({} free), {} CSR entries, {:.2} MB per iteration, built in {build_seconds:.2} s",
@@ -236,7 +237,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         let mut rates = Vec::new();
         for &(solver, backend) in &runs {
             bar.set_message(format!("{} {}", solver.name(), backend.name()));
-            let r = iteration_rate(&net, solver, backend, &bone_now, args.seconds)?;
+            let r = iteration_rate(&net, solver, backend, &bone_now, args.seconds, spectrum)?;
             bar.suspend(|| {
                 global.note(format!(
                     "  {:>9} {:>3}: {:>9.1} it/s, {:>6.2} GB/s effective{}",
@@ -257,8 +258,14 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         let mut approach = serde_json::Value::Null;
         if let Some(increment) = &increment {
             let bar = global.progress(runs.len() as u64, "equilibrium");
-            let settled = time_to_equilibrium(&net, increment, &runs, args.max_iterations, |s| {
-                bar.suspend(|| {
+            let settled = time_to_equilibrium(
+                &net,
+                increment,
+                &runs,
+                args.max_iterations,
+                spectrum,
+                |s| {
+                    bar.suspend(|| {
                     global.note(format!(
                         "  {:>9} {:>3}: {} after {} iterations, {:.3} s, {:.3} % from the first run",
                         s.solver.name(),
@@ -269,17 +276,25 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
                         s.gap_percent
                     ))
                 });
-                bar.inc(1);
-            })?;
+                    bar.inc(1);
+                },
+            )?;
             bar.finish_and_clear();
             equilibrium = json!(settled);
             if args.approach {
                 let bar = global.progress(runs.len() as u64, "approach");
-                let eq =
-                    approach_equilibrium(&net, increment, &runs, 0.01, args.max_iterations, |a| {
+                let eq = approach_equilibrium(
+                    &net,
+                    increment,
+                    &runs,
+                    0.01,
+                    args.max_iterations,
+                    spectrum,
+                    |a| {
                         bar.suspend(|| global.note(format!("  within 1 % of equilibrium: {a}")));
                         bar.inc(1);
-                    })?;
+                    },
+                )?;
                 bar.finish_and_clear();
                 approach = json!(eq);
             }

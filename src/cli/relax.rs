@@ -18,7 +18,7 @@ use crate::parity::Backend;
 use crate::render::{Facing, Panel, RenderOptions, View};
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, SpringClass, Stiffness};
-use crate::tissue::relax::bone_displacements;
+use crate::tissue::stepper::bone_displacements;
 use crate::tissue::{
     CtParams, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork,
     Status, cut_bone, layers_from_ct,
@@ -525,7 +525,7 @@ pub fn skin_overshoot(
     report: &RelaxReport,
 ) -> anyhow::Result<serde_json::Value> {
     let length = |u: &[f32; 4]| Vec3::new(u[0], u[1], u[2]).length();
-    let bone = bone_displacements(network, &report.positions[network.n_free..])?
+    let bone = bone_displacements(network.bone_rest(), &report.positions[network.n_free..])?
         .iter()
         .map(length)
         .fold(0.0f32, f32::max);

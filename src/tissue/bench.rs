@@ -7,10 +7,12 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::cpu::Lanes;
+use super::chebyshev::{self, Spectrum};
+use super::cpu::fast::Lanes;
 use super::network::SpringNetwork;
 use super::plan::ResolvedPlan;
-use super::relax::{RelaxOptions, Simulation, Solver, Status, relax};
+use super::relax::{Simulation, Status, relax};
+use super::stepper::{RelaxOptions, Solver, bone_displacements};
 use crate::Result;
 use crate::parity::Backend;
 
@@ -97,15 +99,18 @@ pub struct Rate {
 /// warm-up batch, then batches of doubling size (from 8 iterations) until
 /// at least `min_seconds` have been timed. Each batch ends with the
 /// solver's convergence readback, as a relaxation's batches do.
+/// `spectrum`: see [`RelaxOptions::spectrum`].
 pub fn iteration_rate(
     net: &SpringNetwork,
     solver: Solver,
     backend: Backend<'_>,
     bone: &[[f32; 4]],
     min_seconds: f64,
+    spectrum: Option<Spectrum>,
 ) -> Result<Rate> {
     let opts = RelaxOptions {
         solver,
+        spectrum,
         ..RelaxOptions::default()
     };
     let mut sim = Simulation::new(net, &opts, backend)?;
@@ -163,7 +168,7 @@ pub fn increment_bone(net: &SpringNetwork, increment: &ResolvedPlan) -> Vec<[f32
 /// list). Each file is written atomically.
 pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 4]]) -> Result<()> {
     use crate::foundation::fs::write_atomic;
-    let u_bone = super::relax::bone_displacements(net, bone)?;
+    let u_bone = bone_displacements(net.bone_rest(), bone)?;
     std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
     let w = 1.0 / net.params.mass;
     let mut u = vec![[0.0, 0.0, 0.0, w]; net.n_free];
@@ -220,30 +225,48 @@ pub struct Settled {
     pub status: Status,
     pub iterations: u64,
     /// Wall time of the relaxation (without the Chebyshev solver's
-    /// one-time spectrum estimate, [`SpringNetwork::spectrum`], when it
-    /// was made before).
+    /// one-time spectrum estimate, [`chebyshev::estimate_spectrum`], which
+    /// is made before).
     pub seconds: f64,
     /// Largest distance of a free node from the first run's final state,
     /// in % of that run's largest free-node displacement.
     pub gap_percent: f64,
 }
 
+/// `spectrum`, or else [`chebyshev::estimate_spectrum`] of `net` when one
+/// of `solvers` needs it (`None` when none does).
+fn shared_spectrum(
+    net: &SpringNetwork,
+    spectrum: Option<Spectrum>,
+    solvers: impl IntoIterator<Item = Solver>,
+) -> Option<Spectrum> {
+    spectrum.or_else(|| {
+        (solvers.into_iter())
+            .any(|s| s == Solver::Chebyshev)
+            .then(|| chebyshev::estimate_spectrum(net))
+    })
+}
+
 /// Relaxes `increment` to each solver's stop test, for each `(solver,
 /// backend)` of `runs` in order; gaps are measured against the first run.
-/// `each` sees every result as it comes.
+/// `each` sees every result as it comes. The Chebyshev runs share
+/// `spectrum`, or one estimate made before the first run.
 pub fn time_to_equilibrium(
     net: &SpringNetwork,
     increment: &ResolvedPlan,
     runs: &[(Solver, Backend<'_>)],
     max_iterations: u32,
+    spectrum: Option<Spectrum>,
     mut each: impl FnMut(&Settled),
 ) -> Result<Vec<Settled>> {
     let free = net.n_free;
+    let spectrum = shared_spectrum(net, spectrum, runs.iter().map(|r| r.0));
     let mut reference: Option<(Vec<[f32; 4]>, f32)> = None;
     let mut out = Vec::new();
     for &(solver, backend) in runs {
         let opts = RelaxOptions {
             solver,
+            spectrum,
             max_iterations,
             ..RelaxOptions::default()
         };
@@ -328,17 +351,22 @@ pub const APPROACH_CHECK: u32 = 50;
 /// then for each `(solver, backend)` of `runs` the iterations and seconds
 /// until every free node is within `share` of the reference's largest
 /// displacement, or `cap` iterations. `each` sees every result as it comes.
+/// The reference and the Chebyshev runs share `spectrum`, or one estimate
+/// made before the reference.
 pub fn approach_equilibrium(
     net: &SpringNetwork,
     increment: &ResolvedPlan,
     runs: &[(Solver, Backend<'_>)],
     share: f32,
     cap: u32,
+    spectrum: Option<Spectrum>,
     mut each: impl FnMut(&Approach),
 ) -> Result<Equilibrium> {
     let free = net.n_free;
+    let spectrum = shared_spectrum(net, spectrum, [Solver::Chebyshev]);
     let tight = RelaxOptions {
         solver: Solver::Chebyshev,
+        spectrum,
         epsilon: Some(1e-7 * net.diagonal()),
         max_iterations: 40_000,
         ..RelaxOptions::default()
@@ -351,6 +379,7 @@ pub fn approach_equilibrium(
     for &(solver, backend) in runs {
         let opts = RelaxOptions {
             solver,
+            spectrum,
             ..RelaxOptions::default()
         };
         let mut sim = Simulation::new(net, &opts, backend)?;

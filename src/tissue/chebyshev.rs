@@ -59,8 +59,9 @@
 //! for the explicit scheme (h = the explicit default Δt).
 
 use rayon::prelude::*;
+use serde::Serialize;
 
-use super::network::{Spectrum, SpringCsr, SpringNetwork};
+use super::network::{SpringCsr, SpringNetwork};
 
 /// Upper bound of the spectrum of B⁻¹K in every state (see the module notes).
 pub const LAMBDA_MAX: f64 = 2.0;
@@ -72,8 +73,20 @@ const LANCZOS_STEPS: usize = 160;
 /// The Ritz value overestimates λ_min; we take this fraction of it.
 const MU_SAFETY: f64 = 0.5;
 
+/// Spectral bounds of the block-Jacobi-preconditioned stiffness B⁻¹K, for
+/// the Chebyshev solver: [`estimate_spectrum`] of a network, made once per
+/// relaxation unless the caller passes one in
+/// [`RelaxOptions::spectrum`](super::RelaxOptions::spectrum).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Spectrum {
+    /// Lower estimate of the smallest eigenvalue of B⁻¹K at rest.
+    pub lambda_min: f64,
+    /// Upper bound of the largest eigenvalue of B⁻¹K in every state: 2.
+    pub lambda_max: f64,
+}
+
 /// Coefficients of the stationary Chebyshev iteration.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ChebyshevCoefficients {
     /// μ used (lower end of the interval).
     pub lambda_min: f64,

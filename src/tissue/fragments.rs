@@ -26,10 +26,14 @@ use std::collections::BTreeMap;
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::plan::{Fragments, Selector, point_text};
+use super::selector::{Selector, point_text};
 use crate::cut::{CutOptions, CutStats, Knife, Side, cut_mesh};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::{Error, Result};
+
+/// Bone vertex ids of named fragments (e.g. the jaw cut off by `cut`),
+/// resolved by [`Selector::Fragment`].
+pub type Fragments = BTreeMap<String, Vec<u32>>;
 
 /// A knife of a plan cut (mesh units).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -1,16 +1,18 @@
 //! GPU passes of the tissue kernels: `spring_step` / `spring_chebyshev`
 //! (one dispatch per iteration, double-buffered positions, many iterations
 //! recorded per submission) and `tissue_reduce_max` (two-stage tree
-//! reduction). Only the two convergence keys (8 bytes) are read back per
+//! reduction); [`spring_step`], [`spring_chebyshev`] and
+//! [`tissue_reduce_max`] run one pass on explicit inputs for the parity
+//! tests. Only the two convergence keys (8 bytes) are read back per
 //! check; the state stays on the device until the end.
 
 use bytemuck::Zeroable;
 use glam::Vec4;
 
-use super::cpu::StepParams;
+use super::cpu;
 use super::network::{SpringCsr, SpringNetwork};
-use super::relax::{Probe, Setup, Solver, Stepper};
-use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, Staged, UniformBuffer};
+use super::stepper::{Probe, Setup, StepKernel, Stepper, absolute, bone_displacements};
+use crate::gpu::{Binder, BoundKernel, Gpu, GpuArray, Kernel, Staged, UniformBuffer};
 use crate::{Error, Result};
 
 /// Workgroups of the first reduction stage (≤ `WG_SIZE` of
@@ -19,14 +21,24 @@ const REDUCE_GROUPS: u32 = 256;
 /// Most iterations recorded into one command buffer.
 const MAX_PER_SUBMIT: u32 = 512;
 
-/// `Params` of `spring_step.wgsl` / `spring_chebyshev.wgsl` (same layout;
-/// the Chebyshev kernel names `dt` `h` and `damping` `momentum`).
+/// `Params` of `spring_step.wgsl` (`gain` and `isotropy` are not read).
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
-pub struct Params {
+pub struct SpringStepParams {
     pub n_free: u32,
     pub use_forces: u32,
     pub dt: f32,
     pub damping: f32,
+    pub gain: f32,
+    pub isotropy: f32,
+}
+
+/// `Params` of `spring_chebyshev.wgsl`.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct SpringChebyshevParams {
+    pub n_free: u32,
+    pub use_forces: u32,
+    pub h: f32,
+    pub momentum: f32,
     pub gain: f32,
     pub isotropy: f32,
 }
@@ -38,13 +50,26 @@ pub struct Materials {
     pub rows: [Vec4; 16],
 }
 
-impl From<&StepParams> for Params {
-    fn from(p: &StepParams) -> Self {
-        Params {
+impl From<&cpu::SpringStepParams> for SpringStepParams {
+    fn from(p: &cpu::SpringStepParams) -> Self {
+        SpringStepParams {
             n_free: p.n_free,
             use_forces: u32::from(p.use_forces),
             dt: p.dt,
             damping: p.damping,
+            gain: 0.0,
+            isotropy: 0.0,
+        }
+    }
+}
+
+impl From<&cpu::SpringChebyshevParams> for SpringChebyshevParams {
+    fn from(p: &cpu::SpringChebyshevParams) -> Self {
+        SpringChebyshevParams {
+            n_free: p.n_free,
+            use_forces: u32::from(p.use_forces),
+            h: p.h,
+            momentum: p.momentum,
             gain: p.gain,
             isotropy: p.isotropy,
         }
@@ -58,22 +83,55 @@ pub struct ReduceParams {
     pub mode: u32,
 }
 
-fn kernel_of(solver: Solver) -> Kernel {
-    match solver {
-        Solver::Explicit => Kernel::SpringStep,
-        Solver::Chebyshev => Kernel::SpringChebyshev,
+/// The step kernel's `Params` uniform.
+#[derive(Debug)]
+enum StepUniform {
+    SpringStep(UniformBuffer<SpringStepParams>),
+    SpringChebyshev(UniformBuffer<SpringChebyshevParams>),
+}
+
+impl StepUniform {
+    fn new(gpu: &Gpu, kernel: &StepKernel) -> Result<Self> {
+        let label = format!("{}.params", kernel_of(kernel).name());
+        Ok(match kernel {
+            StepKernel::SpringStep(p) => {
+                StepUniform::SpringStep(UniformBuffer::new(gpu, &label, &p.into())?)
+            }
+            StepKernel::SpringChebyshev(p) => {
+                StepUniform::SpringChebyshev(UniformBuffer::new(gpu, &label, &p.into())?)
+            }
+        })
+    }
+
+    /// The next binding of `binder`: this uniform.
+    fn bind_to<'a>(&'a self, binder: Binder<'a>) -> Binder<'a> {
+        match self {
+            StepUniform::SpringStep(u) => binder.uniform(u),
+            StepUniform::SpringChebyshev(u) => binder.uniform(u),
+        }
     }
 }
 
-/// Buffers only the bind groups reference (kept alive with them).
-type KeepAlive = (
-    (UniformBuffer<Params>, UniformBuffer<Materials>),
-    GpuArray<u32>,
-    GpuArray<u32>,
-    [GpuArray<[f32; 4]>; 2],
-    GpuArray<[u32; 2]>,
-    [UniformBuffer<ReduceParams>; 2],
-);
+fn kernel_of(kernel: &StepKernel) -> Kernel {
+    match kernel {
+        StepKernel::SpringStep(_) => Kernel::SpringStep,
+        StepKernel::SpringChebyshev(_) => Kernel::SpringChebyshev,
+    }
+}
+
+/// Buffers only the bind groups reference, kept alive with them.
+#[derive(Debug)]
+#[expect(dead_code, reason = "held for the bind groups, never read")]
+struct KeepAlive {
+    params: StepUniform,
+    materials: UniformBuffer<Materials>,
+    offsets: GpuArray<u32>,
+    entries: GpuArray<u32>,
+    rest: GpuArray<[f32; 4]>,
+    forces: GpuArray<[f32; 4]>,
+    partials: GpuArray<[u32; 2]>,
+    reduce_params: [UniformBuffer<ReduceParams>; 2],
+}
 
 /// Free-node positions and velocities after one step.
 pub type StepOutput = (Vec<[f32; 4]>, Vec<[f32; 4]>);
@@ -89,6 +147,7 @@ pub struct GpuStepper<'g> {
     vel: GpuArray<[f32; 4]>,
     snap: GpuArray<[f32; 4]>,
     result: GpuArray<[u32; 2]>,
+    /// Reused read-back of `result`.
     staging: Staged<[u32; 2]>,
     /// `[0]`: pos[0] → pos[1]; `[1]`: pos[1] → pos[0].
     step_bind: [BoundKernel; 2],
@@ -109,8 +168,7 @@ impl<'g> GpuStepper<'g> {
     pub(crate) fn new(gpu: &'g Gpu, net: &SpringNetwork, setup: &Setup) -> Result<Self> {
         Self::from_parts(
             gpu,
-            kernel_of(setup.solver),
-            &setup.params,
+            &setup.kernel,
             &net.csr,
             &net.rest,
             &setup.forces,
@@ -119,18 +177,17 @@ impl<'g> GpuStepper<'g> {
         )
     }
 
-    #[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
     fn from_parts(
         gpu: &'g Gpu,
-        kernel: Kernel,
-        params: &StepParams,
+        step: &StepKernel,
         csr: &SpringCsr,
         rest: &[[f32; 4]],
         forces: &[[f32; 4]],
         positions: &[[f32; 4]],
         velocities: &[[f32; 4]],
     ) -> Result<Self> {
-        let n_free = params.n_free;
+        let kernel = kernel_of(step);
+        let n_free = step.n_free();
         let nf = n_free as usize;
         if csr.offsets.len() != nf + 1
             || velocities.len() != nf
@@ -148,35 +205,33 @@ impl<'g> GpuStepper<'g> {
                 positions.len()
             )));
         }
-        let uniform = UniformBuffer::new(gpu, "spring_step.params", &Params::from(params))?;
+        // Buffer labels name the kernel: `spring_step.rest`, `spring_chebyshev.rest`.
+        let label = |buffer: &str| format!("{}.{buffer}", kernel.name());
+        let uniform = StepUniform::new(gpu, step)?;
         let materials = UniformBuffer::new(
             gpu,
-            "spring_step.materials",
+            &label("materials"),
             &Materials {
-                rows: params.materials.map(Vec4::from_array),
+                rows: step.materials().map(Vec4::from_array),
             },
         )?;
-        let offsets = GpuArray::from_slice(gpu, "spring_step.offsets", &csr.offsets)?;
-        let entries = GpuArray::from_slice(gpu, "spring_step.entries", &csr.entries)?;
-        let rest_buf = GpuArray::from_slice(gpu, "spring_step.rest", rest)?;
-        let forces = GpuArray::from_slice(gpu, "spring_step.forces", forces)?;
+        let offsets = GpuArray::from_slice(gpu, &label("offsets"), &csr.offsets)?;
+        let entries = GpuArray::from_slice(gpu, &label("entries"), &csr.entries)?;
+        let rest_buf = GpuArray::from_slice(gpu, &label("rest"), rest)?;
+        let forces = GpuArray::from_slice(gpu, &label("forces"), forces)?;
         let mut second = positions.to_vec();
         second[..nf].fill([f32::NAN; 4]);
         let pos = [
-            GpuArray::from_slice(gpu, "spring_step.pos_a", positions)?,
-            GpuArray::from_slice(gpu, "spring_step.pos_b", &second)?,
+            GpuArray::from_slice(gpu, &label("pos_a"), positions)?,
+            GpuArray::from_slice(gpu, &label("pos_b"), &second)?,
         ];
-        let vel = GpuArray::from_slice(gpu, "spring_step.vel", velocities)?;
+        let vel = GpuArray::from_slice(gpu, &label("vel"), velocities)?;
         let snap = GpuArray::from_slice(gpu, "tissue_reduce_max.snap", &positions[..nf])?;
         let reduce_wg = Kernel::TissueReduceMax.spec()?.wg_size;
         let n_reduce_groups = n_free.div_ceil(reduce_wg).clamp(1, REDUCE_GROUPS.min(reduce_wg));
-        let partials = GpuArray::filled(
-            gpu,
-            "tissue_reduce_max.partials",
-            n_reduce_groups as usize,
-            [0u32; 2],
-        )?;
-        let result = GpuArray::filled(gpu, "tissue_reduce_max.result", 1, [u32::MAX; 2])?;
+        let partials =
+            GpuArray::zeroed(gpu, "tissue_reduce_max.partials", n_reduce_groups as usize)?;
+        let result = GpuArray::output(gpu, "tissue_reduce_max.result", 1, [u32::MAX; 2])?;
         let reduce_params = [
             UniformBuffer::new(
                 gpu,
@@ -194,8 +249,7 @@ impl<'g> GpuStepper<'g> {
         ];
         let staging = result.staging(gpu);
         let step_bind_for = |src: usize| {
-            (gpu.kernel(kernel)?)
-                .uniform(&uniform)
+            (uniform.bind_to(gpu.kernel(kernel)?))
                 .uniform(&materials)
                 .read(&offsets)
                 .read(&entries)
@@ -241,14 +295,16 @@ impl<'g> GpuStepper<'g> {
             reduce_final,
             cur: 0,
             rest: rest.to_vec(),
-            _buffers: (
-                (uniform, materials),
+            _buffers: KeepAlive {
+                params: uniform,
+                materials,
                 offsets,
                 entries,
-                [rest_buf, forces],
+                rest: rest_buf,
+                forces,
                 partials,
                 reduce_params,
-            ),
+            },
         })
     }
 
@@ -268,8 +324,8 @@ impl<'g> GpuStepper<'g> {
             label: Some("chisel.tissue_reduce_max"),
             timestamp_writes: None,
         });
-        let bound = &self.reduce_bind[self.cur];
-        bound.dispatch(self.gpu, &mut pass, self.n_reduce_groups * bound.wg_size());
+        let first = &self.reduce_bind[self.cur];
+        first.dispatch(self.gpu, &mut pass, self.n_reduce_groups * first.wg_size());
         let last = &self.reduce_final;
         last.dispatch(self.gpu, &mut pass, last.wg_size());
     }
@@ -298,18 +354,7 @@ impl<'g> GpuStepper<'g> {
 impl Stepper for GpuStepper<'_> {
     fn set_bone(&mut self, bone: &[[f32; 4]]) -> Result<()> {
         let bone_rest = &self.rest[(self.n_free as usize).min(self.rest.len())..];
-        if bone.len() != bone_rest.len() {
-            return Err(Error::InvalidInput(format!(
-                "{} bone positions for {} bone nodes",
-                bone.len(),
-                bone_rest.len()
-            )));
-        }
-        let data: Vec<[f32; 4]> = bone
-            .iter()
-            .zip(bone_rest)
-            .map(|(b, r)| [b[0] - r[0], b[1] - r[1], b[2] - r[2], 0.0])
-            .collect();
+        let data = bone_displacements(bone_rest, bone)?;
         if data.is_empty() {
             return Ok(());
         }
@@ -329,7 +374,7 @@ impl Stepper for GpuStepper<'_> {
     }
 
     fn reset_velocities(&mut self) -> Result<()> {
-        let mut encoder = self.gpu.encoder("spring_step.reset");
+        let mut encoder = self.gpu.encoder(&format!("{}.reset", self.kernel.name()));
         encoder.clear_buffer(&self.vel.buffer, 0, None);
         self.gpu.queue.submit([encoder.finish()]);
         Ok(())
@@ -362,40 +407,53 @@ impl Stepper for GpuStepper<'_> {
 
     fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
         let state = self.pos[self.cur].read(self.gpu)?;
-        Ok(state
-            .iter()
-            .zip(&self.rest)
-            .map(|(u, r)| [r[0] + u[0], r[1] + u[1], r[2] + u[2], u[3]])
-            .collect())
+        Ok(absolute(&self.rest, &state))
     }
 }
 
-/// One dispatch of `spring_step` (or `spring_chebyshev` for
-/// `Solver::Chebyshev`) on explicit inputs (the buffers of
-/// [`super::cpu::spring_step`]; `pos_in` holds displacements from `rest`),
-/// for parity tests: returns the free part of `pos_out` (NaN where the
-/// kernel did not write) and the updated velocities.
-#[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
-pub fn step_once(
+/// One dispatch of `spring_step` on explicit inputs (the buffers of
+/// [`cpu::spring_step`]; `pos_in` holds displacements from `rest`), for
+/// parity tests: returns the free part of `pos_out` (NaN where the kernel
+/// did not write) and the updated velocities.
+pub fn spring_step(
     gpu: &Gpu,
-    solver: Solver,
-    params: &StepParams,
+    params: &cpu::SpringStepParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
     pos_in: &[[f32; 4]],
     vel: &[[f32; 4]],
 ) -> Result<StepOutput> {
-    let mut s = GpuStepper::from_parts(
-        gpu,
-        kernel_of(solver),
-        params,
-        csr,
-        rest,
-        forces,
-        pos_in,
-        vel,
-    )?;
+    let step = StepKernel::SpringStep(*params);
+    dispatch_once(gpu, &step, csr, rest, forces, pos_in, vel)
+}
+
+/// One dispatch of `spring_chebyshev` on explicit inputs (the buffers of
+/// [`cpu::spring_chebyshev`]), as [`spring_step`].
+pub fn spring_chebyshev(
+    gpu: &Gpu,
+    params: &cpu::SpringChebyshevParams,
+    csr: &SpringCsr,
+    rest: &[[f32; 4]],
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    vel: &[[f32; 4]],
+) -> Result<StepOutput> {
+    let step = StepKernel::SpringChebyshev(*params);
+    dispatch_once(gpu, &step, csr, rest, forces, pos_in, vel)
+}
+
+/// One dispatch of `step`'s kernel: free positions and velocities after it.
+fn dispatch_once(
+    gpu: &Gpu,
+    step: &StepKernel,
+    csr: &SpringCsr,
+    rest: &[[f32; 4]],
+    forces: &[[f32; 4]],
+    pos_in: &[[f32; 4]],
+    vel: &[[f32; 4]],
+) -> Result<StepOutput> {
+    let mut s = GpuStepper::from_parts(gpu, step, csr, rest, forces, pos_in, vel)?;
     let mut encoder = gpu.encoder(s.kernel.name());
     s.record_steps(&mut encoder, 1);
     gpu.submit_and_wait(encoder)?;
@@ -416,24 +474,21 @@ pub fn tissue_reduce_max(
             "tissue_reduce_max: vel, pos and snapshot differ in length".into(),
         ));
     }
-    let params = StepParams {
+    let step = StepKernel::SpringStep(cpu::SpringStepParams {
         n_free: u32::try_from(n)
             .map_err(|_| Error::InvalidInput("tissue_reduce_max: too many nodes".into()))?,
         use_forces: false,
         dt: 0.0,
         damping: 0.0,
-        gain: 0.0,
-        isotropy: 0.0,
         materials: [[0.0; 4]; 16],
-    };
+    });
     let csr = SpringCsr {
         offsets: vec![0; n + 1],
         entries: Vec::new(),
     };
     let s = GpuStepper::from_parts(
         gpu,
-        Kernel::SpringStep,
-        &params,
+        &step,
         &csr,
         &vec![<[f32; 4]>::zeroed(); n],
         &vec![<[f32; 4]>::zeroed(); n],

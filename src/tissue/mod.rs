@@ -33,6 +33,7 @@
 pub mod bench;
 pub mod chebyshev;
 pub mod cpu;
+mod cpu_stepper;
 pub mod ct;
 pub mod explicit;
 pub mod fragments;
@@ -43,15 +44,18 @@ pub mod oracle;
 pub mod phantom;
 pub mod plan;
 pub mod relax;
+pub mod selector;
+pub mod stepper;
 
 pub use ct::{CtLayers, CtParams, layers_from_ct};
-pub use fragments::{BoneCut, CutBone, KnifeSpec, cut_bone};
+pub use fragments::{BoneCut, CutBone, Fragments, KnifeSpec, cut_bone};
 pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
     default_origin,
 };
-pub use plan::{Fragments, Iterations, Plan, ResolvedPlan, Rotation, Selector, Step};
+pub use plan::{Iterations, Plan, ResolvedPlan, Rotation, Step};
 pub use relax::{
-    IncrementReport, RelaxOptions, RelaxReport, Simulation, Solver, Status, StepProbe, StepReport,
-    iterate, relax,
+    IncrementReport, RelaxReport, Simulation, Status, StepProbe, StepReport, iterate, relax,
 };
+pub use selector::Selector;
+pub use stepper::{RelaxOptions, Solver};

@@ -6,14 +6,12 @@
 //! `n + i`), bone `2n..2n + n_bone`. The first `2n` nodes are *free*; bone
 //! nodes are fixed (B_i = 0) and only move when a plan moves them.
 
-use std::sync::OnceLock;
-
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::kdtree::KdTree;
-use super::plan::Selector;
+use super::selector::Selector;
 use crate::mesh::{Csr, TriMesh};
 use crate::{Error, Result};
 
@@ -249,16 +247,6 @@ impl SpringCsr {
     }
 }
 
-/// Spectral bounds of the block-Jacobi-preconditioned stiffness B⁻¹K, for
-/// the Chebyshev solver (see `chebyshev.rs`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Spectrum {
-    /// Lower estimate of the smallest eigenvalue of B⁻¹K at rest.
-    pub lambda_min: f64,
-    /// Upper bound of the largest eigenvalue of B⁻¹K in every state: 2.
-    pub lambda_max: f64,
-}
-
 /// The layered spring network of seed 000 §4.1.
 #[derive(Debug, Clone)]
 pub struct SpringNetwork {
@@ -283,7 +271,6 @@ pub struct SpringNetwork {
     pub materials: Vec<Material>,
     /// Gather adjacency of the free nodes.
     pub csr: SpringCsr,
-    spectrum: OnceLock<Spectrum>,
 }
 
 /// The SPEC §1.1 default origin: for an open surface, the centre of the
@@ -653,7 +640,6 @@ impl SpringNetwork {
             springs,
             materials,
             csr: SpringCsr::default(),
-            spectrum: OnceLock::new(),
         };
         net.csr = net.gather_csr();
         Ok(net)
@@ -740,7 +726,6 @@ impl SpringNetwork {
             springs: list,
             materials: materials.to_vec(),
             csr: SpringCsr::default(),
-            spectrum: OnceLock::new(),
         };
         net.csr = net.gather_csr();
         Ok(net)
@@ -853,14 +838,6 @@ impl SpringNetwork {
         self.n_free as u64 * (4 + 48 + 32)
             + self.n_bone() as u64 * 32
             + self.csr.entries.len() as u64 * 4
-    }
-
-    /// Spectral bounds of B⁻¹K, computed once (Lanczos, see
-    /// `chebyshev::estimate_spectrum`) and cached.
-    pub fn spectrum(&self) -> Spectrum {
-        *self
-            .spectrum
-            .get_or_init(|| super::chebyshev::estimate_spectrum(self))
     }
 }
 

@@ -12,7 +12,8 @@ use std::f32::consts::PI;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::plan::{Fragments, Plan};
+use super::fragments::Fragments;
+use super::plan::Plan;
 use crate::mesh::TriMesh;
 use crate::volume::{Volume, VolumeData};
 use crate::{Error, Result};

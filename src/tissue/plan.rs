@@ -24,131 +24,15 @@
 //! Unknown keys are errors. Selections are made on the bone layer as it
 //! stands when the step starts (after the earlier steps' moves).
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::{DQuat, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::fragments::BoneCut;
+use super::fragments::{BoneCut, Fragments};
 use super::network::SpringNetwork;
+use super::selector::{Selector, finite3, point_text, select};
 use crate::{Error, Position, Result};
-
-/// Bone vertex ids of named fragments (e.g. the jaw cut off by `cut`),
-/// resolved by [`Selector::Fragment`].
-pub type Fragments = BTreeMap<String, Vec<u32>>;
-
-/// Which points a step (or a stiffness region) applies to.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
-pub enum Selector {
-    /// Points with `|x − center| ≤ radius`.
-    Sphere { center: [f32; 3], radius: f32 },
-    /// Points with `min ≤ x ≤ max` componentwise.
-    Box { min: [f32; 3], max: [f32; 3] },
-    /// Points with `(x − point) · normal ≥ 0`.
-    HalfSpace { point: [f32; 3], normal: [f32; 3] },
-    /// Explicit bone-layer vertex ids.
-    Vertices(Vec<u32>),
-    /// The bone vertices of a named fragment (see [`Fragments`]).
-    Fragment(String),
-}
-
-/// `(x, y, z)`, each coordinate in the shortest form that reads back as
-/// the same `f32` (`1.0` prints as `1`).
-pub(crate) fn point_text(v: &[f32; 3]) -> String {
-    format!("({}, {}, {})", v[0], v[1], v[2])
-}
-
-fn finite3(v: &[f32; 3]) -> bool {
-    v.iter().all(|c| c.is_finite())
-}
-
-impl Selector {
-    /// Checks the parameters (finite vectors, positive radius, ordered box,
-    /// non-zero normal, non-empty id list); `what` names the owner in errors.
-    pub fn validate(&self, what: &str) -> Result<()> {
-        let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
-        match self {
-            Selector::Sphere { center, radius } => {
-                if !finite3(center) || !radius.is_finite() || *radius <= 0.0 {
-                    return bad(format!(
-                        "sphere needs a finite centre and a radius > 0, got centre {}, radius {radius}",
-                        point_text(center)
-                    ));
-                }
-            }
-            Selector::Box { min, max } => {
-                if !finite3(min) || !finite3(max) || (0..3).any(|a| min[a] > max[a]) {
-                    return bad(format!(
-                        "box needs finite corners with min ≤ max, got min {}, max {}",
-                        point_text(min),
-                        point_text(max)
-                    ));
-                }
-            }
-            Selector::HalfSpace { point, normal } => {
-                if !finite3(point) || !finite3(normal) || Vec3::from_array(*normal).length() == 0.0
-                {
-                    return bad(format!(
-                        "half_space needs a finite point and a non-zero finite normal, got point {}, normal {}",
-                        point_text(point),
-                        point_text(normal)
-                    ));
-                }
-            }
-            Selector::Vertices(ids) => {
-                if ids.is_empty() {
-                    return bad("empty selection: `vertices` lists no id".into());
-                }
-            }
-            Selector::Fragment(name) => {
-                if name.is_empty() {
-                    return bad("fragment name is empty".into());
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Whether the geometric selector contains `p` (`None` for id-based ones).
-    pub fn contains(&self, p: Vec3) -> Option<bool> {
-        match self {
-            Selector::Sphere { center, radius } => {
-                Some(p.distance(Vec3::from_array(*center)) <= *radius)
-            }
-            Selector::Box { min, max } => {
-                Some(p.cmpge(Vec3::from_array(*min)).all() && p.cmple(Vec3::from_array(*max)).all())
-            }
-            Selector::HalfSpace { point, normal } => {
-                Some((p - Vec3::from_array(*point)).dot(Vec3::from_array(*normal)) >= 0.0)
-            }
-            Selector::Vertices(_) | Selector::Fragment(_) => None,
-        }
-    }
-
-    /// The selector in words, for messages.
-    pub fn describe(&self) -> String {
-        match self {
-            Selector::Sphere { center, radius } => {
-                format!(
-                    "sphere centred at {} with radius {radius}",
-                    point_text(center)
-                )
-            }
-            Selector::Box { min, max } => {
-                format!("box from {} to {}", point_text(min), point_text(max))
-            }
-            Selector::HalfSpace { point, normal } => format!(
-                "half_space through {} with normal {}",
-                point_text(point),
-                point_text(normal)
-            ),
-            Selector::Vertices(ids) => format!("{} vertex ids", ids.len()),
-            Selector::Fragment(name) => format!("fragment `{name}`"),
-        }
-    }
-}
 
 /// A rigid rotation about a point, applied before the translation.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -497,47 +381,6 @@ impl Plan {
             steps,
         })
     }
-}
-
-fn select(sel: &Selector, bone: &[DVec3], fragments: &Fragments, what: &str) -> Result<Vec<u32>> {
-    let n = bone.len();
-    let checked = |ids: &[u32]| -> Result<Vec<u32>> {
-        if let Some(&bad) = ids.iter().find(|&&k| k as usize >= n) {
-            return Err(Error::InvalidInput(format!(
-                "{what}: vertex id {bad} is outside the bone layer ({n} bone vertices, ids 0..{})",
-                n - 1
-            )));
-        }
-        let mut v = ids.to_vec();
-        v.sort_unstable();
-        v.dedup();
-        Ok(v)
-    };
-    let ids: Vec<u32> = match sel {
-        Selector::Vertices(ids) => checked(ids)?,
-        Selector::Fragment(name) => checked(fragments.get(name).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "{what}: unknown fragment `{name}` (known: [{}])",
-                fragments.keys().cloned().collect::<Vec<_>>().join(", ")
-            ))
-        })?)?,
-        _ => (0..n as u32)
-            .filter(|&k| sel.contains(bone[k as usize].as_vec3()) == Some(true))
-            .collect(),
-    };
-    if ids.is_empty() {
-        let (lo, hi) = bone.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        return Err(Error::InvalidInput(format!(
-            "{what}: empty selection: the {} selects no bone vertex (the bone layer spans {} to {})",
-            sel.describe(),
-            point_text(&lo.as_vec3().to_array()),
-            point_text(&hi.as_vec3().to_array())
-        )));
-    }
-    Ok(ids)
 }
 
 /// A rigid motion `x ↦ R(t·θ)(x − c) + c + t·translate` for progress `t ∈ [0, 1]`.

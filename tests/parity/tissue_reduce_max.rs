@@ -2,10 +2,8 @@
 //! `tissue::cpu::tissue_reduce_max`, on seeded random inputs and on the
 //! states of the tissue fixtures (fran_cut included) after a bone move.
 //!
-//! Tolerance: the keys are f32 bit patterns of squared lengths; max is
-//! exact, only the rounding of one squared length may differ (FMA), so the
-//! decoded values agree within 2 ulp (rel 2.4e-7). A non-finite input must
-//! give a non-finite key on both.
+//! Tolerance: `tissue::cpu::TISSUE_REDUCE_MAX_TOL` on the decoded keys (see
+//! its docs). A non-finite input must give a non-finite key on both.
 
 use chisel::Backend;
 use chisel::parity::{Tolerance, compare_f32, find_sentinel};
@@ -15,10 +13,7 @@ use chisel::tissue::{RelaxOptions, cpu, iterate};
 use crate::common;
 use crate::spring_step::{moved_bone, networks};
 
-const TOL: Tolerance = Tolerance {
-    abs: 0.0,
-    rel: 2.4e-7,
-};
+const TOL: Tolerance = cpu::TISSUE_REDUCE_MAX_TOL;
 
 /// Velocities, positions and snapshot positions.
 type Inputs = (Vec<[f32; 4]>, Vec<[f32; 4]>, Vec<[f32; 4]>);

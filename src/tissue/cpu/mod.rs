@@ -1,168 +1,25 @@
 //! CPU mirrors of the tissue kernels: `kernels/spring_step.wgsl`,
-//! `kernels/spring_chebyshev.wgsl` and `kernels/tissue_reduce_max.wgsl`.
+//! `kernels/spring_chebyshev.wgsl` (with `kernels/shared/spring_network.wgsl`)
+//! and `kernels/tissue_reduce_max.wgsl`.
 //!
-//! Each mirror performs, per node, the same f32 operations in the same order
-//! as its kernel (CSR order of the springs, the same parenthesisation), and
-//! runs the nodes in parallel with rayon (each node writes only its own
-//! outputs, so the result does not depend on scheduling). The step mirrors
-//! gather several nodes at once as the lanes of a SIMD register, the way a
-//! GPU runs invocations side by side ([`Lanes`]: four in a `Vec4`, eight
-//! with AVX2 or sixteen with AVX-512 in `wide.rs`, arranged once per
-//! network by [`SpringGather`]): the per-spring sqrt and division become vector
-//! instructions, each lane still computes its own node's sum in its own
-//! CSR order, and the results stay bit for bit those of the scalar loop
-//! whatever the width (`tests/tissue.rs`). Lavapipe gives `spring_step`
-//! bit for bit; `spring_chebyshev` differs from it by a few ulp per step
+//! Each step mirror is the kernel's invocation as a plain loop over the
+//! free nodes, with the WGSL's names and the same f32 operations in the
+//! same order (CSR order of the springs, the same parenthesisation), to be
+//! read beside it; the tolerances of their parity tests are defined next
+//! to them. The relaxations run [`fast`], an optimised path tested equal
+//! to these mirrors bit for bit. Lavapipe gives `spring_step` bit for bit;
+//! `spring_chebyshev` differs from it by a few ulp per step
 //! (`tests/parity/spring_step.rs`).
 
-use glam::{Mat4, Vec4};
 use rayon::prelude::*;
-
-use serde::Serialize;
 
 use super::network::SpringCsr;
 use crate::parity::Tolerance;
 
-#[cfg(target_arch = "x86_64")]
-mod wide;
+pub mod fast;
 
 /// Nodes per rayon task of the reduction mirror.
 const CHUNK: usize = 512;
-
-/// Nodes per rayon task of the step mirrors for `n` nodes: about eight
-/// tasks per thread (load balance on a shared machine), at least 64 and at
-/// most 2048 nodes (task overhead vs. cache-sized work), whole groups of
-/// the widest gather.
-fn grain(n: usize) -> usize {
-    (n / (8 * rayon::current_num_threads()))
-        .clamp(64, 2048)
-        .next_multiple_of(16)
-}
-
-/// How many nodes the step mirrors gather side by side. Every width gives
-/// the same bits (each lane performs one kernel invocation's operations);
-/// the widest this CPU has is the fastest.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Lanes {
-    /// Four nodes, one `Vec4` lane each: SSE2 on every x86-64 CPU (glam's
-    /// portable scalar code on other architectures).
-    Four,
-    /// Eight nodes, one lane of a 256-bit register each: x86-64 CPUs with
-    /// AVX2 (detected at run time).
-    Eight,
-    /// Sixteen nodes, one lane of a 512-bit register each: x86-64 CPUs with
-    /// AVX-512 (F, BW, CD, DQ, VL).
-    Sixteen,
-}
-
-impl Lanes {
-    /// Every width, narrowest first.
-    pub const ALL: [Lanes; 3] = [Lanes::Four, Lanes::Eight, Lanes::Sixteen];
-
-    /// The widest width this CPU has; `CHISEL_CPU_LANES=4` or `8` asks for
-    /// at most that many (to compare them). Read once.
-    pub fn best() -> Lanes {
-        static BEST: std::sync::OnceLock<Lanes> = std::sync::OnceLock::new();
-        *BEST.get_or_init(|| {
-            let cap = std::env::var("CHISEL_CPU_LANES")
-                .ok()
-                .and_then(|v| v.trim().parse::<usize>().ok())
-                .unwrap_or(usize::MAX);
-            Lanes::ALL
-                .into_iter()
-                .rfind(|l| l.is_available() && l.count() <= cap)
-                .unwrap_or(Lanes::Four)
-        })
-    }
-
-    /// Whether this CPU runs this width.
-    pub fn is_available(self) -> bool {
-        match self {
-            Lanes::Four => true,
-            #[cfg(target_arch = "x86_64")]
-            Lanes::Eight => pulp::x86::V3::is_available(),
-            #[cfg(target_arch = "x86_64")]
-            Lanes::Sixteen => pulp::x86::V4::is_available(),
-            #[cfg(not(target_arch = "x86_64"))]
-            Lanes::Eight | Lanes::Sixteen => false,
-        }
-    }
-
-    /// Nodes per group.
-    pub fn count(self) -> usize {
-        match self {
-            Lanes::Four => 4,
-            Lanes::Eight => 8,
-            Lanes::Sixteen => 16,
-        }
-    }
-
-    /// What the CPU units are called, for reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Lanes::Four => "4 lanes (SSE2)",
-            Lanes::Eight => "8 lanes (AVX2)",
-            Lanes::Sixteen => "16 lanes (AVX-512)",
-        }
-    }
-}
-
-/// The step mirrors for one network's CSR at one gather width: the CSR's
-/// first `n_free` rows arranged once for the wide gathers (a copy of the
-/// entries, interleaved by group of 8 or 16 nodes), then any number of
-/// steps. The free functions [`spring_step`] and [`spring_chebyshev`] build
-/// one per call.
-#[derive(Debug, Clone)]
-pub struct SpringGather<'a> {
-    csr: &'a SpringCsr,
-    lanes: Lanes,
-    #[cfg(target_arch = "x86_64")]
-    wide: Option<wide::WideRows>,
-}
-
-impl<'a> SpringGather<'a> {
-    /// The mirrors of `csr`'s first `n_free` rows gathering `lanes` nodes at
-    /// a time; an error where this CPU lacks that width.
-    pub fn new(csr: &'a SpringCsr, n_free: usize, lanes: Lanes) -> Result<Self, crate::Error> {
-        if !lanes.is_available() {
-            return Err(crate::Error::InvalidInput(format!(
-                "this CPU cannot gather {}",
-                lanes.name()
-            )));
-        }
-        Ok(Self::arrange(csr, n_free, lanes))
-    }
-
-    /// [`Lanes::best`] for `csr`.
-    pub fn best(csr: &'a SpringCsr, n_free: usize) -> Self {
-        Self::arrange(csr, n_free, Lanes::best())
-    }
-
-    /// [`SpringGather::new`] for a width this CPU has.
-    fn arrange(csr: &'a SpringCsr, n_free: usize, lanes: Lanes) -> Self {
-        let n_free = n_free.min(csr.offsets.len().saturating_sub(1));
-        #[cfg(target_arch = "x86_64")]
-        let wide = match lanes {
-            Lanes::Four => None,
-            Lanes::Eight => Some(wide::WideRows::Eight(wide::LaneRows::new(csr, n_free))),
-            Lanes::Sixteen => Some(wide::WideRows::Sixteen(wide::LaneRows::new(csr, n_free))),
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = n_free;
-        SpringGather {
-            csr,
-            lanes,
-            #[cfg(target_arch = "x86_64")]
-            wide,
-        }
-    }
-
-    /// The gather width.
-    pub fn lanes(&self) -> Lanes {
-        self.lanes
-    }
-}
 
 /// Velocity components below this magnitude are flushed to zero after each
 /// update (kernel and mirror alike): subnormal floats are 100× slower on
@@ -170,21 +27,38 @@ impl<'a> SpringGather<'a> {
 /// coordinate of any mesh in any unit.
 pub const VELOCITY_FLUSH: f32 = 1e-30;
 
-/// Uniform parameters shared by the step kernels (`StepParams` in WGSL).
+/// Parameters of `spring_step.wgsl` (its `Params`, the fields it reads,
+/// and its `Materials` table).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StepParams {
+pub struct SpringStepParams {
     /// Number of free nodes (the dispatch size).
     pub n_free: u32,
     /// Whether `forces` holds external forces (otherwise f_i = 0).
     pub use_forces: bool,
-    /// `spring_step`: Δt. `spring_chebyshev`: the pseudo-time step h.
+    /// Δt.
     pub dt: f32,
-    /// `spring_step`: damping γ. `spring_chebyshev`: momentum β.
+    /// Damping γ.
     pub damping: f32,
-    /// `spring_chebyshev` only: gain α/h on the preconditioned residual.
+    /// Material table rows `[c1, c2 − c1, knee, c_max]`.
+    pub materials: [[f32; 4]; 16],
+}
+
+/// Parameters of `spring_chebyshev.wgsl` (its `Params` and its `Materials`
+/// table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringChebyshevParams {
+    /// Number of free nodes (the dispatch size).
+    pub n_free: u32,
+    /// Whether `forces` holds external forces (otherwise f_i = 0).
+    pub use_forces: bool,
+    /// The pseudo-time step h.
+    pub h: f32,
+    /// Momentum β.
+    pub momentum: f32,
+    /// Gain α/h on the preconditioned residual.
     pub gain: f32,
-    /// `spring_chebyshev` only: η, the least stiffness across a spring in
-    /// the preconditioner blocks as a share of c_max.
+    /// η, the least stiffness across a spring in the preconditioner blocks
+    /// as a share of c_max.
     pub isotropy: f32,
     /// Material table rows `[c1, c2 − c1, knee, c_max]`.
     pub materials: [[f32; 4]; 16],
@@ -210,230 +84,89 @@ pub fn position_tolerance(iterations: u32, diagonal: f32) -> Tolerance {
     }
 }
 
-/// Nodes the portable gather takes side by side, like a SIMD group of GPU
-/// invocations (one `Vec4` lane each; SSE2 on x86-64, scalar elsewhere).
-const LANES: usize = 4;
+/// The buffers of `spring_network.wgsl` (bindings 1–6) a mirror reads.
+struct Network<'a> {
+    materials: &'a [[f32; 4]; 16],
+    csr: &'a SpringCsr,
+    rest: &'a [[f32; 4]],
+    forces: &'a [[f32; 4]],
+    pos_in: &'a [[f32; 4]],
+}
 
-/// Spring force sums g_i of eq. 4.4 of the nodes `i0..i0 + lanes`
-/// (`1 ≤ lanes ≤ LANES`), with rest positions `rest` and displacements
-/// `pos_in`: lane t is node `i0 + t` and sums its springs in its CSR order,
-/// r_ij = (x0_i − x0_j) + (u_i − u_j), so every lane performs exactly the
-/// float operations of one kernel invocation (vector sqrt, division and
-/// arithmetic round like scalar ones, and nothing is contracted to FMA).
-/// The rest length is l_ij = |x0_i − x0_j| from the same f32 difference.
-/// A lane whose row has ended reads its own node with an all-zero material
-/// (r = 0, |r| = 0, c_max = 0: nothing added). Returns `[gx, gy, gz]`
-/// by lane and, with `BLOCKS`, the preconditioner blocks of
-/// `spring_chebyshev.wgsl` as `[b00, b11, b22, b01, b02, b12]` by lane
-/// (η = `isotropy`; zeros without `BLOCKS`).
-#[inline(always)]
-fn gather_group<const BLOCKS: bool>(
-    i0: usize,
-    lanes: usize,
-    csr: &SpringCsr,
-    rest: &[[f32; 4]],
-    pos_in: &[[f32; 4]],
-    materials: &[[f32; 4]; 16],
-    isotropy: f32,
-) -> ([Vec4; 3], [Vec4; 6]) {
-    // One length for both node arrays: one bounds check per neighbour.
-    let n = rest.len().min(pos_in.len());
-    let (rest, pos_in, entries) = (&rest[..n], &pos_in[..n], &csr.entries[..]);
-    let mut node = [i0; LANES];
-    let mut start = [0usize; LANES];
-    let mut count = [0usize; LANES];
-    for t in 0..lanes {
-        node[t] = i0 + t;
-        start[t] = csr.offsets[i0 + t] as usize;
-        count[t] = csr.offsets[i0 + t + 1] as usize - start[t];
+fn xyz(v: [f32; 4]) -> [f32; 3] {
+    [v[0], v[1], v[2]]
+}
+
+/// `SpringTerm` of `spring_network.wgsl`.
+struct SpringTerm {
+    r: [f32; 3],
+    len: f32,
+    f: f32,
+    c_max: f32,
+}
+
+/// `spring_term` of `spring_network.wgsl`: spring `k` of a row,
+/// r_ij = (x_rest,i − x_rest,j) + (u_i − u_j), its length, the biphasic
+/// force of its extension and c_max of its material.
+fn spring_term(k: usize, x0: [f32; 3], u: [f32; 3], b: &Network<'_>) -> SpringTerm {
+    let (j, m) = SpringCsr::unpack(b.csr.entries[k]);
+    let m = b.materials[m];
+    let d0: [f32; 3] = std::array::from_fn(|c| x0[c] - b.rest[j][c]);
+    let l = (d0[0] * d0[0] + d0[1] * d0[1] + d0[2] * d0[2]).sqrt();
+    let r: [f32; 3] = std::array::from_fn(|c| d0[c] + (u[c] - b.pos_in[j][c]));
+    let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+    let ext = len - l;
+    SpringTerm {
+        r,
+        len,
+        f: m[0] * ext + m[1] * (ext - m[2] * l).max(0.0),
+        c_max: m[3],
     }
-    let x0 = node.map(|i| Vec4::from_array(rest[i]));
-    let u = node.map(|i| Vec4::from_array(pos_in[i]));
-    let k_end = count.iter().copied().max().unwrap_or(0);
-    let (mut gx, mut gy, mut gz) = (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO);
-    let (mut blocks, mut iso) = ([Vec4::ZERO; 6], Vec4::ZERO);
-    let eta = Vec4::splat(isotropy);
-    for k in 0..k_end {
-        let mut d0 = [Vec4::ZERO; LANES];
-        let mut r = [Vec4::ZERO; LANES];
-        let mut row = [Vec4::ZERO; LANES];
-        for t in 0..LANES {
-            // A lane past its row: its own node and an all-zero material.
-            let (j, m) = if k < count[t] {
-                let (j, m) = SpringCsr::unpack(entries[start[t] + k]);
-                (j, Vec4::from_array(materials[m]))
-            } else {
-                (node[t], Vec4::ZERO)
-            };
-            d0[t] = x0[t] - Vec4::from_array(rest[j]);
-            r[t] = d0[t] + (u[t] - Vec4::from_array(pos_in[j]));
-            row[t] = m;
-        }
-        // Lanes as vectors: d0 and r by component, the material rows as
-        // (c1, c2 − c1, knee, c_max) by lane.
-        let d0 = Mat4::from_cols(d0[0], d0[1], d0[2], d0[3]).transpose();
-        let r = Mat4::from_cols(r[0], r[1], r[2], r[3]).transpose();
-        let mat = Mat4::from_cols(row[0], row[1], row[2], row[3]).transpose();
-        // Rest length l_ij = |x_rest,i − x_rest,j|, from the same difference.
-        let (dx, dy, dz) = (d0.x_axis, d0.y_axis, d0.z_axis);
-        let l = (dx * dx + dy * dy + dz * dz).sqrt();
-        let (rx, ry, rz) = (r.x_axis, r.y_axis, r.z_axis);
-        let len = (rx * rx + ry * ry + rz * rz).sqrt();
-        // Biphasic law (seed §4.1.2): c1·e + (c2 − c1)·max(e − knee·l, 0).
-        let ext = len - l;
-        let f = mat.x_axis * ext + mat.y_axis * (ext - mat.z_axis * l).max(Vec4::ZERO);
-        let s = f / len;
-        // A zero (or NaN) length adds +0, which leaves g unchanged: g starts
-        // at +0 and a sum starting at +0 is never −0.
-        let on = len.cmpgt(Vec4::ZERO);
-        gx += Vec4::select(on, s * rx, Vec4::ZERO);
-        gy += Vec4::select(on, s * ry, Vec4::ZERO);
-        gz += Vec4::select(on, s * rz, Vec4::ZERO);
-        if BLOCKS {
-            let c_max = mat.w_axis;
-            let across = (eta * c_max).max(s);
-            // q = 0 where the kernel skips the spring: its terms add ±0,
-            // which leaves sums that start at +0 unchanged.
-            let q = Vec4::select(on, (c_max - across) / (len * len), Vec4::ZERO);
-            let (qx, qy, qz) = (q * rx, q * ry, q * rz);
-            let terms = [qx * rx, qy * ry, qz * rz, qx * ry, qx * rz, qy * rz];
-            for (b, term) in blocks.iter_mut().zip(terms) {
-                *b += term;
-            }
-            // A spring of length 0 adds c_max I (a lane past its row, 0).
-            iso += Vec4::select(on, across, c_max);
+}
+
+/// The CSR row of node `ix`.
+fn row(ix: usize, csr: &SpringCsr) -> std::ops::Range<usize> {
+    csr.offsets[ix] as usize..csr.offsets[ix + 1] as usize
+}
+
+/// `spring_force` of `spring_network.wgsl`: g_i = Σ_j f(|r_ij| − l_ij) /
+/// |r_ij| · r_ij (eq. 4.4) over node ix's row in stored order;
+/// zero-length springs add nothing.
+fn spring_force(ix: usize, x0: [f32; 3], u: [f32; 3], b: &Network<'_>) -> [f32; 3] {
+    let mut g = [0.0f32; 3];
+    for k in row(ix, b.csr) {
+        let t = spring_term(k, x0, u, b);
+        if t.len > 0.0 {
+            let s = t.f / t.len;
+            g = std::array::from_fn(|c| g[c] + s * t.r[c]);
         }
     }
-    for b in &mut blocks[..3] {
-        *b += iso;
-    }
-    ([gx, gy, gz], blocks)
+    g
 }
 
-#[inline(always)]
-fn flush(v: f32) -> f32 {
-    if v.abs() < VELOCITY_FLUSH { 0.0 } else { v }
-}
-
-/// The per-node update after the gather (u: displacement, w = B/m, g and
-/// b from [`gather_group`], v: velocity, f: external force).
-#[derive(Debug, Clone, Copy)]
-enum Update {
-    /// `spring_step`: eq. 4.5–4.7 with Δt and damping γ.
-    Explicit { dt: f32, gamma: f32 },
-    /// `spring_chebyshev`: pseudo-time step h, momentum β, gain α/h.
-    Chebyshev { h: f32, beta: f32, gain: f32 },
-}
-
-impl Update {
-    /// `(u', v')` of one node.
-    #[inline(always)]
-    fn apply(
-        self,
-        u: [f32; 3],
-        w: f32,
-        g: [f32; 3],
-        b: [f32; 6],
-        v: [f32; 3],
-        f: [f32; 3],
-    ) -> ([f32; 3], [f32; 3]) {
-        let mut u2 = [0.0f32; 3];
-        let mut v2 = [0.0f32; 3];
-        match self {
-            Update::Explicit { dt, gamma } => {
-                for k in 0..3 {
-                    // eq. 4.5: a = (f − γ v − g) · B/m;  eq. 4.7: v += Δt a; u += Δt v.
-                    let a = (f[k] - gamma * v[k] - g[k]) * w;
-                    v2[k] = flush(v[k] + dt * a);
-                    u2[k] = u[k] + dt * v2[k];
-                }
-            }
-            Update::Chebyshev { h, beta, gain } => {
-                let r = block_solve(b, [f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
-                for k in 0..3 {
-                    v2[k] = flush(beta * v[k] + gain * r[k]);
-                    u2[k] = u[k] + h * v2[k];
-                }
-            }
-        }
-        (u2, v2)
+/// `external_force` of `spring_network.wgsl`.
+fn external_force(ix: usize, use_forces: bool, b: &Network<'_>) -> [f32; 3] {
+    if use_forces {
+        xyz(b.forces[ix])
+    } else {
+        [0.0; 3]
     }
 }
 
-/// Runs one step of `update` over the free nodes, in groups of
-/// `gather`'s width (`BLOCKS`: the gather builds the preconditioner blocks);
-/// the nodes a rayon task holds past its last whole group, and those past
-/// the rows arranged for the wide gather, run four at a time (the same
-/// bits).
-#[expect(clippy::too_many_arguments, reason = "the kernel's bindings, one each")]
-#[inline(always)]
-fn for_free_nodes<const BLOCKS: bool>(
-    gather: &SpringGather<'_>,
-    p: &StepParams,
-    update: Update,
-    rest: &[[f32; 4]],
-    forces: &[[f32; 4]],
-    pos_in: &[[f32; 4]],
+/// `advance` of `spring_network.wgsl`: v ← v_raw flushed below
+/// [`VELOCITY_FLUSH`], u ← u + step · v, w copied.
+fn advance(
+    ix: usize,
+    p: [f32; 4],
+    v_raw: [f32; 3],
+    step: f32,
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
-    let csr = gather.csr;
-    let n = p.n_free as usize;
-    let chunk = grain(n);
-    pos_out[..n]
-        .par_chunks_mut(chunk)
-        .zip(vel[..n].par_chunks_mut(chunk))
-        .enumerate()
-        .for_each(|(c, (po, ve))| {
-            let (first, len) = (c * chunk, po.len());
-            #[cfg_attr(not(target_arch = "x86_64"), expect(unused_mut))]
-            let mut done = 0;
-            #[cfg(target_arch = "x86_64")]
-            if let Some(rows) = &gather.wide {
-                // `chunk` is a multiple of every width: whole groups from `first`.
-                let l = rows.width();
-                let groups = first / l..((first + len) / l).min(rows.groups());
-                let b = wide::Bindings {
-                    csr,
-                    rest,
-                    pos_in,
-                    forces,
-                    use_forces: p.use_forces,
-                    materials: &p.materials,
-                    isotropy: p.isotropy,
-                    update,
-                };
-                let wide_nodes = groups.len() * l;
-                if rows.run::<BLOCKS>(groups, &b, &mut po[..wide_nodes], &mut ve[..wide_nodes]) {
-                    done = wide_nodes;
-                }
-            }
-            for i in (first + done..first + len).step_by(LANES) {
-                let lanes = LANES.min(first + len - i);
-                let ([gx, gy, gz], blocks) =
-                    gather_group::<BLOCKS>(i, lanes, csr, rest, pos_in, &p.materials, p.isotropy);
-                for t in 0..lanes {
-                    let p_i = pos_in[i + t];
-                    let f = if p.use_forces {
-                        let f = forces[i + t];
-                        [f[0], f[1], f[2]]
-                    } else {
-                        [0.0; 3]
-                    };
-                    let v = ve[i + t - first];
-                    let (u2, v2) = update.apply(
-                        [p_i[0], p_i[1], p_i[2]],
-                        p_i[3],
-                        [gx[t], gy[t], gz[t]],
-                        blocks.map(|b| b[t]),
-                        [v[0], v[1], v[2]],
-                        f,
-                    );
-                    po[i + t - first] = [u2[0], u2[1], u2[2], p_i[3]];
-                    ve[i + t - first] = [v2[0], v2[1], v2[2], 0.0];
-                }
-            }
-        });
+    let v_new = v_raw.map(|v| if v.abs() < VELOCITY_FLUSH { 0.0 } else { v });
+    let u_new: [f32; 3] = std::array::from_fn(|c| p[c] + step * v_new[c]);
+    pos_out[ix] = [u_new[0], u_new[1], u_new[2], p[3]];
+    vel[ix] = [v_new[0], v_new[1], v_new[2], 0.0];
 }
 
 /// Mirror of `spring_step.wgsl`: one semi-implicit Euler step (eq. 4.4–4.7)
@@ -443,10 +176,9 @@ fn for_free_nodes<const BLOCKS: bool>(
 /// `n_free` of `pos_out` are written (the caller keeps the fixed nodes
 /// equal in both buffers). `vel`: #free `[vx, vy, vz, 0]`, updated in
 /// place. `forces`: #free external forces (read only when `use_forces`).
-/// Arranges `csr` for [`Lanes::best`] on every call: to step many times,
-/// build a [`SpringGather`] once.
+/// Parity tolerance: [`position_tolerance`].
 pub fn spring_step(
-    p: &StepParams,
+    params: &SpringStepParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
@@ -454,17 +186,33 @@ pub fn spring_step(
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
-    SpringGather::best(csr, p.n_free as usize).spring_step(p, rest, forces, pos_in, pos_out, vel);
+    let b = Network {
+        materials: &params.materials,
+        csr,
+        rest,
+        forces,
+        pos_in,
+    };
+    for ix in 0..params.n_free as usize {
+        let p = pos_in[ix];
+        // eq. 4.4–4.7.
+        let g = spring_force(ix, xyz(rest[ix]), xyz(p), &b);
+        let v = xyz(vel[ix]);
+        let f = external_force(ix, params.use_forces, &b);
+        let a: [f32; 3] = std::array::from_fn(|c| (f[c] - params.damping * v[c] - g[c]) * p[3]);
+        let v_raw = std::array::from_fn(|c| v[c] + params.dt * a[c]);
+        advance(ix, p, v_raw, params.dt, pos_out, vel);
+    }
 }
 
 /// Mirror of `spring_chebyshev.wgsl`: one stationary Chebyshev (second-order
 /// Richardson) step on the block-Jacobi-preconditioned equilibrium
 /// equations, the 3 × 3 block of each node built at the current state
-/// (η = `p.isotropy`). Same buffers as [`spring_step`] (the w lane is not
-/// read); `v` holds the last update divided by h. Arranges `csr` on every
-/// call, as [`spring_step`].
+/// (η = `params.isotropy`). Same buffers as [`spring_step`] (the w lane is
+/// not read); `vel` holds the last update divided by h. Parity tolerance:
+/// [`position_tolerance`].
 pub fn spring_chebyshev(
-    p: &StepParams,
+    params: &SpringChebyshevParams,
     csr: &SpringCsr,
     rest: &[[f32; 4]],
     forces: &[[f32; 4]],
@@ -472,49 +220,54 @@ pub fn spring_chebyshev(
     pos_out: &mut [[f32; 4]],
     vel: &mut [[f32; 4]],
 ) {
-    SpringGather::best(csr, p.n_free as usize)
-        .spring_chebyshev(p, rest, forces, pos_in, pos_out, vel);
-}
-
-impl SpringGather<'_> {
-    /// [`spring_step`] on this gather's CSR.
-    pub fn spring_step(
-        &self,
-        p: &StepParams,
-        rest: &[[f32; 4]],
-        forces: &[[f32; 4]],
-        pos_in: &[[f32; 4]],
-        pos_out: &mut [[f32; 4]],
-        vel: &mut [[f32; 4]],
-    ) {
-        let update = Update::Explicit {
-            dt: p.dt,
-            gamma: p.damping,
-        };
-        for_free_nodes::<false>(self, p, update, rest, forces, pos_in, pos_out, vel);
-    }
-
-    /// [`spring_chebyshev`] on this gather's CSR.
-    pub fn spring_chebyshev(
-        &self,
-        p: &StepParams,
-        rest: &[[f32; 4]],
-        forces: &[[f32; 4]],
-        pos_in: &[[f32; 4]],
-        pos_out: &mut [[f32; 4]],
-        vel: &mut [[f32; 4]],
-    ) {
-        let update = Update::Chebyshev {
-            h: p.dt,
-            beta: p.damping,
-            gain: p.gain,
-        };
-        for_free_nodes::<true>(self, p, update, rest, forces, pos_in, pos_out, vel);
+    let b = Network {
+        materials: &params.materials,
+        csr,
+        rest,
+        forces,
+        pos_in,
+    };
+    for ix in 0..params.n_free as usize {
+        let p = pos_in[ix];
+        let x0 = xyz(rest[ix]);
+        let mut g = [0.0f32; 3];
+        // B_i: diagonal (b00, b11, b22) without and off-diagonal (b01, b02,
+        // b12), and the isotropic part Σ_j t_ij.
+        let mut diag = [0.0f32; 3];
+        let mut off = [0.0f32; 3];
+        let mut iso = 0.0f32;
+        for k in row(ix, csr) {
+            let t = spring_term(k, x0, xyz(p), &b);
+            if t.len > 0.0 {
+                let s = t.f / t.len;
+                g = std::array::from_fn(|c| g[c] + s * t.r[c]);
+                let across = (params.isotropy * t.c_max).max(s);
+                let q = (t.c_max - across) / (t.len * t.len);
+                let qr = t.r.map(|x| q * x);
+                diag = std::array::from_fn(|c| diag[c] + qr[c] * t.r[c]);
+                // off + qr.xxy * r.yzz
+                off = [
+                    off[0] + qr[0] * t.r[1],
+                    off[1] + qr[0] * t.r[2],
+                    off[2] + qr[1] * t.r[2],
+                ];
+                iso += across;
+            } else {
+                iso += t.c_max;
+            }
+        }
+        diag = diag.map(|x| x + iso);
+        let f = external_force(ix, params.use_forces, &b);
+        let d: [f32; 3] = std::array::from_fn(|c| f[c] - g[c]);
+        let r = block_solve([diag[0], diag[1], diag[2], off[0], off[1], off[2]], d);
+        let v = xyz(vel[ix]);
+        let v_raw = std::array::from_fn(|c| params.momentum * v[c] + params.gain * r[c]);
+        advance(ix, p, v_raw, params.h, pos_out, vel);
     }
 }
 
 /// B⁻¹ d for the block `b = [b00, b11, b22, b01, b02, b12]` by cofactors of
-/// B / tr B, as in `spring_chebyshev.wgsl`; 0 when tr B = 0 (no springs).
+/// B / tr B, as `spring_chebyshev.wgsl` writes it out; 0 when tr B = 0 (no springs).
 #[inline(always)]
 pub fn block_solve(b: [f32; 6], d: [f32; 3]) -> [f32; 3] {
     let tr = b[0] + b[1] + b[2];
@@ -545,11 +298,19 @@ pub fn max_key(x: f32) -> u32 {
     x.to_bits() & 0x7fff_ffff
 }
 
+/// Parity tolerance of [`tissue_reduce_max`] on the decoded keys: the keys
+/// are f32 bit patterns of squared lengths; max is exact, only the rounding
+/// of one squared length may differ (FMA contraction), so the decoded
+/// values agree within 2 ulp (rel 2.4e-7).
+pub const TISSUE_REDUCE_MAX_TOL: Tolerance = Tolerance {
+    abs: 0.0,
+    rel: 2.4e-7,
+};
+
 /// Mirror of `tissue_reduce_max.wgsl`: `[max_i key(|v_i|²), max_i
 /// key(|x_i − s_i|²)]` over the first `n` nodes (`vel`, `pos`, `snapshot`
-/// each hold at least `n`). Max is exact whatever the reduction tree; the
-/// kernel may differ only in the rounding of each squared length (FMA
-/// contraction), by ≤ 2 ulp.
+/// each hold at least `n`), in parallel chunks (max is exact whatever the
+/// reduction tree). Parity tolerance: [`TISSUE_REDUCE_MAX_TOL`].
 pub fn tissue_reduce_max(
     n: usize,
     vel: &[[f32; 4]],

@@ -11,9 +11,9 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::{Error, hscan, normals, reduce, scan, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
@@ -138,116 +138,116 @@ fn encase_bytes<T: encase::ShaderType + encase::internal::WriteInto>(v: &T) -> V
 fn params_sample(kernel: Kernel) -> Sample {
     match kernel {
         Kernel::VertexNormals => (
-                encase_bytes(&normals::gpu::Params { n_vertices: 0xA1 }),
-                vec![("n_vertices", 0xA1)],
-            ),
+            encase_bytes(&normals::gpu::Params { n_vertices: 0xA1 }),
+            vec![("n_vertices", 0xA1)],
+        ),
         Kernel::BoundsReduce | Kernel::RangeReduce => (
-                encase_bytes(&reduce::gpu::Params {
-                    n_items: 0xB1,
-                    pairs: 0xB2,
-                }),
-                vec![("n_items", 0xB1), ("pairs", 0xB2)],
-            ),
+            encase_bytes(&reduce::gpu::Params {
+                n_items: 0xB1,
+                pairs: 0xB2,
+            }),
+            vec![("n_items", 0xB1), ("pairs", 0xB2)],
+        ),
         Kernel::ExclusiveScanBlocks | Kernel::ExclusiveScanAdd => (
-                encase_bytes(&scan::gpu::Params { n: 0xC1 }),
-                vec![("n", 0xC1)],
-            ),
+            encase_bytes(&scan::gpu::Params { n: 0xC1 }),
+            vec![("n", 0xC1)],
+        ),
         Kernel::McClassify => (
-                encase_bytes(&surface::gpu::ClassifyParams {
-                    nx: 0xD1,
-                    ny: 0xD2,
-                    nz: 0xD3,
-                    z_first: 0xD4,
-                    z_begin: 0xD5,
-                    n_layers: 0xD6,
-                    blocks_per_layer: 0xD7,
-                    level: f32::from_bits(0xD8),
-                }),
-                vec![
-                    ("nx", 0xD1),
-                    ("ny", 0xD2),
-                    ("nz", 0xD3),
-                    ("z_first", 0xD4),
-                    ("z_begin", 0xD5),
-                    ("n_layers", 0xD6),
-                    ("blocks_per_layer", 0xD7),
-                    ("level", 0xD8),
-                ],
-            ),
+            encase_bytes(&surface::gpu::ClassifyParams {
+                nx: 0xD1,
+                ny: 0xD2,
+                nz: 0xD3,
+                z_first: 0xD4,
+                z_begin: 0xD5,
+                n_layers: 0xD6,
+                blocks_per_layer: 0xD7,
+                level: f32::from_bits(0xD8),
+            }),
+            vec![
+                ("nx", 0xD1),
+                ("ny", 0xD2),
+                ("nz", 0xD3),
+                ("z_first", 0xD4),
+                ("z_begin", 0xD5),
+                ("n_layers", 0xD6),
+                ("blocks_per_layer", 0xD7),
+                ("level", 0xD8),
+            ],
+        ),
         Kernel::McVertices => (
-                encase_bytes(&surface::gpu::VerticesParams {
-                    nx: 0xE1,
-                    ny: 0xE2,
-                    nz: 0xE3,
-                    z_first: 0xE4,
-                    z_begin: 0xE5,
-                    n_layers: 0xE6,
-                    n_owned: 0xE7,
-                    blocks_per_layer: 0xE8,
-                    v_start: 0xE9,
-                    level: f32::from_bits(0xEA),
-                }),
-                vec![
-                    ("nx", 0xE1),
-                    ("ny", 0xE2),
-                    ("nz", 0xE3),
-                    ("z_first", 0xE4),
-                    ("z_begin", 0xE5),
-                    ("n_layers", 0xE6),
-                    ("n_owned", 0xE7),
-                    ("blocks_per_layer", 0xE8),
-                    ("v_start", 0xE9),
-                    ("level", 0xEA),
-                ],
-            ),
+            encase_bytes(&surface::gpu::VerticesParams {
+                nx: 0xE1,
+                ny: 0xE2,
+                nz: 0xE3,
+                z_first: 0xE4,
+                z_begin: 0xE5,
+                n_layers: 0xE6,
+                n_owned: 0xE7,
+                blocks_per_layer: 0xE8,
+                v_start: 0xE9,
+                level: f32::from_bits(0xEA),
+            }),
+            vec![
+                ("nx", 0xE1),
+                ("ny", 0xE2),
+                ("nz", 0xE3),
+                ("z_first", 0xE4),
+                ("z_begin", 0xE5),
+                ("n_layers", 0xE6),
+                ("n_owned", 0xE7),
+                ("blocks_per_layer", 0xE8),
+                ("v_start", 0xE9),
+                ("level", 0xEA),
+            ],
+        ),
         Kernel::McTriangles => (
-                encase_bytes(&surface::gpu::TrianglesParams {
-                    nx: 0xF1,
-                    ny: 0xF2,
-                    nz: 0xF3,
-                    z_first: 0xF4,
-                    z_begin: 0xF5,
-                    n_layers: 0xF6,
-                    blocks_per_layer: 0xF7,
-                    vb_first: 0xF8,
-                    t_start: 0xF9,
-                    level: f32::from_bits(0xFA),
-                }),
-                vec![
-                    ("nx", 0xF1),
-                    ("ny", 0xF2),
-                    ("nz", 0xF3),
-                    ("z_first", 0xF4),
-                    ("z_begin", 0xF5),
-                    ("n_layers", 0xF6),
-                    ("blocks_per_layer", 0xF7),
-                    ("vb_first", 0xF8),
-                    ("t_start", 0xF9),
-                    ("level", 0xFA),
-                ],
-            ),
+            encase_bytes(&surface::gpu::TrianglesParams {
+                nx: 0xF1,
+                ny: 0xF2,
+                nz: 0xF3,
+                z_first: 0xF4,
+                z_begin: 0xF5,
+                n_layers: 0xF6,
+                blocks_per_layer: 0xF7,
+                vb_first: 0xF8,
+                t_start: 0xF9,
+                level: f32::from_bits(0xFA),
+            }),
+            vec![
+                ("nx", 0xF1),
+                ("ny", 0xF2),
+                ("nz", 0xF3),
+                ("z_first", 0xF4),
+                ("z_begin", 0xF5),
+                ("n_layers", 0xF6),
+                ("blocks_per_layer", 0xF7),
+                ("vb_first", 0xF8),
+                ("t_start", 0xF9),
+                ("level", 0xFA),
+            ],
+        ),
         Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => (
-                    encase_bytes(&hscan::gpu::Params {
-                        n_faces: 0xD1,
-                        n_items: 0xD2,
-                        nx: 0xD3,
-                        ny: 0xD4,
-                        z0: 0xD5,
-                        origin_x: 0xD6,
-                        origin_y: 0xD7,
-                        origin_z: 0xD8,
-                    }),
-                    vec![
-                        ("n_faces", 0xD1),
-                        ("n_items", 0xD2),
-                        ("nx", 0xD3),
-                        ("ny", 0xD4),
-                        ("z0", 0xD5),
-                        ("origin_x", 0xD6),
-                        ("origin_y", 0xD7),
-                        ("origin_z", 0xD8),
-                    ],
-                ),
+            encase_bytes(&hscan::gpu::Params {
+                n_faces: 0xD1,
+                n_items: 0xD2,
+                nx: 0xD3,
+                ny: 0xD4,
+                z0: 0xD5,
+                origin_x: 0xD6,
+                origin_y: 0xD7,
+                origin_z: 0xD8,
+            }),
+            vec![
+                ("n_faces", 0xD1),
+                ("n_items", 0xD2),
+                ("nx", 0xD3),
+                ("ny", 0xD4),
+                ("z0", 0xD5),
+                ("origin_x", 0xD6),
+                ("origin_y", 0xD7),
+                ("origin_z", 0xD8),
+            ],
+        ),
         Kernel::SpringStep | Kernel::SpringChebyshev | Kernel::TissueReduceMax => {
             tissue_params_sample(kernel)
         }
@@ -293,7 +293,10 @@ fn every_kernel_spec_follows_the_house_order() {
 fn mirrors_use_their_kernels_constants() {
     let spec = |k: Kernel| k.spec().unwrap();
     for k in [Kernel::BoundsReduce, Kernel::RangeReduce] {
-        assert_eq!(spec(k).const_u32("BLOCK").unwrap() as usize, reduce::cpu::BLOCK);
+        assert_eq!(
+            spec(k).const_u32("BLOCK").unwrap() as usize,
+            reduce::cpu::BLOCK
+        );
     }
     for k in [Kernel::ExclusiveScanBlocks, Kernel::ExclusiveScanAdd] {
         assert_eq!(spec(k).wg_size as usize, scan::cpu::WG_SIZE);
@@ -352,7 +355,11 @@ fn pass_builder_refuses_bindings_the_wgsl_does_not_declare() {
     let a = GpuArray::<u32>::from_slice(gpu, "test.a", &[1, 2, 3, 4]).unwrap();
     let b = GpuArray::<u32>::zeroed(gpu, "test.b", 4).unwrap();
     // exclusive_scan_add: params, read offsets, read-write scanned.
-    let binder = || gpu.kernel(Kernel::ExclusiveScanAdd).unwrap().uniform(&params);
+    let binder = || {
+        gpu.kernel(Kernel::ExclusiveScanAdd)
+            .unwrap()
+            .uniform(&params)
+    };
     assert!(binder().read(&a).write(&b).bind().is_ok());
     let refused = |r: chisel::Result<chisel::gpu::BoundKernel>, what: &str| match r {
         Err(Error::Kernel { name, message }) => {
@@ -363,7 +370,10 @@ fn pass_builder_refuses_bindings_the_wgsl_does_not_declare() {
     };
     refused(binder().read(&a).read(&b).bind(), "binding 2 is ReadWrite");
     refused(binder().read(&a).bind(), "2 of its 3 bindings");
-    refused(binder().read(&a).write(&b).write(&b).bind(), "declares 3 bindings");
+    refused(
+        binder().read(&a).write(&b).write(&b).bind(),
+        "declares 3 bindings",
+    );
 }
 
 /// The tissue kernels' `Params` samples (one struct per kernel).

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use serde_json::{Value, json};
 
 use super::{BackendArg, Global};
+use crate::foundation::vertex_components;
 use crate::mesh::{Topology, self_intersections};
 use crate::parity::Backend;
-use crate::foundation::vertex_components;
 use crate::volume::analysis::{VolumeStats, label_components, threshold_components};
 
 /// Arguments of `chisel stats`.

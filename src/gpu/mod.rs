@@ -207,7 +207,7 @@ impl Gpu {
         }
     }
 
-    /// The pass builder of `kernel` ([`pass`]): its pipeline, built once
+    /// The pass builder of `kernel` ([`Binder`]): its pipeline, built once
     /// with the bind-group layout its WGSL declares ([`Kernel::spec`]) and
     /// cached for the life of the device.
     pub fn kernel(&self, kernel: Kernel) -> Result<Binder<'_>> {
@@ -256,14 +256,15 @@ impl Gpu {
                     bind_group_layouts: &[Some(&layout)],
                     immediate_size: 0,
                 });
-            let pipeline = (self.device).create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(&label),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
+            let pipeline =
+                (self.device).create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(&label),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some("main"),
+                    compilation_options: Default::default(),
+                    cache: None,
+                });
             Compiled { pipeline, layout }
         })
         .map_err(|e| match e {

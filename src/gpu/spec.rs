@@ -77,11 +77,16 @@ fn reflect(kernel: Kernel) -> std::result::Result<KernelSpec, String> {
     for (_, g) in module.global_variables.iter() {
         let Some(rb) = &g.binding else { continue };
         if rb.group != 0 {
-            return Err(format!("binding {} in group {} (only group 0 is bound)", rb.binding, rb.group));
+            return Err(format!(
+                "binding {} in group {} (only group 0 is bound)",
+                rb.binding, rb.group
+            ));
         }
         let kind = match g.space {
             naga::AddressSpace::Uniform => BindKind::Uniform,
-            naga::AddressSpace::Storage { access } if access.contains(naga::StorageAccess::STORE) => {
+            naga::AddressSpace::Storage { access }
+                if access.contains(naga::StorageAccess::STORE) =>
+            {
                 BindKind::ReadWrite
             }
             naga::AddressSpace::Storage { .. } => BindKind::Read,
@@ -91,16 +96,27 @@ fn reflect(kernel: Kernel) -> std::result::Result<KernelSpec, String> {
     }
     bindings.sort_by_key(|b| b.0);
     if let Some((i, _)) = (bindings.iter().enumerate()).find(|(i, b)| b.0 != *i as u32) {
-        return Err(format!("bindings are not numbered 0..n (binding {i} missing)"));
+        return Err(format!(
+            "bindings are not numbered 0..n (binding {i} missing)"
+        ));
     }
     let [entry] = module.entry_points.as_slice() else {
-        return Err(format!("{} entry points, expected one `main`", module.entry_points.len()));
+        return Err(format!(
+            "{} entry points, expected one `main`",
+            module.entry_points.len()
+        ));
     };
     if entry.name != "main" || entry.stage != naga::ShaderStage::Compute {
-        return Err(format!("entry point `{}` ({:?}), expected compute `main`", entry.name, entry.stage));
+        return Err(format!(
+            "entry point `{}` ({:?}), expected compute `main`",
+            entry.name, entry.stage
+        ));
     }
     let [wg_size, 1, 1] = entry.workgroup_size else {
-        return Err(format!("workgroup size {:?}, expected 1-D", entry.workgroup_size));
+        return Err(format!(
+            "workgroup size {:?}, expected 1-D",
+            entry.workgroup_size
+        ));
     };
     let consts = (module.constants.iter())
         .filter_map(|(_, c)| match module.global_expressions[c.init] {

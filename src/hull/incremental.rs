@@ -20,8 +20,8 @@
 //! Coordinates are bounded by [`MAX_COORD`], so every normal (≤ 2³⁵), offset and `s` (≤ 2⁵⁴) fits `i64` without overflow; volumes are
 //! accumulated in `i128`.
 
-use crate::foundation::exact::{P3, cross, det, dot, gcd, sub};
 use super::CoplanarPolicy;
+use crate::foundation::exact::{P3, cross, det, dot, gcd, sub};
 
 /// Largest accepted |coordinate| (combinatorial units): 2¹⁶.
 pub const MAX_COORD: i64 = 1 << 16;

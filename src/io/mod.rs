@@ -249,4 +249,3 @@ pub fn write_volume(path: &Path, v: &Volume) -> Result<()> {
         VolumeFormat::NiiGz => nifti::write(path, v, true),
     }
 }
-

@@ -42,7 +42,6 @@ use super::{MergedSurface, Polyhedron, ShellGeometry};
 /// i128.
 pub const MAX_COORD: i64 = 1 << 24;
 
-
 /// The normal `(b − a) × (c − a)` of triangle `a b c`, in `i128`.
 fn cross3(a: [i64; 3], b: [i64; 3], c: [i64; 3]) -> [i128; 3] {
     cross_wide(sub(b, a), sub(c, a))

@@ -336,7 +336,12 @@ fn classify(
     let timer = gpu.pass_timer(1);
     let mut encoder = gpu.encoder("mc_classify");
     let n_invocations = n_blocks as u32 * bound.wg_size();
-    bound.record(gpu, &mut encoder, n_invocations, timer.as_ref().map(|t| (t, 0)));
+    bound.record(
+        gpu,
+        &mut encoder,
+        n_invocations,
+        timer.as_ref().map(|t| (t, 0)),
+    );
     let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
     let staged = counts.stage(gpu, &mut encoder)?;
     gpu.submit_and_wait(encoder)?;
@@ -433,7 +438,14 @@ fn emit(
     )?;
     let vk = Kernel::McVertices;
     let tk = Kernel::McTriangles;
-    let vbound = bind_vertices(gpu, &vparams, samples.buffer, &offsets_v, &vert_base, &positions)?;
+    let vbound = bind_vertices(
+        gpu,
+        &vparams,
+        samples.buffer,
+        &offsets_v,
+        &vert_base,
+        &positions,
+    )?;
     let tbound = bind_triangles(
         gpu,
         &tparams,
@@ -541,7 +553,12 @@ pub fn mc_classify(
     table: &[u32],
 ) -> Result<Vec<[u32; 2]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
-    let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks as usize, [u32::MAX; 2])?;
+    let counts = GpuArray::output(
+        gpu,
+        "mc_classify.block_counts",
+        n_blocks as usize,
+        [u32::MAX; 2],
+    )?;
     let uniform = UniformBuffer::new(gpu, "mc_classify.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_classify.samples", samples)?;
     let table = GpuArray::from_slice(gpu, "mc_classify.table", table)?;
@@ -565,7 +582,11 @@ pub fn mc_vertices(
     let uniform = UniformBuffer::new(gpu, "mc_vertices.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_vertices.samples", samples)?;
     let offsets = GpuArray::from_slice(gpu, "mc_vertices.block_offsets", block_offsets)?;
-    let vert_base = GpuArray::zeroed(gpu, "mc_vertices.vert_base", params.n_layers as usize * layer)?;
+    let vert_base = GpuArray::zeroed(
+        gpu,
+        "mc_vertices.vert_base",
+        params.n_layers as usize * layer,
+    )?;
     let positions = GpuArray::output(gpu, "mc_vertices.positions", n_vertices, [f32::NAN; 4])?;
     let bound = bind_vertices(gpu, &uniform, &samples, &offsets, &vert_base, &positions)?;
     let positions = run_blocks(gpu, &bound, n_blocks, &positions)?;
@@ -590,7 +611,8 @@ pub fn mc_triangles(
     let offsets = GpuArray::from_slice(gpu, "mc_triangles.block_offsets", block_offsets)?;
     let vert_base = GpuArray::from_slice(gpu, "mc_triangles.vert_base", vert_base)?;
     let triangles = GpuArray::output(gpu, "mc_triangles.triangles", n_triangles, [u32::MAX; 4])?;
-    let bound =
-        bind_triangles(gpu, &uniform, &samples, &table, &offsets, &vert_base, &triangles)?;
+    let bound = bind_triangles(
+        gpu, &uniform, &samples, &table, &offsets, &vert_base, &triangles,
+    )?;
     run_blocks(gpu, &bound, n_blocks, &triangles)
 }

@@ -12,21 +12,16 @@
 //! triangles are integers and compare exactly; positions are bit for bit on
 //! adapters with correctly rounded division (lavapipe), else within
 //! WGSL's 2.5-ulp division bound carried through `f32(p) + t`.
-#![expect(
-    clippy::needless_range_loop,
-    reason = "mirrors the kernels' invocation loops"
-)]
 
+use super::cpu::T_MIN;
 use super::field::Field;
 use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams, scan_with_total};
-use super::cpu::T_MIN;
 use super::tables;
 use crate::Result;
 
 /// Invocations per workgroup of the three kernels (`WG_SIZE`; checked
 /// against the WGSL by `tests/shaders.rs`).
 pub const WG_SIZE: u32 = 256;
-
 
 /// Units in the last place a GPU position may differ from the mirror's on
 /// hardware whose f32 division is not correctly rounded: WGSL allows 2.5

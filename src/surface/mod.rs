@@ -182,7 +182,13 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
     let (forest, groups) = rayon::join(
         || Forest {
             closed_outward: field.pad == 1,
-            ..Forest::build(mesh.view(), &blocks.keys, blocks.dims, &raw.groups, raw.n_groups)
+            ..Forest::build(
+                mesh.view(),
+                &blocks.keys,
+                blocks.dims,
+                &raw.groups,
+                raw.n_groups,
+            )
         },
         || group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid),
     );

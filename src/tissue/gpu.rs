@@ -228,7 +228,9 @@ impl<'g> GpuStepper<'g> {
         let vel = GpuArray::from_slice(gpu, &label("vel"), velocities)?;
         let snap = GpuArray::from_slice(gpu, "tissue_reduce_max.snap", &positions[..nf])?;
         let reduce_wg = Kernel::TissueReduceMax.spec()?.wg_size;
-        let n_reduce_groups = n_free.div_ceil(reduce_wg).clamp(1, REDUCE_GROUPS.min(reduce_wg));
+        let n_reduce_groups = n_free
+            .div_ceil(reduce_wg)
+            .clamp(1, REDUCE_GROUPS.min(reduce_wg));
         let partials =
             GpuArray::zeroed(gpu, "tissue_reduce_max.partials", n_reduce_groups as usize)?;
         let result = GpuArray::output(gpu, "tissue_reduce_max.result", 1, [u32::MAX; 2])?;

@@ -20,8 +20,9 @@
 //!
 //! A diverged increment ends the plan (the later steps are not run).
 //!
-//! The driver only: the backends ([`super::cpu_stepper::CpuStepper`],
-//! [`super::gpu::GpuStepper`]) implement [`super::stepper::Stepper`].
+//! The driver only: the backends (`CpuStepper`,
+//! [`super::gpu::GpuStepper`]) implement the `Stepper` trait of
+//! [`super::stepper`].
 
 use std::time::Instant;
 

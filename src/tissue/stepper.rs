@@ -1,8 +1,7 @@
-//! What the relaxation driver ([`super::relax`]) asks of a backend: the
+//! What the relaxation driver ([`super::relax()`]) asks of a backend: the
 //! solver, the numerical options, the state both backends start from
-//! ([`Setup`]), and the [`Stepper`] trait that the CPU mirror
-//! ([`super::cpu_stepper::CpuStepper`]) and the GPU
-//! ([`super::gpu::GpuStepper`]) implement.
+//! (`Setup`), and the `Stepper` trait that the CPU mirror (`CpuStepper`)
+//! and the GPU ([`super::gpu::GpuStepper`]) implement.
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};

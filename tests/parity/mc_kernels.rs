@@ -90,7 +90,13 @@ pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize
     let vertex_offsets = off_v[a * bpl..=(a + vb_layers) * bpl].to_vec();
     let mut vert_base = vec![0u32; vb_layers * layer];
     let mut positions = vec![[f32::NAN; 4]; (off_v[b * bpl] - off_v[a * bpl]) as usize];
-    mirror::mc_vertices(&vertices, &emit_samples, &vertex_offsets, &mut vert_base, &mut positions);
+    mirror::mc_vertices(
+        &vertices,
+        &emit_samples,
+        &vertex_offsets,
+        &mut vert_base,
+        &mut positions,
+    );
     let triangles_params = TrianglesParams {
         nx: nx32,
         ny: ny32,
@@ -114,7 +120,10 @@ pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize
         &vert_base,
         &mut triangles,
     );
-    assert!(!triangles.is_empty(), "{what}: an empty surface proves nothing");
+    assert!(
+        !triangles.is_empty(),
+        "{what}: an empty surface proves nothing"
+    );
     Stages {
         what: what.into(),
         table,
@@ -138,7 +147,13 @@ pub fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
     let data: Vec<i16> = (0..dims.iter().product::<usize>())
         .map(|_| (next() % 2000) as i16)
         .collect();
-    Volume::new(dims, [0.7, 1.1, 1.3], [-3.0, 2.0, 5.0], VolumeData::I16(data)).unwrap()
+    Volume::new(
+        dims,
+        [0.7, 1.1, 1.3],
+        [-3.0, 2.0, 5.0],
+        VolumeData::I16(data),
+    )
+    .unwrap()
 }
 
 /// The fixtures every kernel module runs: random volumes (levels between
@@ -158,10 +173,20 @@ pub fn fixtures() -> Vec<Stages> {
     let labels = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
     out.push(stages("labels", &labels, IsoSpec::Label(2.0), None));
     let vol = random_volume(5, [40, 30, 24]);
-    out.push(stages("slab 7..15", &vol, IsoSpec::Level(1000.5), Some((7, 15))));
+    out.push(stages(
+        "slab 7..15",
+        &vol,
+        IsoSpec::Level(1000.5),
+        Some((7, 15)),
+    ));
     if let Some(vol) = common::real_volume("headsq/quarter.nhdr") {
         for level in [500.0, 1150.0] {
-            out.push(stages(&format!("headsq {level}"), &vol, IsoSpec::Level(level), None));
+            out.push(stages(
+                &format!("headsq {level}"),
+                &vol,
+                IsoSpec::Level(level),
+                None,
+            ));
         }
     }
     out

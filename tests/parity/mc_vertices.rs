@@ -12,11 +12,22 @@ use super::mc_kernels::{Stages, compare_positions, fixtures};
 use crate::common;
 
 fn ulps_on(g: &Gpu) -> u32 {
-    if g.is_software() { 0 } else { TOL_POSITION_ULPS }
+    if g.is_software() {
+        0
+    } else {
+        TOL_POSITION_ULPS
+    }
 }
 
 fn run(g: &Gpu, s: &Stages) -> (Vec<u32>, Vec<[f32; 4]>) {
-    gpu::mc_vertices(g, &s.vertices, &s.emit_samples, &s.vertex_offsets, s.positions.len()).unwrap()
+    gpu::mc_vertices(
+        g,
+        &s.vertices,
+        &s.emit_samples,
+        &s.vertex_offsets,
+        s.positions.len(),
+    )
+    .unwrap()
 }
 
 #[test]
@@ -25,12 +36,18 @@ fn mc_vertices_matches_its_mirror() {
     for s in fixtures() {
         let (vert_base, positions) = run(g, &s);
         assert!(
-            positions.iter().all(|p| p[..3].iter().all(|c| c.is_finite())),
+            positions
+                .iter()
+                .all(|p| p[..3].iter().all(|c| c.is_finite())),
             "{}: a position sentinel survived",
             s.what
         );
-        compare_exact(&format!("mc_vertices vert_base {}", s.what), &s.vert_base, &vert_base)
-            .unwrap_or_else(|m| panic!("{m}"));
+        compare_exact(
+            &format!("mc_vertices vert_base {}", s.what),
+            &s.vert_base,
+            &vert_base,
+        )
+        .unwrap_or_else(|m| panic!("{m}"));
         compare_positions(
             &format!("mc_vertices positions {}", s.what),
             &s.positions,

@@ -282,7 +282,12 @@ pub(super) fn order_by_group_and_layer(
 }
 
 /// The (group, layer) runs of `order` (sorted by group, layer, id).
-pub(super) fn layer_runs(order: &[u32], group_starts: &[u32], cells: &[u32], layer: usize) -> Vec<LayerRun> {
+pub(super) fn layer_runs(
+    order: &[u32],
+    group_starts: &[u32],
+    cells: &[u32],
+    layer: usize,
+) -> Vec<LayerRun> {
     let z_of = |t: u32| cells[t as usize] as usize / layer;
     let mut runs = Vec::new();
     for w in group_starts.windows(2) {

@@ -9,7 +9,7 @@
 //!
 //! Marching-cubes surfaces use the real cell grid (each triangle remembers
 //! its cell, recorded in the same pass that makes it), grouped into leaf
-//! blocks of [`LEAF_BLOCK`]³ cells; any other mesh (a file, a triangulated
+//! blocks of `surface::LEAF_BLOCK`³ cells; any other mesh (a file, a triangulated
 //! knife) gets a virtual grid over its bounding box.
 
 mod build;
@@ -334,9 +334,8 @@ impl Forest {
                 n_groups,
             };
         };
-        let (lo, hi) = (mesh.positions.iter()).fold((*first, *first), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
+        let (lo, hi) =
+            (mesh.positions.iter()).fold((*first, *first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         let extent = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
         let target = (mesh.triangles.len() as f64 / LEAF_TRIANGLES as f64).max(1.0);
         // Cell edge h with (extent/h)^2 ≈ target (surfaces fill ~ a 2-D set).

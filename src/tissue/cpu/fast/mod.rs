@@ -8,7 +8,7 @@
 //! still computes its own node's sum in its own CSR order, and the results
 //! stay bit for bit those of the mirror ([`super::spring_step`],
 //! [`super::spring_chebyshev`]) whatever the width (`tests/tissue.rs`).
-//! The relaxations ([`crate::tissue::relax`]) run this path.
+//! The relaxations ([`crate::tissue::relax()`]) run this path.
 
 use glam::{Mat4, Vec4};
 use rayon::prelude::*;

@@ -1,0 +1,331 @@
+//! The *emit* pass: one chunk of z layers ([`ChunkOut`], its slices of the
+//! output arrays) gets its vertices and triangles written in place, and
+//! returns its one-pass union-find grouping ([`ChunkGroups`]).
+
+use rayon::prelude::*;
+
+use super::super::field::{NativeSamples, SampleVisitor, Scalar};
+use super::super::tables::{self, EDGE_OWNER, corner_offset, edge_axis};
+use super::count::{Bits, Rows, case_at, cell_word};
+use super::{NONE, T_MIN};
+use crate::foundation::UnionFind;
+
+/// One chunk's share of the output: cell layers `z0..z1`, point layers
+/// `z0..=z1` of which it stores `z0..own_end`.
+pub(super) struct ChunkOut<'a> {
+    pub(super) z0: usize,
+    pub(super) z1: usize,
+    pub(super) own_end: usize,
+    /// Global id of the first vertex of layer `z0`.
+    pub(super) first_vertex: u32,
+    /// Vertices on layers `z0..=z1`.
+    pub(super) n_vertices: usize,
+    pub(super) positions: &'a mut [[f32; 3]],
+    pub(super) edges: &'a mut [u64],
+    pub(super) triangles: &'a mut [[u32; 3]],
+    pub(super) cells: &'a mut [u32],
+    /// Local union-find node of each triangle.
+    pub(super) tri_node: &'a mut [u32],
+}
+
+/// One chunk's grouping state.
+pub(super) struct ChunkGroups {
+    pub(super) uf: UnionFind,
+    /// Union-find node of each vertex of layers `z0..=z1` (by id − first
+    /// id), or NONE.
+    pub(super) vertex_node: Vec<u32>,
+    pub(super) first_vertex: u32,
+}
+
+/// Write cursors of a chunk.
+struct Emit<'a, 'o> {
+    out: &'a mut ChunkOut<'o>,
+    groups: ChunkGroups,
+    n_positions: usize,
+    n_triangles: usize,
+}
+
+/// The numbered crossing edges of one point layer: per row and word the
+/// crossing masks, and per row its first vertex id. A vertex id is
+/// recovered by counting along the row ([`VertexRows`]).
+struct Crossings {
+    /// `ny · words` masks `[x, y, z]`.
+    masks: Vec<[u64; 3]>,
+    /// `ny` first vertex ids.
+    row_base: Vec<u32>,
+}
+
+impl Crossings {
+    fn new(rows: &Rows) -> Self {
+        Crossings {
+            masks: vec![[0; 3]; rows.ny * rows.words],
+            row_base: vec![0; rows.ny],
+        }
+    }
+}
+
+/// The emit pass over all chunks (in parallel), with the samples read in
+/// the volume's native type.
+pub(super) struct RunChunks<'b, 'o> {
+    pub(super) bits: &'b Bits,
+    pub(super) outs: Vec<ChunkOut<'o>>,
+}
+
+impl SampleVisitor for RunChunks<'_, '_> {
+    type Output = Vec<ChunkGroups>;
+
+    fn visit<T: Scalar>(self, samples: NativeSamples<'_, '_, T>) -> Vec<ChunkGroups> {
+        let bits = self.bits;
+        self.outs
+            .into_par_iter()
+            .map(|out| run_chunk(samples, bits, out))
+            .collect()
+    }
+}
+
+fn run_chunk<T: Scalar>(
+    samples: NativeSamples<'_, '_, T>,
+    bits: &Bits,
+    mut out: ChunkOut<'_>,
+) -> ChunkGroups {
+    let rows = &bits.rows;
+    let (z0, z1, own_end) = (out.z0, out.z1, out.own_end);
+    let mut emit = Emit {
+        groups: ChunkGroups {
+            uf: UnionFind::default(),
+            vertex_node: vec![NONE; out.n_vertices],
+            first_vertex: out.first_vertex,
+        },
+        out: &mut out,
+        n_positions: 0,
+        n_triangles: 0,
+    };
+    // Crossings of layers z, z + 1 in slot (k − z0) mod 2.
+    let mut crossings = [Crossings::new(rows), Crossings::new(rows)];
+    let mut vertex_rows = VertexRows::new(rows);
+    let mut next_id = emit.groups.first_vertex;
+    number_points(
+        &samples,
+        bits,
+        z0,
+        true,
+        &mut crossings[0],
+        &mut next_id,
+        &mut emit,
+    );
+    for z in z0..z1 {
+        let [c0, c1] = &mut crossings;
+        let (lower, upper) = if (z - z0) % 2 == 0 {
+            (c0, c1)
+        } else {
+            (c1, c0)
+        };
+        let own = z + 1 < own_end;
+        number_points(&samples, bits, z + 1, own, upper, &mut next_id, &mut emit);
+        vertex_rows.clear();
+        emit_cells(bits, z, [&*lower, &*upper], &mut vertex_rows, &mut emit);
+    }
+    emit.groups
+}
+
+/// Numbers the crossing edges of point layer `z` in point order (x
+/// fastest, then y; axes x < y < z within a point), a word of 64 points at
+/// a time. Records the masks and row bases in `crossings`; stores positions
+/// and edge ids when the layer is `own`.
+fn number_points<T: Scalar>(
+    samples: &NativeSamples<'_, '_, T>,
+    bits: &Bits,
+    z: usize,
+    own: bool,
+    crossings: &mut Crossings,
+    next_id: &mut u32,
+    emit: &mut Emit<'_, '_>,
+) {
+    let Rows { nx, ny, words, .. } = bits.rows;
+    let level = samples.level();
+    let zf = z as f32;
+    for y in 0..ny {
+        crossings.row_base[y] = *next_id;
+        let masks = &mut crossings.masks[y * words..(y + 1) * words];
+        for (w, mask) in masks.iter_mut().enumerate() {
+            let [ex, ey, ez] = bits.crossings(y, z, w);
+            *mask = [ex, ey, ez];
+            *next_id += ex.count_ones() + ey.count_ones() + ez.count_ones();
+            if !own {
+                continue;
+            }
+            let mut any = ex | ey | ez;
+            while any != 0 {
+                let s = any.trailing_zeros();
+                any &= any - 1;
+                let x = 64 * w + s as usize;
+                let point = (x + nx * (y + ny * z)) as u64;
+                let a = samples.sample(x, y, z);
+                let mut vertex = |axis: usize, b: f32| {
+                    let t = ((level - a) / (b - a)).clamp(T_MIN, 1.0 - T_MIN);
+                    let mut u = [x as f32, y as f32, zf];
+                    u[axis] += t;
+                    emit.out.positions[emit.n_positions] = u;
+                    emit.out.edges[emit.n_positions] = 3 * point + axis as u64;
+                    emit.n_positions += 1;
+                };
+                if ex >> s & 1 == 1 {
+                    vertex(0, samples.sample(x + 1, y, z));
+                }
+                if ey >> s & 1 == 1 {
+                    vertex(1, samples.sample(x, y + 1, z));
+                }
+                if ez >> s & 1 == 1 {
+                    vertex(2, samples.sample(x, y, z + 1));
+                }
+            }
+        }
+    }
+}
+
+/// Vertex ids of the point rows a cell row reads — rows `y` and `y + 1`
+/// of the lower and upper layer — unpacked from [`Crossings`] into small
+/// per-row arrays, each row once per cell layer.
+struct VertexRows {
+    nx: usize,
+    words: usize,
+    /// Ids at `((2·layer + y mod 2)·3 + axis)·nx + x`.
+    ids: Vec<u32>,
+    /// Row held by each `[layer][y mod 2]` slot (`usize::MAX`: none).
+    held: [[usize; 2]; 2],
+}
+
+impl VertexRows {
+    fn new(rows: &Rows) -> Self {
+        VertexRows {
+            nx: rows.nx,
+            words: rows.words,
+            ids: vec![NONE; 12 * rows.nx],
+            held: [[usize::MAX; 2]; 2],
+        }
+    }
+
+    /// Forgets the rows held (a new cell layer starts).
+    fn clear(&mut self) {
+        self.held = [[usize::MAX; 2]; 2];
+    }
+
+    /// Makes rows `y` and `y + 1` of the lower and upper layer available.
+    fn hold(&mut self, layers: [&Crossings; 2], y: usize) {
+        let nx = self.nx;
+        for (dz, c) in layers.into_iter().enumerate() {
+            for yy in [y, y + 1] {
+                if self.held[dz][yy % 2] == yy {
+                    continue;
+                }
+                let slot = 2 * dz + yy % 2;
+                let ids = &mut self.ids[slot * 3 * nx..(slot + 1) * 3 * nx];
+                let (ids_x, rest) = ids.split_at_mut(nx);
+                let (ids_y, ids_z) = rest.split_at_mut(nx);
+                let mut id = c.row_base[yy];
+                let masks = &c.masks[yy * self.words..(yy + 1) * self.words];
+                for (w, &[ex, ey, ez]) in masks.iter().enumerate() {
+                    let mut any = ex | ey | ez;
+                    while any != 0 {
+                        let s = any.trailing_zeros();
+                        any &= any - 1;
+                        let x = 64 * w + s as usize;
+                        if ex >> s & 1 == 1 {
+                            ids_x[x] = id;
+                            id += 1;
+                        }
+                        if ey >> s & 1 == 1 {
+                            ids_y[x] = id;
+                            id += 1;
+                        }
+                        if ez >> s & 1 == 1 {
+                            ids_z[x] = id;
+                            id += 1;
+                        }
+                    }
+                }
+                self.held[dz][yy % 2] = yy;
+            }
+        }
+    }
+
+    /// Offset into the held ids of each local edge of the cells of row `y`
+    /// (add the cell's `x`).
+    fn edge_offsets(&self, y: usize) -> [usize; 12] {
+        std::array::from_fn(|e| {
+            let [ox, oy, oz] = corner_offset(EDGE_OWNER[e] as usize);
+            ((2 * oz + (y + oy) % 2) * 3 + edge_axis(e)) * self.nx + ox
+        })
+    }
+}
+
+/// Emits the triangles of cell layer `z` in cell order (x fastest, then
+/// y), a word of 64 cells at a time.
+fn emit_cells(
+    bits: &Bits,
+    z: usize,
+    crossings: [&Crossings; 2],
+    vertex_rows: &mut VertexRows,
+    emit: &mut Emit<'_, '_>,
+) {
+    let Rows { nx, ny, words, .. } = bits.rows;
+    let table = tables::table();
+    let (cx, cy) = (nx - 1, ny - 1);
+    for y in 0..cy {
+        let r = bits.cell_rows(y, z);
+        let mut held = false;
+        let offsets = vertex_rows.edge_offsets(y);
+        for w in 0..words {
+            let (lo, hi, mut crossed) = cell_word(&r, w, bits.rows.has_x[w]);
+            if crossed != 0 && !held {
+                vertex_rows.hold(crossings, y);
+                held = true;
+            }
+            while crossed != 0 {
+                let s = crossed.trailing_zeros();
+                crossed &= crossed - 1;
+                let x = 64 * w + s as usize;
+                let cell = (x + cx * (y + cy * z)) as u32;
+                let ids = &vertex_rows.ids[x..];
+                for tri in table.case(case_at(&lo, &hi, s)) {
+                    let id = |e: u8| ids[offsets[e as usize]];
+                    let v = [id(tri[0]), id(tri[1]), id(tri[2])];
+                    let node = join_group(&mut emit.groups, v);
+                    let i = emit.n_triangles;
+                    emit.out.triangles[i] = v;
+                    emit.out.cells[i] = cell;
+                    emit.out.tri_node[i] = node;
+                    emit.n_triangles += 1;
+                }
+            }
+        }
+    }
+}
+
+/// One-pass grouping: the new triangle `v` joins the groups of the
+/// triangles already using its vertices (seed §1: add to one group, start a
+/// new group, or merge several). Returns its union-find node.
+fn join_group(groups: &mut ChunkGroups, v: [u32; 3]) -> u32 {
+    let base = groups.first_vertex;
+    let mut node = NONE;
+    for &i in &v {
+        let g = groups.vertex_node[(i - base) as usize];
+        if g != NONE && g != node {
+            node = if node == NONE {
+                groups.uf.find(g)
+            } else {
+                groups.uf.union(node, g)
+            };
+        }
+    }
+    if node == NONE {
+        node = groups.uf.push();
+    }
+    for &i in &v {
+        let slot = &mut groups.vertex_node[(i - base) as usize];
+        if *slot == NONE {
+            *slot = node;
+        }
+    }
+    node
+}

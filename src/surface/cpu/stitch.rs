@@ -1,0 +1,85 @@
+//! Chunk *stitching*: takes the chunks' groupings ([`ChunkGroups`]) and the
+//! triangles' chunk-local union-find nodes, and returns every triangle's
+//! canonical group (numbered by first triangle) and the number of groups.
+
+use rayon::prelude::*;
+
+use super::NONE;
+use super::emit::ChunkGroups;
+use crate::foundation::UnionFind;
+
+/// Joins the chunks' grouping: one union-find over all chunks' nodes, the
+/// vertices of each shared layer united, then `groups` (per triangle: the
+/// chunk-local node on entry) becomes the canonical group, numbered by
+/// first triangle. Returns the number of groups.
+pub(super) fn stitch(
+    chunk_groups: &[ChunkGroups],
+    chunks: &[(usize, usize)],
+    vbase: &[u64],
+    tbase: &[u64],
+    groups: &mut [u32],
+) -> usize {
+    let mut node_base = Vec::with_capacity(chunk_groups.len());
+    let mut n_nodes = 0u32;
+    for c in chunk_groups {
+        node_base.push(n_nodes);
+        n_nodes += c.uf.len() as u32;
+    }
+    let mut uf = UnionFind::default();
+    for c in chunk_groups {
+        uf.append(&c.uf);
+    }
+    // Seams: chunk k's first layer is chunk k − 1's last.
+    for k in 1..chunk_groups.len() {
+        let (prev, next) = (&chunk_groups[k - 1], &chunk_groups[k]);
+        let z = chunks[k].0;
+        for id in vbase[z] as u32..vbase[z + 1] as u32 {
+            let a = prev.vertex_node[(id - prev.first_vertex) as usize];
+            let b = next.vertex_node[(id - next.first_vertex) as usize];
+            if a != NONE && b != NONE {
+                uf.union(node_base[k - 1] + a, node_base[k] + b);
+            }
+        }
+    }
+    let root = uf.roots();
+    // Per chunk: global roots in place and the distinct roots in order of
+    // first triangle; then canonical numbers in chunk order.
+    let mut slices = Vec::with_capacity(chunks.len());
+    let mut rest = groups;
+    for &(z0, z1) in chunks {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut((tbase[z1] - tbase[z0]) as usize);
+        slices.push(head);
+        rest = tail;
+    }
+    let firsts: Vec<Vec<u32>> = slices
+        .par_iter_mut()
+        .zip(&node_base)
+        .map(|(tris, &base)| {
+            let mut seen = std::collections::HashSet::new();
+            let mut order = Vec::new();
+            let mut prev = NONE;
+            for g in tris.iter_mut() {
+                *g = root[(base + *g) as usize];
+                if *g != prev && seen.insert(*g) {
+                    order.push(*g);
+                }
+                prev = *g;
+            }
+            order
+        })
+        .collect();
+    let mut canonical = vec![NONE; n_nodes as usize];
+    let mut n_groups = 0u32;
+    for r in firsts.iter().flatten() {
+        if canonical[*r as usize] == NONE {
+            canonical[*r as usize] = n_groups;
+            n_groups += 1;
+        }
+    }
+    slices.into_par_iter().for_each(|tris| {
+        for g in tris.iter_mut() {
+            *g = canonical[*g as usize];
+        }
+    });
+    n_groups as usize
+}

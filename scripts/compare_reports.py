@@ -92,6 +92,21 @@ def commands(data, backend):
     ]
 
 
+def differences(old, new, at="$"):
+    """The paths where two normalised reports differ, with both values."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for k in sorted(set(old) | set(new)):
+            out += differences(old.get(k), new.get(k), f"{at}.{k}")
+        return out
+    if isinstance(old, list) and isinstance(new, list) and len(old) == len(new):
+        out = []
+        for i, (a, b) in enumerate(zip(old, new)):
+            out += differences(a, b, f"{at}[{i}]")
+        return out
+    return [] if old == new else [f"{at}: {json.dumps(old)} -> {json.dumps(new)}"]
+
+
 def digest(path):
     """SHA-256 of a file, or of every file below a folder (by relative name)."""
     h = hashlib.sha256()
@@ -140,7 +155,8 @@ def main():
             r_new, f_new = run(os.path.abspath(a.new), name, argv, outputs, new_root)
             same = r_old == r_new and f_old == f_new
             differ += not same
-            detail = "" if same else f"\n  old: {json.dumps(r_old)[:2000]} {f_old}\n  new: {json.dumps(r_new)[:2000]} {f_new}"
+            lines = differences(r_old, r_new) + differences(f_old, f_new, "files")
+            detail = "".join(f"\n  {line[:300]}" for line in lines[:20])
             print(f"{'same' if same else 'DIFFERENT':9} {name}{detail}")
     print(f"{differ} of {len(commands(a.data, a.backend))} commands differ")
     sys.exit(1 if differ else 0)

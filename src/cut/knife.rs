@@ -12,6 +12,10 @@ use glam::{DVec3, Vec3};
 use crate::TriMesh;
 use crate::foundation::{Aabb, Forest};
 
+/// Largest sagitta of an interior cap edge, or of a polyhedral sphere's
+/// triangle, on a sphere, relative to the radius.
+pub const SPHERE_CHORD_ERROR: f64 = 1e-3;
+
 /// A scalpel.
 #[derive(Debug, Clone)]
 pub enum Knife {
@@ -187,7 +191,7 @@ impl Knife {
 
     /// The sphere as an outward triangulated knife: an icosahedron
     /// subdivided until every triangle lies within
-    /// [`SPHERE_CHORD_ERROR`](super::cap::SPHERE_CHORD_ERROR)·r of the
+    /// [`SPHERE_CHORD_ERROR`]·r of the
     /// sphere (the chord bound of analytic sphere caps), its vertices on the
     /// sphere (rounded to f32). `attempt` picks the orientation: a fixed
     /// irrational axis and angle per attempt, so a polyhedron that touches
@@ -196,7 +200,7 @@ impl Knife {
     pub fn polyhedral_sphere(centre: DVec3, radius: f64, attempt: u32) -> TriMesh {
         let (v, triangles) = (0..)
             .map(crate::mesh::unit_icosphere)
-            .find(|(p, t)| crate::mesh::icosphere_sag(p, t) <= super::cap::SPHERE_CHORD_ERROR)
+            .find(|(p, t)| crate::mesh::icosphere_sag(p, t) <= SPHERE_CHORD_ERROR)
             .expect("the sag shrinks about 4× per level");
         let golden = (1.0 + 5f64.sqrt()) / 2.0;
         let axis = DVec3::new(1.0, golden, std::f64::consts::SQRT_2).normalize();

@@ -54,9 +54,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-pub use cap::SPHERE_CHORD_ERROR;
 pub use corefine::{KnifeSegment, PointOrigin};
-pub use knife::{Crossing, Knife, Side};
+pub use knife::{Crossing, Knife, SPHERE_CHORD_ERROR, Side};
 
 use crate::foundation::Forest;
 use crate::{Result, TriMesh};

@@ -10,9 +10,17 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::Located;
-use super::split::Sub;
 use crate::TriMesh;
 use crate::foundation::AtomicUnionFind;
+
+/// A sub-triangle of the split, before regrouping.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Sub {
+    /// Vertex ids: `< n_v` original, else `n_v + cut id`.
+    pub(crate) v: [u32; 3],
+    /// Side for sub-triangles of a separating split; `None` when glued.
+    pub(crate) side: Option<bool>,
+}
 
 /// Slots of the few keys (pieces) that runs of triangles mostly stay in:
 /// the last hit, else a hash map.

@@ -11,19 +11,10 @@ use rayon::prelude::*;
 use super::cap::{self, CutSurface, make_caps};
 use super::corefine;
 use super::knife::{Kind, PreparedKnife};
-use super::regroup::{Regroup, chunk_bounds};
+use super::regroup::{Regroup, Sub, chunk_bounds};
 use super::{CutOptions, CutResult, CutStats, Located, Side};
 use crate::foundation::Forest;
 use crate::{Result, TriMesh};
-
-/// A sub-triangle of the split, before regrouping.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Sub {
-    /// Vertex ids: `< n_v` original, else `n_v + cut id`.
-    pub(super) v: [u32; 3],
-    /// Side for sub-triangles of a separating split; `None` when glued.
-    pub(super) side: Option<bool>,
-}
 
 /// Splits, regroups and caps (shared by the tree and the scan). The tree's
 /// cut passes its forest: sphere caps then find the surface near them

@@ -21,21 +21,8 @@ use chisel::parity::{Mismatch, Tolerance, compare_exact, compare_vec, find_senti
 use chisel::surface::{self, Field, IsoSpec, McOptions, Surface};
 use chisel::volume::{Volume, VolumeData};
 
+use super::mc_kernels::random_volume;
 use crate::common;
-
-fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
-    let mut next = common::xorshift(seed);
-    let data: Vec<i16> = (0..dims.iter().product::<usize>())
-        .map(|_| (next() % 2000) as i16)
-        .collect();
-    Volume::new(
-        dims,
-        [0.7, 1.1, 1.3],
-        [-3.0, 2.0, 5.0],
-        VolumeData::I16(data),
-    )
-    .unwrap()
-}
 
 /// Positions keyed by grid edge id, in edge order.
 fn positions_by_edge(s: &Surface) -> Vec<[f32; 3]> {

@@ -32,11 +32,10 @@ mod triangulate;
 use glam::{DVec2, DVec3, Vec3};
 
 use super::CutStats;
-use super::knife::{Kind, PreparedKnife};
+use super::knife::{Kind, PreparedKnife, SPHERE_CHORD_ERROR};
 use crate::{Error, Result};
 pub(super) use loops::loops;
 pub(crate) use sphere::CutSurface;
-pub use sphere::SPHERE_CHORD_ERROR;
 use sphere::{
     CAP_REPAIR_ROUNDS, SphereCapCheck, refine_on_sphere, repair_on_sphere, sphere_max_edge,
 };

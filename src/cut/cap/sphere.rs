@@ -11,11 +11,9 @@ use rayon::prelude::*;
 use super::Projection;
 use crate::TriMesh;
 use crate::cut::Located;
-use crate::cut::split::Sub;
+use crate::cut::knife::SPHERE_CHORD_ERROR;
+use crate::cut::regroup::Sub;
 use crate::foundation::{Aabb, Forest};
-
-/// Largest sagitta of an interior cap edge on a sphere, relative to the radius.
-pub const SPHERE_CHORD_ERROR: f64 = 1e-3;
 
 /// Longest interior cap edge on a sphere of radius `r`: the sagitta of a
 /// chord of length L is `r − √(r² − L²/4) ≈ L²/(8r)`, so `L = r·√(8ε)`.

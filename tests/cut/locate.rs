@@ -1,0 +1,99 @@
+//! Knife location: the tree equals the full scan, leaf tables, and a forest
+//! of another mesh is refused.
+
+use super::*;
+
+/// Everything but the counts: crossed triangles, cut vertex numbering,
+/// points (bit for bit) and sides.
+fn same_located(a: &Located, b: &Located, what: &str) {
+    assert_eq!(a.triangles, b.triangles, "{what}: crossed triangles");
+    assert_eq!(a.edge_cuts, b.edge_cuts, "{what}: edge cuts");
+    assert_eq!(a.points, b.points, "{what}: points");
+    assert_eq!(a.lower_negative, b.lower_negative, "{what}: sides");
+    assert_eq!(a.edges, b.edges, "{what}: edges");
+}
+
+#[test]
+fn tree_locate_equals_the_scan_on_every_analytic_knife() {
+    let s = mc(&shell_volume(40, 11.0, 16.0));
+    let c = DVec3::splat(19.5);
+    let knives = [
+        plane([19.5, 19.5, 21.3], [0.1, 0.2, 1.0]),
+        plane([19.5, 19.5, 19.5], [0.0, 0.0, 1.0]),
+        Knife::Sphere {
+            centre: c + DVec3::new(13.0, 2.0, 1.0),
+            radius: 6.3,
+        },
+        Knife::Rect {
+            centre: c,
+            normal: DVec3::new(0.3, -0.2, 1.0),
+            u_axis: DVec3::X,
+            half_extents: [14.0, 6.0],
+        },
+    ];
+    let plain = Forest::from_triangles(s.mesh.view()).forest;
+    // The same boxes taken as unsorted: every child box is tested instead
+    // of the binary-searched slab.
+    assert!(s.forest.axis_sorted);
+    let unsorted = Forest {
+        axis_sorted: false,
+        ..s.forest.clone()
+    };
+    for k in &knives {
+        let scan = locate_full_scan(&s.mesh, k).unwrap();
+        assert!(!scan.triangles.is_empty(), "{k:?} misses the shell");
+        let tree = locate(&s.mesh, &s.forest, k).unwrap();
+        same_located(&tree, &scan, "marching-cubes forest");
+        assert!(tree.stats.triangles_tested < tree.stats.triangles_total / 4);
+        same_located(
+            &locate(&s.mesh, &plain, k).unwrap(),
+            &scan,
+            "virtual-grid forest",
+        );
+        let all = locate(&s.mesh, &unsorted, k).unwrap();
+        same_located(&all, &scan, "unsorted forest");
+        assert!(all.stats.nodes_visited > tree.stats.nodes_visited, "{k:?}");
+        assert!(all.stats.triangles_tested >= tree.stats.triangles_tested);
+    }
+    // Negative control: a knife moved by a tenth of a voxel differs.
+    let moved = plane([19.5, 19.5, 21.4], [0.1, 0.2, 1.0]);
+    let a = locate(&s.mesh, &s.forest, &knives[0]).unwrap();
+    let b = locate(&s.mesh, &s.forest, &moved).unwrap();
+    assert_ne!(a.points, b.points);
+}
+
+#[test]
+fn leaf_tables_name_each_triangles_corners_and_positions() {
+    let s = mc(&shell_volume(24, 6.0, 9.0));
+    let f = &s.forest;
+    assert_eq!(f.corners.len(), f.triangles.len());
+    assert_eq!(f.leaf_positions.len(), f.leaf_vertices.len());
+    for (&v, &q) in f.leaf_vertices.iter().zip(&f.leaf_positions) {
+        assert_eq!(
+            q, s.mesh.positions[v as usize],
+            "leaf position of vertex {v}"
+        );
+    }
+    for c in &f.cells {
+        let vs = &f.leaf_vertices[c.vertices.range()];
+        assert!(vs.windows(2).all(|w| w[0] < w[1]), "distinct, ascending");
+        for i in c.triangles.range() {
+            let want = s.mesh.triangles[f.triangles[i] as usize];
+            let got = f.corners[i].map(|v| {
+                assert!(c.vertices.range().contains(&(v as usize)));
+                f.leaf_vertices[v as usize]
+            });
+            assert_eq!(got, want);
+        }
+    }
+}
+
+#[test]
+fn a_forest_of_another_mesh_is_an_error() {
+    let s = mc(&ball_volume(16, 5.0));
+    let other = mc(&ball_volume(16, 6.0));
+    let k = plane([7.5, 7.5, 7.5], [0.0, 0.0, 1.0]);
+    let err = locate(&s.mesh, &other.forest, &k).unwrap_err();
+    assert!(err.to_string().contains("forest was built for"), "{err}");
+    assert!(cut(&s.mesh, &other.forest, &k, &CAP).is_err());
+}

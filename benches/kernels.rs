@@ -16,7 +16,7 @@ use std::time::Duration;
 
 use chisel::gpu::Gpu;
 use chisel::normals::{self, NormalsInput};
-use chisel::{reduce, scan};
+use chisel::{exclusive_scan, reduce};
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
 
 #[path = "common/mod.rs"]
@@ -172,13 +172,13 @@ fn bench_exclusive_scan(c: &mut Criterion, gpu: Option<&Gpu>) {
             bytes: 16 * n as u64,
         });
         g.bench_with_input(BenchmarkId::new("cpu", n), &v, |b, v| {
-            b.iter(|| scan::cpu::exclusive_scan(v))
+            b.iter(|| exclusive_scan::cpu::exclusive_scan(v))
         });
         if let Some(gpu) = gpu {
             g.bench_with_input(BenchmarkId::new("gpu_end_to_end", n), &v, |b, v| {
-                b.iter(|| scan::gpu::exclusive_scan(gpu, v).expect("gpu"))
+                b.iter(|| exclusive_scan::gpu::exclusive_scan(gpu, v).expect("gpu"))
             });
-            let buffers = scan::gpu::ScanBuffers::upload(gpu, &v).expect("upload");
+            let buffers = exclusive_scan::gpu::ScanBuffers::upload(gpu, &v).expect("upload");
             g.bench_function(BenchmarkId::new("gpu_resident", n), |b| {
                 b.iter(|| {
                     run_resident(gpu, "exclusive_scan", |e| {

@@ -18,11 +18,11 @@
 //           layers[2k + 1] = start, end (in `layers`) of the ids of the
 //           faces local layer k tests, or LAYER_MISSES when the polyhedron
 //           misses the layer (every row empty). Every face for every layer,
-//           or only those whose z range holds it (hscan::row_spans_culled).
+//           or only those whose z range holds it (hull_scan::row_spans_culled).
 //   spans:  n_items vec4<i32> out: local x of (closed lo, closed hi, open
 //           lo, open hi), inclusive; empty = (0, −1)
-// Range (hscan::check_range): |r| < 2^61, products i32 × i32, exact.
-// Mirror: hscan::cpu::hull_rows_i32x2 (and hull_rows / hull_rows_culled:
+// Range (hull_scan::check_range): |r| < 2^61, products i32 × i32, exact.
+// Mirror: hull_scan::cpu::hull_rows_i32x2 (and hull_rows / hull_rows_culled:
 // same spans).
 
 #import dispatch

@@ -11,8 +11,8 @@
 //   faces:  #F Face (shared/hull_face.wgsl)
 //   sides:  ceil(n_items / 4) u32 out, byte b of word w = code of voxel
 //           4w + b: 0 outside, 1 on, 2 inside (0 past n_items)
-// Range (hscan::check_range): |n·p| < 2^49, |d| ≤ 2^60, no overflow.
-// Mirror: hscan::cpu::hull_scan.
+// Range (hull_scan::check_range): |n·p| < 2^49, |d| ≤ 2^60, no overflow.
+// Mirror: hull_scan::cpu::hull_scan.
 
 #import dispatch
 #import hull_face

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         normals reduce scan surface hscan hull polyhedron cut tissue
+//!  ④ rooms         normals reduce exclusive_scan surface hull_scan hull polyhedron cut tissue
 //!  ③ GPU, parity   gpu (context, kernel specs, pass builder, buffers), parity (Backend, Tolerance)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -29,10 +29,11 @@
 pub mod cli;
 pub mod cut;
 pub mod error;
+pub mod exclusive_scan;
 pub mod foundation;
 pub mod gpu;
-pub mod hscan;
 pub mod hull;
+pub mod hull_scan;
 pub mod io;
 pub mod mesh;
 pub mod normals;
@@ -41,7 +42,6 @@ pub mod phantom;
 pub mod polyhedron;
 pub mod reduce;
 pub mod render;
-pub mod scan;
 pub mod surface;
 pub mod tissue;
 pub mod volume;

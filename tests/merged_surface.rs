@@ -7,7 +7,7 @@ mod common;
 
 use std::collections::HashMap;
 
-use chisel::hscan::{Side, VoxelBox};
+use chisel::hull_scan::{Side, VoxelBox};
 use chisel::parity::Backend;
 use chisel::phantom::voxel::{cylinder_tunnel, ellipsoid_dent, torus};
 use chisel::polyhedron::{MergedSurface, PolyhedrizeOptions, Polyhedron, polyhedrize, theorem_ke};

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::{Error, hscan, normals, reduce, scan, surface};
+use chisel::{Error, exclusive_scan, hull_scan, normals, reduce, surface};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn root() -> PathBuf {
@@ -149,7 +149,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             vec![("n_items", 0xB1), ("pairs", 0xB2)],
         ),
         Kernel::ExclusiveScanBlocks | Kernel::ExclusiveScanAdd => (
-            encase_bytes(&scan::gpu::Params { n: 0xC1 }),
+            encase_bytes(&exclusive_scan::gpu::Params { n: 0xC1 }),
             vec![("n", 0xC1)],
         ),
         Kernel::McClassify => (
@@ -227,7 +227,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             ],
         ),
         Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => (
-            encase_bytes(&hscan::gpu::Params {
+            encase_bytes(&hull_scan::gpu::Params {
                 n_faces: 0xD1,
                 n_items: 0xD2,
                 nx: 0xD3,
@@ -299,7 +299,7 @@ fn mirrors_use_their_kernels_constants() {
         );
     }
     for k in [Kernel::ExclusiveScanBlocks, Kernel::ExclusiveScanAdd] {
-        assert_eq!(spec(k).wg_size as usize, scan::cpu::WG_SIZE);
+        assert_eq!(spec(k).wg_size as usize, exclusive_scan::cpu::WG_SIZE);
     }
     for k in [Kernel::McClassify, Kernel::McVertices, Kernel::McTriangles] {
         assert_eq!(spec(k).wg_size, surface::mirror::WG_SIZE);
@@ -351,7 +351,8 @@ fn pass_builder_refuses_bindings_the_wgsl_does_not_declare() {
         return;
     };
     let gpu: &Gpu = &gpu;
-    let params = UniformBuffer::new(gpu, "test.params", &scan::gpu::Params { n: 4 }).unwrap();
+    let params =
+        UniformBuffer::new(gpu, "test.params", &exclusive_scan::gpu::Params { n: 4 }).unwrap();
     let a = GpuArray::<u32>::from_slice(gpu, "test.a", &[1, 2, 3, 4]).unwrap();
     let b = GpuArray::<u32>::zeroed(gpu, "test.b", 4).unwrap();
     // exclusive_scan_add: params, read offsets, read-write scanned.

@@ -1,6 +1,6 @@
 // Shared declarations of the hull-scan kernels (hull_scan, hull_rows and
 // their _i32x2 twins): the uniform parameters and one face n·p ≤ d.
-// Host side: hscan::gpu::{Params, GpuFace}.
+// Host side: hull_scan::gpu::{Params, GpuFace}.
 
 struct Params {
     // Faces in `faces` (hull_scan*; hull_rows* read theirs from `layers`).

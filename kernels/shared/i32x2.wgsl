@@ -1,7 +1,7 @@
 // Exact signed 64-bit integers from 32-bit operations, for GPUs without
 // SHADER_INT64: a value is vec2<u32>(low word, high word), two's complement.
 // Products i32 × i32 are exact (16-bit limbs); sums wrap mod 2^64 like i64.
-// Mirror: hscan::cpu::i32x2 (function for function).
+// Mirror: hull_scan::cpu::i32x2 (function for function).
 
 // Sign-extends a.
 fn w_from_i32(a: i32) -> vec2<u32> {

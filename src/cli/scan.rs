@@ -2,7 +2,7 @@
 //! scan (SPEC §4.3, seed 003 §4.1–4.2). Every structure of the volume gets
 //! one report row: its exact convex hull (§4.1, cell list and eq. 8.2
 //! storage), the inside / on / outside counts of the hull's voxel bounding
-//! box (the per-row interval scan of [`crate::hscan`], `hull_rows` on the
+//! box (the per-row interval scan of [`crate::hull_scan`], `hull_rows` on the
 //! GPU or its CPU mirror, bit-exact either way) and its ZKHs summarised by
 //! class (Def. CO/CA/TU).
 //!
@@ -22,7 +22,7 @@
 //! structure gets its polygon hull (two opposite faces plus edge
 //! half-spaces) and its scan, but no ZKHs (a flat hull has no inside).
 //!
-//! **ZKHs.** [`crate::hscan::zkh::analyse`], which classifies from the
+//! **ZKHs.** [`crate::hull_scan::zkh::analyse`], which classifies from the
 //! scan's [`Classification`] (so the GPU scan feeds it directly) and finds
 //! incident faces only at corners outside the open row intervals. Faces
 //! visible from or coplanar with a 0-cell of the ZKH are incident (§4.2.3).
@@ -54,9 +54,9 @@ use serde_json::{Value, json};
 
 use super::hull::{HullArgs, object_json};
 use super::{BackendArg, Global};
-use crate::hscan::zkh::{ZkhClass, analyse};
-use crate::hscan::{self, Classification, VoxelBox};
 use crate::hull::ConvexHull;
+use crate::hull_scan::zkh::{ZkhClass, analyse};
+use crate::hull_scan::{self, Classification, VoxelBox};
 use crate::parity::Backend;
 use crate::volume::Volume;
 use crate::volume::analysis::label_6_connected;
@@ -234,7 +234,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         "min_voxels": args.min_voxels,
         "backend": backend.name(),
         "adapter": gpu.as_ref().map(|g| g.describe()),
-        "arithmetic": gpu.as_ref().map(|g| format!("{:?}", hscan::gpu::Arithmetic::of(g)).to_lowercase()),
+        "arithmetic": gpu.as_ref().map(|g| format!("{:?}", hull_scan::gpu::Arithmetic::of(g)).to_lowercase()),
         "candidates": kind,
         "hull_options": options,
         "structures": structures.len(),
@@ -468,7 +468,7 @@ fn scan_structure(
         "area_world": summary.area_world,
         "planar": summary.planar,
     });
-    let faces: Vec<hscan::HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
+    let faces: Vec<hull_scan::HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
     times.hull += t.elapsed().as_secs_f64();
 
     let t = Instant::now();

@@ -92,10 +92,10 @@ pub struct HalfSpace {
     pub offset: i64,
 }
 
-impl From<HalfSpace> for crate::hscan::HalfSpace {
+impl From<HalfSpace> for crate::hull_scan::HalfSpace {
     /// The same half-space as input of the inside-hull scans.
     fn from(h: HalfSpace) -> Self {
-        crate::hscan::HalfSpace {
+        crate::hull_scan::HalfSpace {
             normal: h.normal,
             offset: h.offset,
         }

@@ -28,24 +28,24 @@ impl ConvexHull {
     }
 
     /// Per-row intervals of the voxel rows of `bbox` in the closed hull,
-    /// exactly ([`crate::hscan::row_spans_culled`]: on the CPU each layer
+    /// exactly ([`crate::hull_scan::row_spans_culled`]: on the CPU each layer
     /// uses only the faces meeting it).
     ///
-    /// Errors: the hull-scan range limits of [`crate::hscan::check_range`].
+    /// Errors: the hull-scan range limits of [`crate::hull_scan::check_range`].
     pub fn row_spans(
         &self,
-        bbox: &crate::hscan::VoxelBox,
+        bbox: &crate::hull_scan::VoxelBox,
         backend: crate::parity::Backend<'_>,
-    ) -> crate::Result<crate::hscan::RowSpans> {
-        let spaces: Vec<crate::hscan::HalfSpace> =
+    ) -> crate::Result<crate::hull_scan::RowSpans> {
+        let spaces: Vec<crate::hull_scan::HalfSpace> =
             self.half_spaces().into_iter().map(Into::into).collect();
-        crate::hscan::row_spans_culled(&spaces, &self.face_z_extents(), bbox, backend)
+        crate::hull_scan::row_spans_culled(&spaces, &self.face_z_extents(), bbox, backend)
     }
 
     /// The combinatorial z range `[min, max]` of each half-space of
     /// [`Self::half_spaces`], in the same order: the range of its face's
     /// vertices (a flat hull: the polygon's range for every half-space), for
-    /// [`crate::hscan::row_spans_culled`].
+    /// [`crate::hull_scan::row_spans_culled`].
     pub fn face_z_extents(&self) -> Vec<[i64; 2]> {
         let range = |vs: &mut dyn Iterator<Item = &u32>| {
             vs.fold([i64::MAX, i64::MIN], |r, &v| {

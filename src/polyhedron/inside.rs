@@ -30,7 +30,7 @@
 //! (i128 for products), within ±2^24 ([`MAX_COORD`]).
 
 use crate::foundation::exact::{P2, cross_wide, orient2, sub};
-use crate::hscan::{RowSpans, Side, VoxelBox};
+use crate::hull_scan::{RowSpans, Side, VoxelBox};
 use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 

@@ -10,7 +10,7 @@
 //! concavity"). The touched faces are split into edge-connected sets:
 //! 0 sets → cavity, 1 → concavity, 2 → tunnel, more → branched tunnel.
 //!
-//! The inside test is the exact per-row method of [`crate::hscan`] on the
+//! The inside test is the exact per-row method of [`crate::hull_scan`] on the
 //! CPU (bit for bit the brute-force classification).
 
 use std::collections::HashMap;
@@ -68,7 +68,7 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let (lo, hi) = hull.voxel_bbox();
     let dims: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize);
     let at = |x: usize, y: usize, z: usize| [lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64];
-    let bbox = crate::hscan::VoxelBox { origin: lo, dims };
+    let bbox = crate::hull_scan::VoxelBox { origin: lo, dims };
     let sides = hull
         .row_spans(&bbox, crate::parity::Backend::Cpu)?
         .to_classification()?;

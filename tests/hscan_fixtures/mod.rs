@@ -1,4 +1,4 @@
-//! Exact polyhedra for the hull-scan tests (`tests/hscan.rs`,
+//! Exact polyhedra for the hull-scan tests (`tests/hull_scan.rs`,
 //! `tests/parity/hull_scan.rs`), built by brute force in i128 — test-only
 //! stand-ins for the exact hull of `src/hull`.
 //!
@@ -12,7 +12,7 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashSet};
 
-use chisel::hscan::{HalfSpace, VoxelBox};
+use chisel::hull_scan::{HalfSpace, VoxelBox};
 
 /// xorshift64 (reproducible, no external RNG).
 #[derive(Debug, Clone)]

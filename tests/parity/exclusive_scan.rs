@@ -1,13 +1,13 @@
 //! Parity of `kernels/exclusive_scan_blocks.wgsl` + `exclusive_scan_add.wgsl`
-//! against `scan::cpu` (exact, wrapping u32), with a sequential fold as the
+//! against `exclusive_scan::cpu` (exact, wrapping u32), with a sequential fold as the
 //! independent oracle and CSR offsets as real-data ground truth.
 
 use chisel::Backend;
+use chisel::exclusive_scan::gpu::ScanBuffers;
+use chisel::exclusive_scan::{self, Scan, cpu};
 use chisel::gpu::Gpu;
 use chisel::mesh::Csr;
 use chisel::parity::{compare_exact, find_sentinel};
-use chisel::scan::gpu::ScanBuffers;
-use chisel::scan::{self, Scan, cpu};
 
 use crate::common;
 
@@ -43,7 +43,7 @@ fn check(gpu: &Gpu, what: &str, values: &[u32], sentinel_free: bool) -> Scan {
     let want = cpu::exclusive_scan(values);
     let truth = oracle(values);
     assert_eq!(want, truth, "{what}: mirror vs oracle");
-    let got = scan::exclusive_scan(values, Backend::Gpu(gpu)).unwrap();
+    let got = exclusive_scan::exclusive_scan(values, Backend::Gpu(gpu)).unwrap();
     if sentinel_free {
         assert_eq!(
             find_sentinel(&got.offsets, u32::MAX),
@@ -173,7 +173,7 @@ fn negative_control() {
     let Some(gpu) = common::gpu() else { return };
     let v = random_values(9, 3000, 100);
     let want = cpu::exclusive_scan(&v);
-    let mut got = scan::exclusive_scan(&v, Backend::Gpu(gpu)).unwrap();
+    let mut got = exclusive_scan::exclusive_scan(&v, Backend::Gpu(gpu)).unwrap();
     compare_exact("exclusive_scan/control", &want.offsets, &got.offsets).unwrap();
     let k = 2049;
     got.offsets[k] += 1;

@@ -1,6 +1,6 @@
 //! Parity of the inside-hull scan kernels (`hull_scan`, `hull_scan_i32x2`,
-//! `hull_rows`, `hull_rows_i32x2`) against `hscan::cpu` and the independent
-//! i128 oracle `hscan::brute`: bit for bit, with native i64 (lavapipe has
+//! `hull_rows`, `hull_rows_i32x2`) against `hull_scan::cpu` and the independent
+//! i128 oracle `hull_scan::brute`: bit for bit, with native i64 (lavapipe has
 //! `SHADER_INT64`) and with the exact emulated fallback (device opened
 //! `portable`), in one binding and in z slabs, on synthetic polytopes and
 //! the thresholded CT head; the row kernels also with per-layer face lists
@@ -9,9 +9,9 @@
 
 use chisel::Backend;
 use chisel::gpu::{Gpu, GpuOptions};
-use chisel::hscan::gpu::{Arithmetic, HullScanInput, ROWS_SENTINEL};
-use chisel::hscan::{self, HalfSpace, RowSpans, Side, VoxelBox, brute, cpu, zkh};
 use chisel::hull::{ConvexHull, HullOptions};
+use chisel::hull_scan::gpu::{Arithmetic, HullScanInput, ROWS_SENTINEL};
+use chisel::hull_scan::{self, HalfSpace, RowSpans, Side, VoxelBox, brute, cpu, zkh};
 use chisel::parity::{compare_exact, find_sentinel};
 use chisel::volume::analysis::label_6_connected;
 use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection};
@@ -95,7 +95,7 @@ fn random_cases() -> Vec<(String, Vec<HalfSpace>, VoxelBox)> {
         cases.push((format!("random {case}"), faces, bbox));
     }
     // Range limits: normals near ±(2³¹ − 1), boxes at both ends of ±2¹⁵.
-    let m = hscan::MAX_NORMAL;
+    let m = hull_scan::MAX_NORMAL;
     for origin in [[-32768; 3], [32768 - 17, 32768 - 11, 32768 - 5]] {
         let bbox = VoxelBox {
             origin,
@@ -160,7 +160,7 @@ fn slabs_over_the_binding_limit() {
             origin: [0; 3],
             dims: [64, 64, 2],
         };
-        assert!(hscan::classify_voxels(&[], &wide, Backend::Gpu(gpu)).is_err());
+        assert!(hull_scan::classify_voxels(&[], &wide, Backend::Gpu(gpu)).is_err());
     }
 }
 
@@ -170,7 +170,7 @@ fn negative_control() {
     let (_, faces, bbox) = random_cases().pop().unwrap();
     for gpu in &gpus {
         let truth = brute::classify(&faces, &bbox).unwrap();
-        let mut got = hscan::classify_voxels(&faces, &bbox, Backend::Gpu(gpu)).unwrap();
+        let mut got = hull_scan::classify_voxels(&faces, &bbox, Backend::Gpu(gpu)).unwrap();
         compare_exact("hull_scan", &truth.sides, &got.sides).unwrap();
         let i = got.sides.len() / 2 + 3;
         got.sides[i] = (got.sides[i] + 1) % 3;
@@ -178,7 +178,7 @@ fn negative_control() {
         assert_eq!((m.index, m.count), (i, 1));
 
         let want = cpu::hull_rows(&faces, &bbox);
-        let mut spans: RowSpans = hscan::row_spans(&faces, &bbox, Backend::Gpu(gpu)).unwrap();
+        let mut spans: RowSpans = hull_scan::row_spans(&faces, &bbox, Backend::Gpu(gpu)).unwrap();
         compare_exact("hull_rows", &want.spans, &spans.spans).unwrap();
         let r = spans.spans.iter().position(|s| s[2] <= s[3]).unwrap();
         spans.spans[r][2] = spans.spans[r][3] + 1;

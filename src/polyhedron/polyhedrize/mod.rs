@@ -81,8 +81,8 @@ pub use summary::PolyhedronSummary;
 pub(super) use voxelize::{differences, verify_box};
 
 use crate::foundation::exact::{cross_wide, gcd, sub};
-use crate::hscan::VoxelBox;
 use crate::hull::{ConvexHull, HullOptions};
+use crate::hull_scan::VoxelBox;
 use crate::parity::Backend;
 use crate::voxel::{CandidateKind, Frame};
 
@@ -183,7 +183,7 @@ impl ShellGeometry {
     /// The voxels whose centres lie in the closed shell: the box of the
     /// shell's vertices and one flag per voxel (x fastest).
     ///
-    /// Errors: hull-scan range limits ([`crate::hscan::check_range`]).
+    /// Errors: hull-scan range limits ([`crate::hull_scan::check_range`]).
     pub fn closed_voxels(&self, backend: Backend<'_>) -> crate::Result<(VoxelBox, Vec<bool>)> {
         match self {
             ShellGeometry::Point(p) => Ok((unit_box(voxel_of(*p)), vec![true])),

@@ -4,7 +4,7 @@
 
 use std::collections::VecDeque;
 
-use crate::hscan::VoxelBox;
+use crate::hull_scan::VoxelBox;
 use crate::parity::Backend;
 use crate::polyhedron::balls::maximal_balls;
 use crate::polyhedron::{ZkhClass, background_components, faces_to_press};

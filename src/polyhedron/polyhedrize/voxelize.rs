@@ -3,7 +3,7 @@
 //! `impl Polyhedron`: `voxelize`, `mismatches`); the box and comparison
 //! helpers are shared with the ray-parity check of `polyhedron::inside`.
 
-use crate::hscan::VoxelBox;
+use crate::hull_scan::VoxelBox;
 use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 

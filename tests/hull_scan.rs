@@ -8,9 +8,9 @@ mod common;
 mod hscan_fixtures;
 
 use chisel::Backend;
-use chisel::hscan::cpu::{self, i32x2};
-use chisel::hscan::zkh::{self, ZkhClass};
-use chisel::hscan::{self, Classification, HalfSpace, Side, VoxelBox, brute};
+use chisel::hull_scan::cpu::{self, i32x2};
+use chisel::hull_scan::zkh::{self, ZkhClass};
+use chisel::hull_scan::{self, Classification, HalfSpace, Side, VoxelBox, brute};
 use chisel::parity::compare_exact;
 use hscan_fixtures::{Polytope, Rng, box_faces, dirs26, random_half_spaces, supporting};
 use proptest::prelude::*;
@@ -19,14 +19,14 @@ use proptest::prelude::*;
 /// emulated); returns the oracle.
 fn all_agree(what: &str, faces: &[HalfSpace], bbox: &VoxelBox) -> Classification {
     let truth = brute::classify(faces, bbox).unwrap();
-    let mirror = hscan::classify_voxels(faces, bbox, Backend::Cpu).unwrap();
+    let mirror = hull_scan::classify_voxels(faces, bbox, Backend::Cpu).unwrap();
     compare_exact(
         &format!("{what}: brute mirror"),
         &truth.sides,
         &mirror.sides,
     )
     .unwrap_or_else(|m| panic!("{m}"));
-    let rows = hscan::classify(faces, bbox, Backend::Cpu).unwrap();
+    let rows = hull_scan::classify(faces, bbox, Backend::Cpu).unwrap();
     compare_exact(&format!("{what}: rows"), &truth.sides, &rows.sides)
         .unwrap_or_else(|m| panic!("{m}"));
     let rows_i32x2 = cpu::hull_rows_i32x2(faces, bbox);
@@ -126,7 +126,7 @@ fn coplanar_rows_and_faces_parallel_to_x() {
 #[test]
 fn extreme_magnitudes_at_the_range_limit() {
     let mut rng = Rng::new(99);
-    let m = hscan::MAX_NORMAL;
+    let m = hull_scan::MAX_NORMAL;
     for corner in [[-32768, -32768, -32768], [32768 - 12, 32768 - 9, 32768 - 7]] {
         let bbox = VoxelBox {
             origin: corner,
@@ -166,15 +166,15 @@ fn out_of_range_inputs_are_refused() {
         normal: [i64::from(i32::MAX) + 1, 0, 0],
         offset: 0,
     };
-    let err = hscan::classify(&[too_big], &bbox, Backend::Cpu).unwrap_err();
+    let err = hull_scan::classify(&[too_big], &bbox, Backend::Cpu).unwrap_err();
     assert!(err.to_string().contains("normal component"), "{err}");
     let far = HalfSpace {
         normal: [1, 0, 0],
         offset: (1 << 60) + 1,
     };
-    assert!(hscan::classify_voxels(&[far], &bbox, Backend::Cpu).is_err());
+    assert!(hull_scan::classify_voxels(&[far], &bbox, Backend::Cpu).is_err());
     for (origin, dims) in [([32765, 0, 0], [4, 1, 1]), ([0, -32769, 0], [1, 1, 1])] {
-        let err = hscan::row_spans(&[], &VoxelBox { origin, dims }, Backend::Cpu).unwrap_err();
+        let err = hull_scan::row_spans(&[], &VoxelBox { origin, dims }, Backend::Cpu).unwrap_err();
         assert!(err.to_string().contains("2^16"), "{err}");
     }
     // The limits themselves are accepted.
@@ -182,7 +182,7 @@ fn out_of_range_inputs_are_refused() {
         origin: [-32768, 32767, 0],
         dims: [1, 1, 1],
     };
-    hscan::check_range(
+    hull_scan::check_range(
         &[HalfSpace {
             normal: [i64::from(i32::MAX), -i64::from(i32::MAX), 0],
             offset: 1 << 60,
@@ -213,7 +213,7 @@ proptest! {
         let bbox = VoxelBox { origin: [rng.range(-9, 9), rng.range(-9, 9), rng.range(-9, 9)], dims: [nx, ny, nz] };
         let faces = random_half_spaces(&mut rng, n, &bbox, k);
         let truth = brute::classify(&faces, &bbox).unwrap();
-        let rows = hscan::classify(&faces, &bbox, Backend::Cpu).unwrap();
+        let rows = hull_scan::classify(&faces, &bbox, Backend::Cpu).unwrap();
         prop_assert_eq!(&truth.sides, &rows.sides);
         prop_assert_eq!(cpu::hull_rows_i32x2(&faces, &bbox), cpu::hull_rows(&faces, &bbox));
     }
@@ -246,7 +246,7 @@ fn box_face(a: usize, high: bool) -> usize {
 
 /// ZKH analysis of `obj` in `bbox` against the polytope `p`.
 fn analyse(obj: &[bool], bbox: &VoxelBox, p: &Polytope) -> zkh::ZkhAnalysis {
-    let c = hscan::classify(&p.faces, bbox, Backend::Cpu).unwrap();
+    let c = hull_scan::classify(&p.faces, bbox, Backend::Cpu).unwrap();
     // Every object voxel lies inside or on its hull.
     assert!(
         obj.iter()
@@ -429,7 +429,7 @@ fn coplanar_contact_counts_as_concavity() {
     ];
     for (holes, class) in cases {
         let (obj, bbox) = carved_cube(n, &holes);
-        let c = hscan::classify(&p.faces, &bbox, Backend::Cpu).unwrap();
+        let c = hull_scan::classify(&p.faces, &bbox, Backend::Cpu).unwrap();
         assert_eq!(c.counts(), [0, 0, (n * n * n) as u64]);
         let a = zkh::analyse(&obj, &c, &p.faces, &p.adjacency).unwrap();
         assert_eq!(a.components.len(), 1);
@@ -441,7 +441,7 @@ fn coplanar_contact_counts_as_concavity() {
 fn zkh_inputs_are_checked() {
     let (obj, bbox) = carved_cube(4, &[]);
     let p = cube_hull(4);
-    let c = hscan::classify(&p.faces, &bbox, Backend::Cpu).unwrap();
+    let c = hull_scan::classify(&p.faces, &bbox, Backend::Cpu).unwrap();
     assert!(zkh::analyse(&obj[1..], &c, &p.faces, &p.adjacency).is_err());
     let mut bad = p.adjacency.clone();
     bad[0].push(99);
@@ -576,5 +576,5 @@ fn culling_with_wrong_ranges_is_detected() {
     let side = faces.iter().position(|f| f.normal == [1, 0, 0]).unwrap();
     extents[side] = [9, 9];
     assert_ne!(cpu::hull_rows_culled(&faces, &extents, &bbox), full);
-    assert!(hscan::row_spans_culled(&faces, &extents[1..], &bbox, Backend::Cpu).is_err());
+    assert!(hull_scan::row_spans_culled(&faces, &extents[1..], &bbox, Backend::Cpu).is_err());
 }

@@ -4,7 +4,7 @@
 //! `hull_rows_i32x2` (per-row intervals by binary search on emulated 64-bit
 //! products, `kernels/hull_rows_i32x2.wgsl`), plus [`i32x2`], the Rust twin
 //! of `kernels/shared/i32x2.wgsl`. Arithmetic bounds: see the module docs of
-//! [`crate::hscan`] (callers run [`super::check_range`] first).
+//! [`crate::hull_scan`] (callers run [`super::check_range`] first).
 
 use rayon::prelude::*;
 

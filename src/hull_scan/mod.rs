@@ -23,7 +23,7 @@
 //! open one in a sub-interval (inside), so a row is two integer intervals
 //! found by exact floor/ceil division (or, on GPUs without `SHADER_INT64`,
 //! by binary search on exact emulated 64-bit products). Both methods agree
-//! bit for bit; `tests/hscan.rs` and `tests/parity/hull_scan.rs` prove it.
+//! bit for bit; `tests/hull_scan.rs` and `tests/parity/hull_scan.rs` prove it.
 //!
 //! **Exactness and range.** All arithmetic is integer; no floats, no
 //! epsilons. [`check_range`] refuses inputs outside

@@ -4,7 +4,7 @@
 //! their exact emulated twins ([`Arithmetic`]). The row kernels read per z
 //! layer the list of faces to test: every face, or with the faces' z
 //! ranges ([`HullScanInput::culled`]) only those meeting the layer, as
-//! `hscan::cpu::hull_rows_culled` does. Boxes larger than one storage
+//! `hull_scan::cpu::hull_rows_culled` does. Boxes larger than one storage
 //! binding ([`Gpu::max_binding_bytes`]) are processed in z slabs, one
 //! dispatch and readback per slab; outputs start filled with sentinels
 //! ([`SCAN_SENTINEL`], [`ROWS_SENTINEL`]) so a missed write shows.
@@ -274,7 +274,7 @@ impl HullScanInput {
     /// Lets the row kernels test, per z layer, only the faces whose
     /// combinatorial z range (`z_extents[f]`, inclusive, one per face of a
     /// convex polytope) holds it, and leave layers outside every range
-    /// empty: the spans of `hscan::cpu::hull_rows_culled`.
+    /// empty: the spans of `hull_scan::cpu::hull_rows_culled`.
     ///
     /// Errors: not one range per face.
     pub fn culled(mut self, z_extents: &[[i64; 2]]) -> Result<Self> {

@@ -18,9 +18,9 @@ use std::time::Duration;
 
 use chisel::Backend;
 use chisel::gpu::{Gpu, GpuOptions};
-use chisel::hscan::gpu::{Arithmetic, HullScanInput};
-use chisel::hscan::{self, HalfSpace, VoxelBox};
 use chisel::hull::{ConvexHull, HullOptions};
+use chisel::hull_scan::gpu::{Arithmetic, HullScanInput};
+use chisel::hull_scan::{self, HalfSpace, VoxelBox};
 use chisel::phantom::voxel::blob;
 use chisel::voxel::{CandidateKind, Component, DigitalObject, Selection};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -123,15 +123,15 @@ fn bench(c: &mut Criterion) {
         eprintln!("box {n}³, {label}: {} faces", faces.len());
         g.throughput(Throughput::Elements(voxels));
         g.bench_with_input(BenchmarkId::new("cpu_rows", &label), &n, |b, _| {
-            b.iter(|| hscan::row_spans(black_box(&faces), &bbox, Backend::Cpu).unwrap())
+            b.iter(|| hull_scan::row_spans(black_box(&faces), &bbox, Backend::Cpu).unwrap())
         });
         g.bench_with_input(BenchmarkId::new("cpu_classify", &label), &n, |b, _| {
-            b.iter(|| hscan::classify(black_box(&faces), &bbox, Backend::Cpu).unwrap())
+            b.iter(|| hull_scan::classify(black_box(&faces), &bbox, Backend::Cpu).unwrap())
         });
         if let Some(extents) = &extents {
             g.bench_with_input(BenchmarkId::new("cpu_rows_culled", &label), &n, |b, _| {
                 b.iter(|| {
-                    hscan::row_spans_culled(black_box(&faces), extents, &bbox, Backend::Cpu)
+                    hull_scan::row_spans_culled(black_box(&faces), extents, &bbox, Backend::Cpu)
                         .unwrap()
                 })
             });
@@ -139,7 +139,9 @@ fn bench(c: &mut Criterion) {
         // Brute force is ~100× slower than rows: 256³ on 2 cores takes a minute.
         if n <= 128 {
             g.bench_with_input(BenchmarkId::new("cpu_brute", &label), &n, |b, _| {
-                b.iter(|| hscan::classify_voxels(black_box(&faces), &bbox, Backend::Cpu).unwrap())
+                b.iter(|| {
+                    hull_scan::classify_voxels(black_box(&faces), &bbox, Backend::Cpu).unwrap()
+                })
             });
         }
         for (gpu, name) in &gpus {

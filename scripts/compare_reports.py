@@ -5,11 +5,18 @@ binaries and compares their JSON reports (timings, adapter descriptions and
 paths left out) and every mesh, volume and cell file they write (byte for
 byte).
 
-    scripts/compare_reports.py OLD_CHISEL NEW_CHISEL [--data ../shared/data] [--backend cpu|gpu]
+    scripts/compare_reports.py OLD_CHISEL NEW_CHISEL [--data ../shared/data] [--backend cpu|gpu] [--old-cli]
 
 Prints one line per command and exits 1 when anything differs. Build the old
 binary from another checkout of the base commit (`git worktree add`), e.g.
 `cargo build --bin chisel` there; both must run with the same CHISEL_ADAPTER.
+
+`--old-cli`: the old binary predates the consistent command line of
+2026-12-06 (`--threshold` for `--level`, `demo --out`, no report `schema`).
+Its arguments are translated, and the report changes of that day are
+undone before comparing: `schema` dropped, `threshold` read as `level`,
+the fields added then (`stats`' `backend`; `relax`'s `mass`, `damping`,
+`max_iterations`) dropped from the new report.
 """
 
 import argparse
@@ -44,6 +51,37 @@ def normalise(value, root):
     return value
 
 
+# Fields the consistent CLI added to reports (dropped from the new one with --old-cli).
+ADDED = {"schema", "mass", "damping", "max_iterations"}
+
+
+def old_argv(argv):
+    """The arguments of the pre-2026-12-06 command line for `argv`."""
+    renames = {"--output": "--out"} if argv[0] == "demo" else {}
+    if argv[0] in ("stats", "hull", "scan", "polyhedrize"):
+        renames["--level"] = "--threshold"
+    return [renames.get(a, a) for a in argv]
+
+
+def as_new(value):
+    """An old report with the 2026-12-06 renames applied (`threshold` → `level`)."""
+    if isinstance(value, dict):
+        return {("level" if k == "threshold" else k): as_new(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [as_new(v) for v in value]
+    return value
+
+
+def without_added(value, command):
+    """A new report without the fields the old command line did not have."""
+    if isinstance(value, dict):
+        drop = ADDED | ({"backend"} if command.startswith("stats") else set())
+        return {k: without_added(v, command) for k, v in value.items() if k not in drop}
+    if isinstance(value, list):
+        return [without_added(v, command) for v in value]
+    return value
+
+
 def commands(data, backend):
     """(name, argv, output files) of every run; `{out}` is the run's folder."""
     headsq = f"{data}/headsq/quarter.nhdr"
@@ -51,7 +89,7 @@ def commands(data, backend):
     plan = "src/tissue/plans/fran_chin_advance.toml"
     return [
         ("stats mesh", ["stats", f"{data}/fsu/footbones.ply", "--json"], []),
-        ("stats volume", ["stats", headsq, "--threshold", "1150", "--json"], []),
+        ("stats volume", ["stats", headsq, "--level", "1150", "--json"], []),
         (
             "mc",
             ["mc", headsq, "--level", "1150", "--close-border", "--backend", backend,
@@ -68,15 +106,15 @@ def commands(data, backend):
                      "-o", "{out}/cyl.nrrd"], ["cyl.nrrd"]),
         (
             "hull",
-            ["hull", "{out}/../phantom/cyl.nrrd", "--threshold", "1", "-o", "{out}/hull.ply",
+            ["hull", "{out}/../phantom/cyl.nrrd", "--level", "1", "-o", "{out}/hull.ply",
              "--report", "{out}/r.json"],
             ["hull.ply"],
         ),
-        ("scan", ["scan", headsq, "--threshold", "1150", "--backend", backend,
+        ("scan", ["scan", headsq, "--level", "1150", "--backend", backend,
                   "--report", "{out}/r.json"], []),
         (
             "polyhedrize",
-            ["polyhedrize", "{out}/../phantom/cyl.nrrd", "--threshold", "1", "--backend",
+            ["polyhedrize", "{out}/../phantom/cyl.nrrd", "--level", "1", "--backend",
              backend, "-o", "{out}/cyl.cells", "--mesh", "{out}/cyl.ply", "--verify",
              "--report", "{out}/r.json"],
             ["cyl.cells", "cyl.ply"],
@@ -87,7 +125,7 @@ def commands(data, backend):
              "--report", "{out}/r.json"],
             ["relaxed.ply"],
         ),
-        ("demo", ["demo", "--out", "{out}/demo", "--json"],
+        ("demo", ["demo", "--output", "{out}/demo", "--json"],
          ["demo/relaxed_skin.ply", "demo/bone_moved.ply", "demo/head_ct.nrrd"]),
     ]
 
@@ -147,12 +185,17 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--data", default="../shared/data")
     ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"])
+    ap.add_argument("--old-cli", action="store_true",
+                    help="the old binary has the command line before 2026-12-06")
     a = ap.parse_args()
     differ = 0
     with tempfile.TemporaryDirectory() as old_root, tempfile.TemporaryDirectory() as new_root:
         for name, argv, outputs in commands(a.data, a.backend):
-            r_old, f_old = run(os.path.abspath(a.old), name, argv, outputs, old_root)
+            argv_old = old_argv(argv) if a.old_cli else argv
+            r_old, f_old = run(os.path.abspath(a.old), name, argv_old, outputs, old_root)
             r_new, f_new = run(os.path.abspath(a.new), name, argv, outputs, new_root)
+            if a.old_cli:
+                r_old, r_new = as_new(r_old), without_added(r_new, name)
             same = r_old == r_new and f_old == f_new
             differ += not same
             lines = differences(r_old, r_new) + differences(f_old, f_new, "files")

@@ -21,6 +21,9 @@ pub enum Position {
     Field(String),
     /// The file as a whole (e.g. its length).
     Whole,
+    /// An element of an in-memory structure: `vertex 7`, `triangle 3`,
+    /// `shell 2`, `integer 17` of a cell list.
+    Item { kind: &'static str, index: u64 },
 }
 
 impl fmt::Display for Position {
@@ -31,6 +34,7 @@ impl fmt::Display for Position {
             Position::Byte(n) => write!(f, "byte {n}"),
             Position::Field(k) => write!(f, "field `{k}`"),
             Position::Whole => write!(f, "whole file"),
+            Position::Item { kind, index } => write!(f, "{kind} {index}"),
         }
     }
 }
@@ -67,9 +71,60 @@ pub enum Error {
     /// The file's format is not one chisel reads or writes.
     #[error("{path}: unsupported format: {what}")]
     Unsupported { path: PathBuf, what: String },
-    /// Well-formed input that violates a documented precondition.
-    #[error("invalid input: {0}")]
-    InvalidInput(String),
+    /// A parameter outside its documented range: `name` (as the API or the
+    /// command line spells it), the `value` given and the `rule` it breaks.
+    #[error("{name} = {value}: {rule}")]
+    InvalidParameter {
+        name: String,
+        value: String,
+        rule: String,
+    },
+    /// A count or size past what a structure, a numbering or an adapter
+    /// supports: `what` is counted, `asked` is the count, `allowed` the most.
+    #[error("{what}: {asked} exceeds the limit of {allowed}")]
+    Limit {
+        what: String,
+        asked: u64,
+        allowed: u64,
+    },
+    /// Arguments that do not fit together: `what` has `found` items where
+    /// `expected` are needed (one per vertex, one per free node, …).
+    #[error("{what}: {found} given where {expected} are needed")]
+    Mismatch {
+        what: String,
+        expected: u64,
+        found: u64,
+    },
+    /// An input that must hold at least one item holds none (a mesh with no
+    /// triangles, a plan with no steps, no views to render).
+    #[error("{what}: none given, at least one is needed")]
+    Empty { what: String },
+    /// In-memory data that breaks a structural rule: `what` names the
+    /// structure (a mesh, a cell list, a spring network), `at` the element,
+    /// `problem` the rule it breaks.
+    #[error("{what}: {at}: {problem}")]
+    InvalidData {
+        what: String,
+        at: Position,
+        problem: String,
+    },
+    /// A name that is none of the known ones (a view, a solver, a fragment).
+    #[error("unknown {kind} `{name}`; known: [{}]", known.join(", "))]
+    Unknown {
+        kind: &'static str,
+        name: String,
+        known: Vec<String>,
+    },
+    /// Valid input whose geometry an algorithm refuses, with where.
+    #[error(transparent)]
+    Refused(#[from] Refusal),
+    /// A broken internal invariant: a bug in chisel, never the input's fault.
+    #[error("internal error (a bug in chisel, please report it): {0}")]
+    Internal(String),
+    /// An error inside one part of a larger input: `context` says which
+    /// (a plan step, a cut, a region); [`Error::root`] looks through it.
+    #[error("{context}: {inner}")]
+    In { context: String, inner: Box<Error> },
     /// No GPU adapter matched the request.
     #[error(
         "no GPU adapter matches `{requested}`; found: [{}]. {hint}",
@@ -103,6 +158,79 @@ pub enum Error {
     Readback { label: String, message: String },
 }
 
+/// Geometry an algorithm refuses: the input is well formed but degenerate
+/// or outside what the method handles, and the variant says where.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Refusal {
+    /// Some patches of a mesh cannot be oriented consistently.
+    #[error(
+        "{patches} patch(es) of the mesh are non-orientable (like a Möbius strip), the first \
+         one contains triangle {triangle}; no triangle was flipped"
+    )]
+    NonOrientable { patches: usize, triangle: u32 },
+    /// A knife triangle touches a surface triangle without crossing it
+    /// cleanly (a vertex on the other surface, an edge through an edge,
+    /// coplanar triangles).
+    #[error(
+        "knife triangle {knife_triangle} touches surface triangle {surface_triangle} without \
+         crossing it cleanly (a vertex on the other surface, an edge through an edge, or \
+         coplanar triangles); move or tilt the knife slightly"
+    )]
+    KnifeContact {
+        knife_triangle: u32,
+        surface_triangle: u32,
+    },
+    /// The cut curve cannot split a triangle (`triangle` names the mesh and
+    /// the id): two cut points at one spot, or the curve ends inside.
+    #[error("triangulated knife: {triangle} {problem}")]
+    CutCurve {
+        triangle: String,
+        problem: &'static str,
+    },
+    /// A knife that is not a consistently oriented manifold.
+    #[error(
+        "knife mesh triangle {triangle}: edge {from}->{to} is degenerate or used twice in one \
+         direction; the knife must be a consistently oriented manifold"
+    )]
+    KnifeNotManifold { triangle: u32, from: u32, to: u32 },
+    /// No pole of the sphere lies outside the cap regions, so the cap
+    /// cannot be projected to a plane.
+    #[error(
+        "cap: found no projection pole of the sphere outside the cap regions; move the sphere slightly"
+    )]
+    NoCapPole,
+    /// Hull candidates on one line: no polygon, no polyhedron.
+    #[error(
+        "the {points} hull candidates are collinear: no polygon or polyhedron (a line of voxels \
+         has a hull through its cell corners: `--vertices corners`)"
+    )]
+    Collinear { points: usize },
+    /// A flat hull or object has no inside.
+    #[error("{what} is flat: it has no inside")]
+    Flat { what: &'static str },
+    /// Sibling shells of a polyhedron are not proven separated (disjoint
+    /// interiors, no common face area).
+    #[error(
+        "the merged surface needs sibling shells with disjoint interiors and no common face area"
+    )]
+    SiblingsNotSeparated,
+    /// The face chain of a (malformed) shell tree does not bound a region.
+    #[error("merged surface: the face chain does not bound a region: {0}")]
+    NotARegion(String),
+    /// An iso level at which the volume has no surface.
+    #[error("the volume has no surface at the {layer} level {level} (no sample on both sides)")]
+    NoSurface { layer: &'static str, level: f64 },
+    /// A selection (of bone vertices, of a bone piece) that selects nothing.
+    #[error("{what}: empty selection: {detail}")]
+    EmptySelection { what: String, detail: String },
+    /// A spring network with no springs on free nodes and no damping: no
+    /// time step is stable.
+    #[error(
+        "the network has neither springs on free nodes nor damping: no stable Δt exists; give --dt"
+    )]
+    NoStableStep,
+}
+
 /// Library result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
@@ -119,6 +247,92 @@ impl Error {
             at,
             expected: expected.into(),
             found: found.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn param(
+        name: impl Into<String>,
+        value: impl fmt::Display,
+        rule: impl Into<String>,
+    ) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            value: value.to_string(),
+            rule: rule.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Limit`].
+    pub fn limit(
+        what: impl Into<String>,
+        asked: impl TryInto<u64>,
+        allowed: impl TryInto<u64>,
+    ) -> Self {
+        Error::Limit {
+            what: what.into(),
+            asked: asked.try_into().unwrap_or(u64::MAX),
+            allowed: allowed.try_into().unwrap_or(u64::MAX),
+        }
+    }
+
+    /// Shorthand for [`Error::Mismatch`].
+    pub fn mismatch(what: impl Into<String>, expected: usize, found: usize) -> Self {
+        Error::Mismatch {
+            what: what.into(),
+            expected: expected as u64,
+            found: found as u64,
+        }
+    }
+
+    /// Shorthand for [`Error::Empty`].
+    pub fn empty(what: impl Into<String>) -> Self {
+        Error::Empty { what: what.into() }
+    }
+
+    /// Shorthand for [`Error::InvalidData`] at element `index` of `kind`.
+    pub fn data(
+        what: impl Into<String>,
+        kind: &'static str,
+        index: impl TryInto<u64>,
+        problem: impl Into<String>,
+    ) -> Self {
+        Error::InvalidData {
+            what: what.into(),
+            at: Position::Item {
+                kind,
+                index: index.try_into().unwrap_or(u64::MAX),
+            },
+            problem: problem.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Unknown`].
+    pub fn unknown<S: ToString>(
+        kind: &'static str,
+        name: impl Into<String>,
+        known: impl IntoIterator<Item = S>,
+    ) -> Self {
+        Error::Unknown {
+            kind,
+            name: name.into(),
+            known: known.into_iter().map(|k| k.to_string()).collect(),
+        }
+    }
+
+    /// Wraps `self` in the `context` of a larger input ([`Error::In`]).
+    pub fn within(self, context: impl Into<String>) -> Self {
+        Error::In {
+            context: context.into(),
+            inner: Box::new(self),
+        }
+    }
+
+    /// The error itself, looking through [`Error::In`] contexts.
+    pub fn root(&self) -> &Error {
+        match self {
+            Error::In { inner, .. } => inner.root(),
+            e => e,
         }
     }
 

@@ -47,7 +47,7 @@ pub mod tissue;
 pub mod volume;
 pub mod voxel;
 
-pub use error::{Error, Position, Result};
+pub use error::{Error, Position, Refusal, Result};
 pub use gpu::Gpu;
 pub use mesh::TriMesh;
 pub use parity::Backend;

@@ -342,8 +342,25 @@ fn tetrahedron_cell_list_matches_appendix_c() {
     let enc = cl.encode_compact();
     assert_eq!(enc.len(), 2 + 12 + 4 * 4);
     assert_eq!(CellList::decode_compact(&enc).unwrap(), cl);
-    assert!(CellList::decode_compact(&enc[..enc.len() - 1]).is_err());
-    assert!(CellList::decode_compact(&[1, 1, 0, 0, 0, 3, 0, 0, 7]).is_err());
+    let at = |r: chisel::Result<CellList>| match r {
+        Err(chisel::Error::InvalidData {
+            at:
+                chisel::Position::Item {
+                    kind: "integer",
+                    index,
+                },
+            ..
+        }) => index,
+        other => panic!("expected an error naming the integer, got {other:?}"),
+    };
+    assert_eq!(
+        at(CellList::decode_compact(&enc[..enc.len() - 1])),
+        enc.len() as u64 - 1
+    );
+    assert_eq!(
+        at(CellList::decode_compact(&[1, 1, 0, 0, 0, 3, 0, 0, 7])),
+        8
+    );
 }
 
 #[test]
@@ -396,9 +413,28 @@ fn flat_and_degenerate_inputs() {
     assert_eq!(h.containment([3, 3, 5]), Containment::On);
     assert_eq!(h.containment([3, 3, 7]), Containment::Outside);
     assert_eq!(h.containment([9, 3, 5]), Containment::Outside);
-    assert!(ConvexHull::build(&[[1, 1, 1], [3, 3, 3], [5, 5, 5]], HullOptions::default()).is_err());
-    assert!(ConvexHull::build(&[], HullOptions::default()).is_err());
-    assert!(ConvexHull::build(&[[1 << 20, 0, 0]], HullOptions::default()).is_err());
+    assert!(matches!(
+        ConvexHull::build(&[[1, 1, 1], [3, 3, 3], [5, 5, 5]], HullOptions::default()),
+        Err(chisel::Error::Refused(chisel::Refusal::Collinear {
+            points: 3
+        }))
+    ));
+    assert!(matches!(
+        ConvexHull::build(&[], HullOptions::default()),
+        Err(chisel::Error::Refused(chisel::Refusal::Collinear {
+            points: 0
+        }))
+    ));
+    assert!(matches!(
+        ConvexHull::build(&[[1 << 20, 0, 0]], HullOptions::default()),
+        Err(chisel::Error::InvalidData {
+            at: chisel::Position::Item {
+                kind: "point",
+                index: 0
+            },
+            ..
+        })
+    ));
 }
 
 #[test]

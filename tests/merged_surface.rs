@@ -523,9 +523,18 @@ fn ray_parity_refuses_out_of_range_input() {
         origin: [1 << 30, 0, 0],
         dims: [2, 2, 2],
     };
-    assert!(m.classify(&far).is_err());
-    assert!(m.side_of([1, 1, 1], 3).is_err());
-    assert!(m.side_of([1 << 40, 1, 1], 0).is_err());
+    let refused = |e: chisel::Error, param: &str| {
+        assert!(
+            matches!(&e, chisel::Error::InvalidParameter { name, .. } if name == param),
+            "{param}: {e:?}"
+        )
+    };
+    refused(m.classify(&far).unwrap_err(), "ray parity: box");
+    refused(m.side_of([1, 1, 1], 3).unwrap_err(), "ray parity: axis");
+    refused(
+        m.side_of([1 << 40, 1, 1], 0).unwrap_err(),
+        "ray parity: point",
+    );
 }
 
 #[test]
@@ -572,7 +581,7 @@ fn cli_verify_reports_ray_parity() {
         String::from_utf8_lossy(&out.stderr)
     );
     let run = |verify: bool| {
-        let mut args = vec!["polyhedrize", cyl, "--threshold", "1", "--json"];
+        let mut args = vec!["polyhedrize", cyl, "--level", "1", "--json"];
         if verify {
             args.push("--verify");
         }

@@ -145,7 +145,10 @@ fn flat_hull_has_no_inside() {
     let o = object(&v);
     let h = hull(&o);
     assert!(h.is_planar());
-    assert!(background_components(&o, &h).is_err());
+    assert!(matches!(
+        background_components(&o, &h),
+        Err(chisel::Error::Refused(chisel::Refusal::Flat { .. }))
+    ));
 }
 
 #[test]

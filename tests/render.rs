@@ -9,7 +9,7 @@ use chisel::render::{
     CAPTION_HEIGHT, Facing, Image, Panel, RenderOptions, TITLE_HEIGHT, View, render_image,
     render_panels, render_png,
 };
-use chisel::{Error, TriMesh};
+use chisel::{Error, Position, TriMesh};
 use glam::Vec3;
 
 /// Rows above this are left alone by pixel checks: the view caption sits there.
@@ -241,7 +241,7 @@ fn user_range_clamps_the_colours() {
     o.scalar_range = Some((1.0, 1.0));
     assert!(matches!(
         render_image(gpu, &mesh, &o),
-        Err(Error::InvalidInput(_))
+        Err(Error::InvalidParameter { ref name, .. }) if name == "render: scalar range"
     ));
 }
 
@@ -329,27 +329,26 @@ fn bad_requests_are_errors() {
     });
     let mut o = opts(32, &[View::Front]);
     o.scalars = Some("gamma".into());
-    match render_image(gpu, &mesh, &o) {
-        Err(Error::InvalidInput(msg)) => {
-            assert!(
-                msg.contains("`gamma`") && msg.contains("alpha, beta"),
-                "{msg}"
-            );
+    let err = render_image(gpu, &mesh, &o).unwrap_err();
+    match err.root() {
+        Error::Unknown { kind, name, known } => {
+            assert_eq!((*kind, name.as_str()), ("scalar field", "gamma"));
+            assert_eq!(known, &["alpha", "beta"]);
         }
         other => panic!("expected an error naming the fields, got {other:?}"),
     }
     let empty = TriMesh::new(vec![Vec3::ZERO; 3], vec![]).unwrap();
     assert!(matches!(
         render_image(gpu, &empty, &opts(32, &[View::Front])),
-        Err(Error::InvalidInput(_))
+        Err(Error::Empty { .. })
     ));
     assert!(matches!(
         render_image(gpu, &common::tetra(), &opts(32, &[])),
-        Err(Error::InvalidInput(_))
+        Err(Error::Empty { ref what }) if what == "render: views"
     ));
     assert!(matches!(
         render_image(gpu, &common::tetra(), &opts(0, &[View::Front])),
-        Err(Error::InvalidInput(_))
+        Err(Error::InvalidParameter { ref name, .. }) if name == "render: view size"
     ));
     let bad = TriMesh {
         positions: vec![Vec3::ZERO; 3],
@@ -358,7 +357,13 @@ fn bad_requests_are_errors() {
     };
     assert!(matches!(
         render_image(gpu, &bad, &opts(32, &[View::Front])),
-        Err(Error::InvalidInput(_))
+        Err(Error::InvalidData {
+            at: Position::Item {
+                kind: "triangle",
+                index: 0
+            },
+            ..
+        })
     ));
 }
 
@@ -369,8 +374,15 @@ fn view_names_parse() {
         assert_eq!(v.name().parse::<View>().unwrap(), v);
         assert_eq!(v.to_string(), v.name());
     }
-    assert!("Front".parse::<View>().is_err());
-    assert!("diagonal".parse::<View>().is_err());
+    for bad in ["Front", "diagonal"] {
+        match bad.parse::<View>() {
+            Err(Error::Unknown { kind, name, known }) => {
+                assert_eq!((kind, name.as_str()), ("view", bad));
+                assert!(known.iter().any(|k| k == "front") && known.iter().any(|k| k == "side"));
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
 }
 
 #[test]

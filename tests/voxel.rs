@@ -187,8 +187,16 @@ fn selection_by_label_and_component() {
     let second =
         DigitalObject::from_volume(&v, Selection::Label(7.0), Component::Index(2)).unwrap();
     assert_eq!(second.voxels().collect::<Vec<_>>(), vec![[4, 1, 1]]);
-    assert!(DigitalObject::from_volume(&v, Selection::Label(7.0), Component::Index(3)).is_err());
-    assert!(DigitalObject::from_volume(&v, Selection::Label(9.0), Component::All).is_err());
+    assert!(matches!(
+        DigitalObject::from_volume(&v, Selection::Label(7.0), Component::Index(3)),
+        Err(chisel::Error::InvalidParameter { ref name, .. }) if name == "component"
+    ));
+    assert!(matches!(
+        DigitalObject::from_volume(&v, Selection::Label(9.0), Component::All),
+        Err(chisel::Error::Refused(
+            chisel::Refusal::EmptySelection { .. }
+        ))
+    ));
     let thr =
         DigitalObject::from_volume(&v, Selection::Threshold(3.0), Component::Largest).unwrap();
     assert_eq!(thr.n_voxels(), 4);
@@ -196,10 +204,17 @@ fn selection_by_label_and_component() {
 
 #[test]
 fn phantoms_reject_bad_sizes() {
-    assert!(digital_ball(0).is_err());
-    assert!(cylinder_tunnel(10, 10, 5).is_err());
-    assert!(torus(5, 5).is_err());
-    assert!(ellipsoid_dent(5, 5, 3, 3).is_err());
+    let refused = |r: chisel::Result<chisel::Volume>, param: &str| {
+        assert!(
+            matches!(&r, Err(chisel::Error::InvalidParameter { name, .. }) if name == param),
+            "{param}: {:?}",
+            r.err()
+        );
+    };
+    refused(digital_ball(0), "ball radius");
+    refused(cylinder_tunnel(10, 10, 5), "inner diameter");
+    refused(torus(5, 5), "torus tube radius");
+    refused(ellipsoid_dent(5, 5, 3, 3), "dent radius");
     let o = object(&ellipsoid_dent(10, 10, 7, 4).unwrap());
     let t = o.topology().unwrap();
     assert_eq!((t.genus, t.shells), (0, 1));

@@ -7,17 +7,55 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
+use serde::Serialize;
 
+use super::report::{Report, Show};
 use super::{Global, vec3_arg};
 use crate::parity::Backend;
 use crate::tissue::bench::{
-    Machine, approach_equilibrium, export_network, increment_bone, iteration_rate,
-    time_to_equilibrium,
+    Equilibrium, Machine, Rate, Settled, approach_equilibrium, export_network, increment_bone,
+    iteration_rate, time_to_equilibrium,
 };
-use crate::tissue::chebyshev::estimate_spectrum;
+use crate::tissue::chebyshev::{Spectrum, estimate_spectrum};
 use crate::tissue::phantom::refine_grid;
 use crate::tissue::{Fragments, NetworkParams, Plan, ResolvedPlan, Solver, SpringNetwork};
+
+/// The report of `chisel bench relax`.
+#[derive(Debug, Serialize)]
+pub struct BenchRelaxReport<'a> {
+    command: &'static str,
+    mesh: &'a Path,
+    bone_mesh: Option<&'a Path>,
+    grid: Option<[usize; 2]>,
+    plan: Option<&'a Path>,
+    scale_increment: bool,
+    machine: Machine,
+    adapter: Option<String>,
+    networks: Vec<NetworkRun>,
+}
+
+impl Report for BenchRelaxReport<'_> {
+    const SCHEMA: &'static str = "chisel.bench-relax/1";
+}
+
+/// One refinement of the network and what was measured on it.
+#[derive(Debug, Serialize)]
+struct NetworkRun {
+    refine: usize,
+    nodes: usize,
+    free_nodes: usize,
+    csr_entries: usize,
+    springs: usize,
+    build_seconds: f64,
+    spectrum: Option<Spectrum>,
+    spectrum_seconds: Option<f64>,
+    bytes_per_iteration: u64,
+    rates: Vec<Rate>,
+    /// With `--plan`: each run's time to equilibrium after one increment.
+    time_to_equilibrium: Option<Vec<Settled>>,
+    /// With `--approach`: iterations to within 1 % of equilibrium.
+    approach: Option<Equilibrium>,
+}
 
 /// Arguments of `chisel bench`.
 #[derive(Debug, clap::Args)]
@@ -49,7 +87,7 @@ pub struct RelaxArgs {
     mesh: PathBuf,
     /// Bone mesh (default: the skin scaled by 0.7 about the origin).
     #[arg(long)]
-    bone: Option<PathBuf>,
+    bone_mesh: Option<PathBuf>,
     /// Origin O of the layer construction `x,y,z` (default: SPEC §1.1 rule).
     #[arg(long, value_delimiter = ',')]
     origin: Option<Vec<f32>>,
@@ -155,7 +193,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
             skin.n_vertices()
         );
     }
-    let bone = (args.bone.as_deref())
+    let bone = (args.bone_mesh.as_deref())
         .map(crate::io::read_mesh)
         .transpose()?;
     let plan = args.plan.as_deref().map(Plan::from_path).transpose()?;
@@ -254,8 +292,8 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
             bar.inc(1);
         }
         bar.finish_and_clear();
-        let mut equilibrium = serde_json::Value::Null;
-        let mut approach = serde_json::Value::Null;
+        let mut equilibrium = None;
+        let mut approach = None;
         if let Some(increment) = &increment {
             let bar = global.progress(runs.len() as u64, "equilibrium");
             let settled = time_to_equilibrium(
@@ -280,7 +318,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
                 },
             )?;
             bar.finish_and_clear();
-            equilibrium = json!(settled);
+            equilibrium = Some(settled);
             if args.approach {
                 let bar = global.progress(runs.len() as u64, "approach");
                 let eq = approach_equilibrium(
@@ -296,34 +334,34 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
                     },
                 )?;
                 bar.finish_and_clear();
-                approach = json!(eq);
+                approach = Some(eq);
             }
         }
-        networks.push(json!({
-            "refine": factor,
-            "nodes": net.n_nodes(),
-            "free_nodes": net.n_free,
-            "csr_entries": net.csr.entries.len(),
-            "springs": net.springs.len(),
-            "build_seconds": build_seconds,
-            "spectrum": spectrum,
-            "spectrum_seconds": spectrum_seconds,
-            "bytes_per_iteration": net.bytes_per_iteration(),
-            "rates": rates,
-            "time_to_equilibrium": equilibrium,
-            "approach": approach,
-        }));
+        networks.push(NetworkRun {
+            refine: factor,
+            nodes: net.n_nodes(),
+            free_nodes: net.n_free,
+            csr_entries: net.csr.entries.len(),
+            springs: net.springs.len(),
+            build_seconds,
+            spectrum,
+            spectrum_seconds,
+            bytes_per_iteration: net.bytes_per_iteration(),
+            rates,
+            time_to_equilibrium: equilibrium,
+            approach,
+        });
     }
-    let report = json!({
-        "command": "bench relax",
-        "mesh": args.mesh,
-        "bone": args.bone,
-        "grid": grid.map(|(c, r)| [c, r]),
-        "plan": args.plan,
-        "scale_increment": args.scale_increment,
-        "machine": machine,
-        "adapter": gpu.as_ref().map(|g| g.describe()),
-        "networks": networks,
-    });
-    super::report::emit_optional(&report, args.json, args.report.as_deref())
+    let report = BenchRelaxReport {
+        command: "bench relax",
+        mesh: &args.mesh,
+        bone_mesh: args.bone_mesh.as_deref(),
+        grid: grid.map(|(c, r)| [c, r]),
+        plan: args.plan.as_deref(),
+        scale_increment: args.scale_increment,
+        machine,
+        adapter: gpu.as_ref().map(|g| g.describe()),
+        networks,
+    };
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
 }

@@ -1,4 +1,4 @@
-//! `chisel convert IN OUT`: mesh ↔ mesh or volume ↔ volume, by extension.
+//! `chisel convert IN -o OUT`: mesh ↔ mesh or volume ↔ volume, by extension.
 
 use std::path::PathBuf;
 
@@ -11,6 +11,7 @@ pub struct Args {
     /// Input mesh or volume.
     input: PathBuf,
     /// Output file; its extension picks the format (written atomically).
+    #[arg(short, long)]
     output: PathBuf,
     /// Meshes: also write a shaded preview PNG of the result.
     #[arg(long)]

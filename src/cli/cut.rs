@@ -2,15 +2,48 @@
 //! scalpel cuts through the bounding-box B+ tree (seed 004 §3), optionally
 //! capped so every piece is closed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
-use serde_json::json;
+use serde::Serialize;
 
+use super::report::{Report, Show};
 use super::{Global, ViewAxes};
-use crate::cut::{CutOptions, Knife, cut_sequence};
+use crate::cut::{CutOptions, CutStats, Knife, cut_sequence};
 use crate::mesh::{ScalarField, TriMesh};
 use crate::render::{RenderOptions, View};
+
+/// The report of `chisel cut`.
+#[derive(Debug, Serialize)]
+pub struct CutReport<'a> {
+    command: &'static str,
+    mesh: &'a Path,
+    input_triangles: usize,
+    input_signed_volume: f64,
+    knives: usize,
+    cap: bool,
+    pieces: Vec<Piece>,
+    stats: &'a CutStats,
+}
+
+impl Report for CutReport<'_> {
+    const SCHEMA: &'static str = "chisel.cut/1";
+}
+
+/// One piece written by `chisel cut`.
+#[derive(Debug, Serialize)]
+struct Piece {
+    file: PathBuf,
+    /// `positive` or `negative`: the side of the (last) knife.
+    side: String,
+    vertices: usize,
+    triangles: usize,
+    closed: bool,
+    manifold: bool,
+    signed_volume: f64,
+    /// Crossing triangle pairs of a capped piece (`null` uncapped).
+    self_intersecting_pairs: Option<usize>,
+}
 
 /// Arguments of `chisel cut`. Knives apply in the order planes, rectangles,
 /// spheres, meshes; each may be given several times.
@@ -154,16 +187,16 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         let crossings = args
             .cap
             .then(|| crate::mesh::self_intersections(piece).pairs.len());
-        pieces.push(json!({
-            "file": path,
-            "side": format!("{side:?}").to_lowercase(),
-            "vertices": piece.n_vertices(),
-            "triangles": piece.n_triangles(),
-            "closed": topo.closed,
-            "manifold": topo.nonmanifold_edges == 0 && topo.nonmanifold_vertices == 0,
-            "signed_volume": topo.signed_volume,
-            "self_intersecting_pairs": crossings,
-        }));
+        pieces.push(Piece {
+            file: path,
+            side: format!("{side:?}").to_lowercase(),
+            vertices: piece.n_vertices(),
+            triangles: piece.n_triangles(),
+            closed: topo.closed,
+            manifold: topo.nonmanifold_edges == 0 && topo.nonmanifold_vertices == 0,
+            signed_volume: topo.signed_volume,
+            self_intersecting_pairs: crossings,
+        });
     }
     if let Some(path) = &args.preview {
         let gpu = global.gpu()?;
@@ -186,16 +219,20 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         };
         crate::render::render_png(&gpu, &merged(&result.pieces, args.explode), &opts, path)?;
     }
-    let value = json!({
-        "command": "cut",
-        "mesh": args.mesh,
-        "input_triangles": mesh.n_triangles(),
-        "input_signed_volume": crate::mesh::Topology::of(&mesh).signed_volume,
-        "knives": knives.len(),
-        "cap": args.cap,
-        "pieces": pieces,
-        "stats": result.stats,
-    });
+    let crossings: usize = pieces
+        .iter()
+        .filter_map(|p| p.self_intersecting_pairs)
+        .sum();
+    let report = CutReport {
+        command: "cut",
+        mesh: &args.mesh,
+        input_triangles: mesh.n_triangles(),
+        input_signed_volume: crate::mesh::Topology::of(&mesh).signed_volume,
+        knives: knives.len(),
+        cap: args.cap,
+        pieces,
+        stats: &result.stats,
+    };
     if result.stats.sphere_polyhedral {
         global.note(format!(
             "the sphere cap crossed the surface ({} crossings left after {} repair rounds): \
@@ -212,9 +249,6 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             args.mesh.display()
         );
     }
-    let crossings: usize = (pieces.iter())
-        .filter_map(|p| p["self_intersecting_pairs"].as_u64())
-        .sum::<u64>() as usize;
     if args.cap && s.curves_open > 0 {
         eprintln!(
             "warning: {} cut curve(s) end inside the surface (a rectangle or knife mesh that \
@@ -238,5 +272,5 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         result.stats.triangles_total,
         args.output.display()
     ));
-    super::report::emit_optional(&value, args.json, args.report.as_deref())
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
 }

@@ -13,13 +13,20 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use serde_json::json;
+use serde::Serialize;
 
 use super::Global;
-use super::relax::{Job, before_mesh, bone_before_after, run_job, write_preview};
+use super::relax::{
+    BoneCutFigures, Crossings, Job, NetworkFigures, Overshoot, before_mesh, bone_before_after,
+    run_job, write_preview,
+};
+use super::report::{Report, Show};
+use crate::gpu::GpuFeatures;
 use crate::parity::Backend;
 use crate::render::{Facing, View};
 use crate::surface::McOptions;
+use crate::tissue::RelaxReport;
+use crate::tissue::ct::CtFigures;
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, Stiffness};
 use crate::tissue::phantom::{ct_demo_plan, ct_head_phantom};
@@ -30,7 +37,7 @@ use crate::tissue::{CtLayers, CtParams, Fragments, NetworkParams, RelaxOptions, 
 pub struct Args {
     /// Output folder (created if missing).
     #[arg(short, long, default_value = "chisel-demo")]
-    out: PathBuf,
+    output: PathBuf,
     /// Voxel size of the CT phantom, mm (1–8; smaller = finer surfaces, more nodes).
     #[arg(long, default_value_t = 5.0)]
     voxel: f32,
@@ -46,23 +53,88 @@ pub struct Args {
 const SKIN_LEVEL: f32 = 500.0;
 const BONE_LEVEL: f32 = 1150.0;
 
+/// The report of `chisel demo` (`report.json` in the output folder).
+#[derive(Debug, Serialize)]
+pub struct DemoReport<'a> {
+    command: &'static str,
+    adapter: String,
+    features: GpuFeatures,
+    phantom: PhantomFigures,
+    ct: &'a CtFigures,
+    marching_cubes_gpu_equals_cpu: bool,
+    cut: Option<&'a BoneCutFigures>,
+    network: NetworkFigures,
+    relax_gpu: &'a RelaxReport,
+    skin_self_intersecting_pairs: Crossings,
+    skin_overshoot: Overshoot,
+    parity: DemoParity,
+    outputs: DemoOutputs,
+    timings_s: DemoTimings,
+}
+
+impl Report for DemoReport<'_> {
+    const SCHEMA: &'static str = "chisel.demo/1";
+}
+
+#[derive(Debug, Serialize)]
+struct PhantomFigures {
+    dims: [usize; 3],
+    voxel_mm: f32,
+    levels: Levels,
+}
+
+#[derive(Debug, Serialize)]
+struct Levels {
+    skin: f32,
+    bone: f32,
+}
+
+/// The CPU mirror's run of the same plan against the GPU's.
+#[derive(Debug, Serialize)]
+struct DemoParity {
+    cpu_status: crate::tissue::Status,
+    cpu_iterations: u64,
+    same_status_and_iterations: bool,
+    max_epidermis_distance: f32,
+}
+
+#[derive(Debug, Serialize)]
+struct DemoOutputs {
+    skin: PathBuf,
+    bone: PathBuf,
+    ct: PathBuf,
+    preview: PathBuf,
+    bone_preview: PathBuf,
+}
+
+/// Seconds per stage.
+#[derive(Debug, Default, Serialize)]
+struct DemoTimings {
+    phantom: f64,
+    gpu_open: f64,
+    marching_cubes_gpu: f64,
+    marching_cubes_cpu_check: f64,
+    cut_and_network: f64,
+    relax_gpu: f64,
+    relax_cpu_mirror: f64,
+    write_outputs: f64,
+}
+
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    std::fs::create_dir_all(&args.out).map_err(|e| crate::Error::io(&args.out, e))?;
+    std::fs::create_dir_all(&args.output).map_err(|e| crate::Error::io(&args.output, e))?;
     let bar = global.progress(7, "demo");
-    let mut timings = serde_json::Map::new();
-    let mut stage = |name: &str, t: Instant| {
-        timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
-    };
+    let mut timings = DemoTimings::default();
+    let since = |t: Instant| t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let volume = ct_head_phantom(args.voxel)?;
     let plan = ct_demo_plan()?;
-    stage("phantom", t);
+    timings.phantom = since(t);
     bar.inc(1);
 
     let t = Instant::now();
     let gpu = global.gpu()?;
-    stage("gpu_open", t);
+    timings.gpu_open = since(t);
     bar.inc(1);
 
     let t = Instant::now();
@@ -76,12 +148,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     );
     let ct_params = CtParams::for_volume(&volume, SKIN_LEVEL, BONE_LEVEL);
     let layers = CtLayers::from_surfaces(&skin_gpu, &bone_gpu, &ct_params)?;
-    stage("marching_cubes_gpu", t);
+    timings.marching_cubes_gpu = since(t);
     let t = Instant::now();
     let mc_same = skin_gpu.canonical_triangles()
         == mc(SKIN_LEVEL, Backend::Cpu)?.canonical_triangles()
         && bone_gpu.canonical_triangles() == mc(BONE_LEVEL, Backend::Cpu)?.canonical_triangles();
-    stage("marching_cubes_cpu_check", t);
+    timings.marching_cubes_cpu_check = since(t);
     bar.inc(1);
 
     let t = Instant::now();
@@ -100,7 +172,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Fragments::new(),
         &params,
     )?;
-    stage("cut_and_network", t);
+    timings.cut_and_network = since(t);
     bar.inc(1);
 
     let opts = RelaxOptions {
@@ -109,11 +181,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     let t = Instant::now();
     let gpu_report = run_job(global, &job, &opts, Backend::Gpu(&gpu))?;
-    stage("relax_gpu", t);
+    timings.relax_gpu = since(t);
     bar.inc(1);
     let t = Instant::now();
     let cpu_report = run_job(global, &job, &opts, Backend::Cpu)?;
-    stage("relax_cpu_mirror", t);
+    timings.relax_cpu_mirror = since(t);
     bar.inc(1);
     let max_gpu_cpu = gpu_report
         .epidermis
@@ -126,7 +198,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let relaxed = gpu_report.skin_mesh(&job.network);
-    let out = |name: &str| args.out.join(name);
+    let out = |name: &str| args.output.join(name);
     crate::io::write_mesh(&out("relaxed_skin.ply"), &relaxed)?;
     let crossings = super::relax::skin_crossings(&job.skin, &relaxed);
     let overshoot = super::relax::skin_overshoot(&job.network, &job.plan, &gpu_report)?;
@@ -153,46 +225,50 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         format!("{title} - bone"),
         &out("bone_before_after.png"),
     )?;
-    stage("write_outputs", t);
+    timings.write_outputs = since(t);
     bar.inc(1);
     bar.finish_and_clear();
 
-    let report = json!({
-        "command": "demo",
-        "adapter": gpu.describe(),
-        "features": gpu.features,
-        "phantom": {
-            "dims": volume.dims,
-            "voxel_mm": args.voxel,
-            "levels": { "skin": SKIN_LEVEL, "bone": BONE_LEVEL },
+    let report = DemoReport {
+        command: "demo",
+        adapter: gpu.describe(),
+        features: gpu.features,
+        phantom: PhantomFigures {
+            dims: volume.dims,
+            voxel_mm: args.voxel,
+            levels: Levels {
+                skin: SKIN_LEVEL,
+                bone: BONE_LEVEL,
+            },
         },
-        "ct": layers.figures,
-        "marching_cubes_gpu_equals_cpu": mc_same,
-        "cut": job.cut,
-        "network": super::relax::network_json(&job.network, params.subcutis_depth),
-        "relax_gpu": gpu_report,
-        "skin_self_intersecting_pairs": crossings,
-        "skin_overshoot": overshoot,
-        "parity": {
-            "cpu_status": cpu_report.status,
-            "cpu_iterations": cpu_report.iterations,
-            "same_status_and_iterations": same_status,
-            "max_epidermis_distance": max_gpu_cpu,
+        ct: &layers.figures,
+        marching_cubes_gpu_equals_cpu: mc_same,
+        cut: job.cut.as_ref(),
+        network: NetworkFigures::of(&job.network, params.subcutis_depth),
+        relax_gpu: &gpu_report,
+        skin_self_intersecting_pairs: crossings,
+        skin_overshoot: overshoot,
+        parity: DemoParity {
+            cpu_status: cpu_report.status,
+            cpu_iterations: cpu_report.iterations,
+            same_status_and_iterations: same_status,
+            max_epidermis_distance: max_gpu_cpu,
         },
-        "outputs": {
-            "skin": out("relaxed_skin.ply"),
-            "bone": out("bone_moved.ply"),
-            "ct": out("head_ct.nrrd"),
-            "preview": out("before_after.png"),
-            "bone_preview": out("bone_before_after.png"),
+        outputs: DemoOutputs {
+            skin: out("relaxed_skin.ply"),
+            bone: out("bone_moved.ply"),
+            ct: out("head_ct.nrrd"),
+            preview: out("before_after.png"),
+            bone_preview: out("bone_before_after.png"),
         },
-        "timings_s": timings,
-    });
-    let report_path = out("report.json");
-    super::report::write_json(&report_path, &report)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    }
+        timings_s: timings,
+    };
+    super::report::emit(
+        &report,
+        Show::WithJson,
+        args.json,
+        Some(&out("report.json")),
+    )?;
     global.note(format!(
         "demo: CT {}×{}×{} → skin {} / bone {} vertices (GPU marching cubes {}), jaw cut free; \
          {} nodes, GPU relaxation {} after {} iterations ({:.2} s), max skin displacement {:.2} mm; \
@@ -210,7 +286,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         gpu_report.max_displacement,
         if same_status { "agrees" } else { "DIFFERS" },
         max_gpu_cpu,
-        args.out.display()
+        args.output.display()
     ));
     anyhow::ensure!(
         mc_same,

@@ -1,17 +1,18 @@
-//! `chisel hull VOLUME (--threshold T | --label L)`: the exact convex hull of
+//! `chisel hull VOLUME (--level T | --label L)`: the exact convex hull of
 //! a digital object (seed 003 §4.1; SPEC §4.2) with its cell list (App. C),
 //! storage per eq. 8.2, volume, area and the background components inside it
 //! (ZKH, §4.2.1) with their class (Def. CO/CA/TU).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::ValueEnum;
-use serde_json::json;
+use serde::Serialize;
 
+use super::report::{Report, Show};
 use super::{Global, ViewAxes};
-use crate::hull::{ConvexHull, CoplanarPolicy, HullOptions, Order};
-use crate::polyhedron::background_components;
+use crate::hull::{ConvexHull, CoplanarPolicy, HullOptions, HullSummary, Order};
+use crate::polyhedron::{Zkh, background_components};
 use crate::render::{RenderOptions, View};
 use crate::voxel::{CandidateKind, Component, DigitalObject, Selection};
 
@@ -64,7 +65,7 @@ pub enum OrderArg {
 pub struct SelectArgs {
     /// Object = samples ≥ T.
     #[arg(long, conflicts_with = "label", required_unless_present = "label")]
-    threshold: Option<f64>,
+    level: Option<f64>,
     /// Object = samples equal to this label.
     #[arg(long)]
     label: Option<f64>,
@@ -76,10 +77,10 @@ pub struct SelectArgs {
 impl SelectArgs {
     /// The selection and the component rule.
     pub fn parse(&self) -> anyhow::Result<(Selection, Component)> {
-        let selection = match (self.threshold, self.label) {
+        let selection = match (self.level, self.label) {
             (Some(t), None) => Selection::Threshold(t),
             (None, Some(l)) => Selection::Label(l),
-            _ => anyhow::bail!("give exactly one of --threshold and --label"),
+            _ => anyhow::bail!("give exactly one of --level and --label"),
         };
         let component = match self.component.as_str() {
             "largest" => Component::Largest,
@@ -92,13 +93,21 @@ impl SelectArgs {
     }
 
     /// The selection as given, for reports.
-    pub fn to_json(&self) -> serde_json::Value {
-        json!({
-            "threshold": self.threshold,
-            "label": self.label,
-            "component": self.component,
-        })
+    pub fn figures(&self) -> SelectionFigures<'_> {
+        SelectionFigures {
+            level: self.level,
+            label: self.label,
+            component: &self.component,
+        }
     }
+}
+
+/// The report's `selection`: `--level`, `--label`, `--component` as given.
+#[derive(Debug, Serialize)]
+pub struct SelectionFigures<'a> {
+    level: Option<f64>,
+    label: Option<f64>,
+    component: &'a str,
 }
 
 /// How the hull is built: candidates, vertex cells, coplanar policy and
@@ -150,12 +159,64 @@ impl HullArgs {
 
 /// The report's `object` entry: voxels, boundary facets, inclusive voxel
 /// bounding box (source indices).
-pub(super) fn object_json(object: &DigitalObject) -> serde_json::Value {
-    json!({
-        "voxels": object.n_voxels(),
-        "boundary_facets": object.n_boundary_facets(),
-        "voxel_bbox": object.voxel_bbox(),
-    })
+#[derive(Debug, Serialize)]
+pub struct ObjectFigures {
+    voxels: u64,
+    boundary_facets: u64,
+    voxel_bbox: ([i64; 3], [i64; 3]),
+}
+
+impl ObjectFigures {
+    pub(super) fn of(object: &DigitalObject) -> Self {
+        ObjectFigures {
+            voxels: object.n_voxels(),
+            boundary_facets: object.n_boundary_facets(),
+            voxel_bbox: object.voxel_bbox(),
+        }
+    }
+}
+
+/// The report of `chisel hull`.
+#[derive(Debug, Serialize)]
+pub struct HullReport<'a> {
+    command: &'static str,
+    volume: &'a Path,
+    dims: [usize; 3],
+    selection: SelectionFigures<'a>,
+    object: ObjectFigures,
+    candidates: Candidates,
+    hull: HullSummary,
+    /// The ZKHs (`null` when skipped).
+    zkh: Option<Vec<Zkh>>,
+    /// Why the ZKHs were not looked for (`--no-zkh`, a flat hull).
+    zkh_skipped: Option<&'static str>,
+    outputs: HullOutputs<'a>,
+    timings_s: HullTimings,
+}
+
+impl Report for HullReport<'_> {
+    const SCHEMA: &'static str = "chisel.hull/1";
+}
+
+#[derive(Debug, Serialize)]
+struct Candidates {
+    kind: CandidateKind,
+    count: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct HullOutputs<'a> {
+    mesh: Option<&'a Path>,
+    preview: Option<&'a Path>,
+}
+
+/// Seconds per stage.
+#[derive(Debug, Default, Serialize)]
+struct HullTimings {
+    object: f64,
+    candidates: f64,
+    hull: f64,
+    zkh: f64,
 }
 
 /// Arguments of `chisel hull`.
@@ -200,24 +261,21 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         crate::foundation::fs::check_output_path(path)?;
     }
     let (selection, component) = args.select.parse()?;
-    let mut timings = serde_json::Map::new();
-    let mut stage = |name: &str, t: Instant| {
-        timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
-    };
+    let mut timings = HullTimings::default();
     let t = Instant::now();
     let volume = crate::io::read_volume(&args.volume)?;
     let object = DigitalObject::from_volume(&volume, selection, component)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
-    stage("object", t);
+    timings.object = t.elapsed().as_secs_f64();
     let kind = args.hull.kind();
     let options = args.hull.options();
     let t = Instant::now();
     let candidates = object.candidates(kind);
-    stage("candidates", t);
+    timings.candidates = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let hull = ConvexHull::build(&candidates, options)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
-    stage("hull", t);
+    timings.hull = t.elapsed().as_secs_f64();
     let frame = object.frame();
     let t = Instant::now();
     // A flat hull has no inside, so no ZKH (reported as skipped, not as 0).
@@ -232,7 +290,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Some(_) => Vec::new(),
         None => background_components(&object, &hull)?,
     };
-    stage("zkh", t);
+    timings.zkh = t.elapsed().as_secs_f64();
     let mesh = hull.to_mesh(&frame)?;
     if let Some(path) = &args.output {
         crate::io::write_mesh(path, &mesh)?;
@@ -254,19 +312,26 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         };
         crate::render::render_png(&gpu, &mesh, &opts, path)?;
     }
-    let value = json!({
-        "command": "hull",
-        "volume": args.volume,
-        "dims": volume.dims,
-        "selection": args.select.to_json(),
-        "object": object_json(&object),
-        "candidates": { "kind": kind, "count": candidates.len() },
-        "hull": hull.summary(&frame),
-        "zkh": zkh_skipped.is_none().then_some(&zkh),
-        "zkh_skipped": zkh_skipped,
-        "outputs": { "mesh": args.output, "preview": args.preview },
-        "timings_s": timings,
-    });
+    let n_zkh = zkh.len();
+    let report = HullReport {
+        command: "hull",
+        volume: &args.volume,
+        dims: volume.dims,
+        selection: args.select.figures(),
+        object: ObjectFigures::of(&object),
+        candidates: Candidates {
+            kind,
+            count: candidates.len(),
+        },
+        hull: hull.summary(&frame),
+        zkh: zkh_skipped.is_none().then_some(zkh),
+        zkh_skipped,
+        outputs: HullOutputs {
+            mesh: args.output.as_deref(),
+            preview: args.preview.as_deref(),
+        },
+        timings_s: timings,
+    };
     global.note(format!(
         "hull of {} voxels: {} faces, {} vertices, {} integers (eq. 8.2); {}",
         object.n_voxels(),
@@ -275,14 +340,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         hull.cell_list().integers_eq_8_2(),
         match zkh_skipped {
             Some(why) => format!("ZKH skipped ({why})"),
-            None => format!("{} ZKH", zkh.len()),
+            None => format!("{n_zkh} ZKH"),
         }
     ));
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
-    }
-    if let Some(path) = &args.report {
-        super::report::write_json(path, &value)?;
-    }
-    Ok(())
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
 }

@@ -1,10 +1,41 @@
 //! `chisel info`: every adapter with backend, type, driver, limits and
 //! features, and the one chisel would choose.
 
-use serde_json::json;
+use serde::Serialize;
 
 use super::Global;
-use crate::gpu::{AdapterChoice, Gpu, GpuOptions, adapter_reports};
+use super::report::{Report, Show};
+use crate::gpu::{AdapterChoice, AdapterReport, Gpu, GpuFeatures, GpuOptions, adapter_reports};
+
+/// The report of `chisel info`.
+#[derive(Debug, Serialize)]
+pub struct InfoReport {
+    /// chisel's version.
+    chisel: &'static str,
+    /// `--adapter` / `CHISEL_ADAPTER` as given.
+    requested: String,
+    adapters: Vec<AdapterReport>,
+    chosen: Chosen,
+}
+
+impl Report for InfoReport {
+    const SCHEMA: &'static str = "chisel.info/1";
+}
+
+/// The adapter chosen, or why none could be opened.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+enum Chosen {
+    Opened {
+        name: String,
+        description: String,
+        features: GpuFeatures,
+        max_binding_bytes: u64,
+    },
+    Failed {
+        error: String,
+    },
+}
 
 /// Arguments of `chisel info`.
 #[derive(Debug, clap::Args)]
@@ -28,22 +59,23 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         adapter: Some(choice.clone()),
         ..Default::default()
     });
-    let chosen_json = match &chosen {
-        Ok(gpu) => json!({
-            "name": gpu.info.name,
-            "description": gpu.describe(),
-            "features": gpu.features,
-            "max_binding_bytes": gpu.max_binding_bytes(),
-        }),
-        Err(e) => json!({ "error": e.to_string() }),
+    let report = InfoReport {
+        chisel: env!("CARGO_PKG_VERSION"),
+        requested: choice.to_string(),
+        adapters,
+        chosen: match &chosen {
+            Ok(gpu) => Chosen::Opened {
+                name: gpu.info.name.clone(),
+                description: gpu.describe(),
+                features: gpu.features,
+                max_binding_bytes: gpu.max_binding_bytes(),
+            },
+            Err(e) => Chosen::Failed {
+                error: e.to_string(),
+            },
+        },
     };
-    let value = json!({
-        "chisel": env!("CARGO_PKG_VERSION"),
-        "requested": choice.to_string(),
-        "adapters": adapters,
-        "chosen": chosen_json,
-    });
-    super::report::emit(&value, args.json, args.report.as_deref())?;
+    super::report::emit(&report, Show::Always, args.json, args.report.as_deref())?;
     chosen?;
     Ok(())
 }

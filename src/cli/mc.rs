@@ -1,15 +1,59 @@
 //! `chisel mc VOLUME --level L | --label N`: marching cubes with one-pass
 //! grouping (seed 004 §1), per-group figures, optional per-group meshes.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
+use serde::Serialize;
 
-use super::{BackendArg, Global, ViewAxes};
+use super::report::{Report, Show};
+use super::{BackendChoice, Global, ViewAxes};
 use crate::parity::Backend;
 use crate::render::{RenderOptions, View};
-use crate::surface::{IsoSpec, McOptions, marching_cubes};
+use crate::surface::{Group, IsoSpec, McOptions, marching_cubes};
+
+/// The report of `chisel mc`.
+#[derive(Debug, Serialize)]
+pub struct McReport<'a> {
+    command: &'static str,
+    volume: &'a Path,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    iso: Iso,
+    backend: &'static str,
+    adapter: Option<String>,
+    vertices: usize,
+    triangles: usize,
+    group_count: usize,
+    groups: &'a [Group],
+    timings_s: McTimings,
+    outputs: McOutputs<'a>,
+}
+
+impl Report for McReport<'_> {
+    const SCHEMA: &'static str = "chisel.mc/1";
+}
+
+/// `{"level": L}` or `{"label": N}`.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+enum Iso {
+    Level(f32),
+    Label(f64),
+}
+
+#[derive(Debug, Serialize)]
+struct McTimings {
+    read: f64,
+    marching_cubes: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct McOutputs<'a> {
+    mesh: &'a Path,
+    groups_dir: Option<&'a Path>,
+    preview: Option<&'a Path>,
+}
 
 /// Arguments of `chisel mc`.
 #[derive(Debug, clap::Args)]
@@ -29,8 +73,8 @@ pub struct Args {
     #[arg(long)]
     close_border: bool,
     /// Where marching cubes runs (the GPU finishes grouping on the host).
-    #[arg(long, value_enum, default_value = "cpu")]
-    backend: BackendArg,
+    #[command(flatten)]
+    backend: BackendChoice,
     /// Output surface mesh (written atomically).
     #[arg(short, long)]
     output: PathBuf,
@@ -83,10 +127,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         (None, Some(l)) => IsoSpec::Label(l),
         _ => anyhow::bail!("give exactly one of --level and --label"),
     };
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
+    let gpu = global.backend(&args.backend)?;
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let t = Instant::now();
     let surface = marching_cubes(
@@ -160,21 +201,31 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         };
         crate::render::render_png(g, &surface.mesh, &opts, path)?;
     }
-    let value = json!({
-        "command": "mc",
-        "volume": args.volume,
-        "dims": volume.dims,
-        "spacing": volume.spacing,
-        "iso": match iso { IsoSpec::Level(l) => json!({ "level": l }), IsoSpec::Label(l) => json!({ "label": l }) },
-        "backend": backend.name(),
-        "adapter": gpu.as_ref().map(|g| g.describe()),
-        "vertices": surface.mesh.n_vertices(),
-        "triangles": surface.mesh.n_triangles(),
-        "group_count": surface.groups.len(),
-        "groups": surface.groups,
-        "timings_s": { "read": read_s, "marching_cubes": mc_s },
-        "outputs": { "mesh": args.output, "groups_dir": args.groups_dir, "preview": args.preview },
-    });
+    let report = McReport {
+        command: "mc",
+        volume: &args.volume,
+        dims: volume.dims,
+        spacing: volume.spacing,
+        iso: match iso {
+            IsoSpec::Level(l) => Iso::Level(l),
+            IsoSpec::Label(l) => Iso::Label(l),
+        },
+        backend: backend.name(),
+        adapter: gpu.as_ref().map(|g| g.describe()),
+        vertices: surface.mesh.n_vertices(),
+        triangles: surface.mesh.n_triangles(),
+        group_count: surface.groups.len(),
+        groups: &surface.groups,
+        timings_s: McTimings {
+            read: read_s,
+            marching_cubes: mc_s,
+        },
+        outputs: McOutputs {
+            mesh: &args.output,
+            groups_dir: args.groups_dir.as_deref(),
+            preview: args.preview.as_deref(),
+        },
+    };
     global.note(format!(
         "{} triangles in {} groups ({:.3} s on {}); wrote {}",
         surface.mesh.n_triangles(),
@@ -183,5 +234,5 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         backend.name(),
         args.output.display()
     ));
-    super::report::emit_optional(&value, args.json, args.report.as_deref())
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
 }

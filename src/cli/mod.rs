@@ -1,8 +1,8 @@
 //! The `chisel` command line (SPEC §0.7): one module per command.
 //!
 //! Conventions shared by every command: `--adapter` picks the GPU (same
-//! values as `CHISEL_ADAPTER`), `--backend cpu|gpu` picks where data-parallel
-//! work runs, `--quiet` hides progress bars (they also hide when stderr is
+//! values as `CHISEL_ADAPTER`), `--backend auto|cpu|gpu` picks where
+//! data-parallel work runs (one default, `auto`, printed when chosen), `--quiet` hides progress bars (they also hide when stderr is
 //! not a terminal), `--json` prints the report on stdout, `--report FILE`
 //! writes it atomically.
 
@@ -164,10 +164,24 @@ pub(super) fn clear_numbered_outputs(
 /// Where data-parallel work runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BackendArg {
-    /// The CPU mirror of each kernel.
+    /// The GPU when the chosen adapter is a hardware GPU, else the CPU
+    /// (whose fast paths beat a software adapter such as lavapipe).
+    Auto,
+    /// The CPU paths of each kernel.
     Cpu,
-    /// The WGSL kernels on the chosen adapter.
+    /// The WGSL kernels on the chosen adapter (a software one included).
     Gpu,
+}
+
+/// `--backend`: the same flag, default and behaviour in every command
+/// with data-parallel work; the choice is printed (unless `--quiet`) and
+/// named in the report.
+#[derive(Debug, Clone, clap::Args)]
+pub struct BackendChoice {
+    /// Where data-parallel work runs: `auto` (the GPU when the adapter is a
+    /// hardware GPU, else the CPU), `cpu` or `gpu`.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: BackendArg,
 }
 
 #[derive(Debug, Subcommand)]
@@ -203,15 +217,51 @@ enum Command {
 impl Global {
     /// Opens the GPU this invocation asked for.
     fn gpu(&self) -> anyhow::Result<Gpu> {
-        let adapter: AdapterChoice = self.adapter.parse()?;
-        let gpu = Gpu::with_options(GpuOptions {
-            adapter: Some(adapter),
-            ..Default::default()
-        })?;
+        let gpu = self.open_gpu()?;
         if !self.quiet {
             eprintln!("adapter: {}", gpu.describe());
         }
         Ok(gpu)
+    }
+
+    /// The GPU that `--backend` asks for, `None` for the CPU; prints the
+    /// choice (and, for `auto`, why).
+    fn backend(&self, choice: &BackendChoice) -> anyhow::Result<Option<Gpu>> {
+        let gpu = match choice.backend {
+            BackendArg::Cpu => None,
+            BackendArg::Gpu => Some(self.open_gpu()?),
+            BackendArg::Auto => {
+                let adapter: AdapterChoice = self.adapter.parse()?;
+                match crate::gpu::probe_adapter(&adapter) {
+                    Ok((_, false)) => Some(self.open_gpu()?),
+                    Ok((name, true)) => {
+                        self.note(format!(
+                            "backend: cpu (auto: the adapter {name} is a software one; \
+                             `--backend gpu` runs the kernels on it)"
+                        ));
+                        return Ok(None);
+                    }
+                    Err(e) => {
+                        self.note(format!("backend: cpu (auto: {e})"));
+                        return Ok(None);
+                    }
+                }
+            }
+        };
+        match &gpu {
+            Some(g) => self.note(format!("backend: gpu on {}", g.describe())),
+            None => self.note("backend: cpu"),
+        }
+        Ok(gpu)
+    }
+
+    /// Opens the GPU without printing it.
+    fn open_gpu(&self) -> anyhow::Result<Gpu> {
+        let adapter: AdapterChoice = self.adapter.parse()?;
+        Ok(Gpu::with_options(GpuOptions {
+            adapter: Some(adapter),
+            ..Default::default()
+        })?)
     }
 
     /// A progress bar on stderr (hidden with `--quiet` or without a terminal).

@@ -2,12 +2,30 @@
 //! Tables 4.1/4.2, 8.6/8.7, §8.1) and the demo's CT-like head as volumes
 //! (object voxels 1, background 0; the head in CT numbers).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use serde_json::json;
+use serde::Serialize;
 
 use super::Global;
+use super::report::{Report, Show};
 use crate::phantom::voxel;
+use crate::volume::VolumeStats;
+
+/// The report of `chisel phantom`.
+#[derive(Debug, Serialize)]
+pub struct PhantomReport<'a> {
+    command: &'static str,
+    kind: &'a Kind,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    origin: [f64; 3],
+    stats: VolumeStats,
+    output: &'a Path,
+}
+
+impl Report for PhantomReport<'_> {
+    const SCHEMA: &'static str = "chisel.phantom/1";
+}
 
 /// The objects (in reports `{"shape": "ball", "r": 4}`).
 #[derive(Debug, Clone, clap::Subcommand, serde::Serialize)]
@@ -110,24 +128,20 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Kind::Head { voxel } => crate::tissue::phantom::ct_head_phantom(voxel)?,
     };
     crate::io::write_volume(output, &volume)?;
-    let stats = crate::volume::VolumeStats::of(&volume);
-    let value = json!({
-        "command": "phantom",
-        "kind": args.kind,
-        "dims": volume.dims,
-        "spacing": volume.spacing,
-        "origin": volume.origin,
-        "stats": stats,
-        "output": output,
-    });
+    let report = PhantomReport {
+        command: "phantom",
+        kind: &args.kind,
+        dims: volume.dims,
+        spacing: volume.spacing,
+        origin: volume.origin,
+        stats: VolumeStats::of(&volume),
+        output,
+    };
     global.note(format!(
         "{:?}: {:?} samples; wrote {}",
         args.kind,
         volume.dims,
         output.display()
     ));
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
-    }
-    Ok(())
+    super::report::emit(&report, Show::WithJson, args.json, None)
 }

@@ -1,4 +1,4 @@
-//! `chisel polyhedrize VOLUME (--threshold T | --label L)`: the lossless
+//! `chisel polyhedrize VOLUME (--level T | --label L)`: the lossless
 //! polyhedral representation of a digital object (seed 003 §4.4–4.5; SPEC
 //! §4.4–4.5) as nested convex shells, written as a `.cells` file (compact
 //! eq. 8.2 encoding) and/or readable JSON, with a triangle mesh of the
@@ -10,17 +10,86 @@
 //! `--slice Z` gives the 2-D analogue (ch. 9): nested convex polygons for
 //! one slice.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
+use serde::Serialize;
 
-use super::hull::{HullArgs, SelectArgs, object_json};
-use super::{BackendArg, Global, ViewAxes};
+use super::hull::{HullArgs, ObjectFigures, SelectArgs, SelectionFigures};
+use super::report::{Report, Show};
+use super::{BackendChoice, Global, ViewAxes};
 use crate::parity::Backend;
-use crate::polyhedron::{PolyhedrizeOptions, Polyhedron, polyhedrize};
+use crate::polyhedron::{
+    PolyhedrizeOptions, Polyhedron, PolyhedronSummary, ZkhReport, polyhedrize,
+};
 use crate::render::{RenderOptions, View};
-use crate::voxel::{DigitalObject, marching_cubes_integers};
+use crate::voxel::{BoundaryTopology, DigitalObject, marching_cubes_integers};
+
+/// The report of `chisel polyhedrize`.
+#[derive(Debug, Serialize)]
+pub struct PolyhedrizeReport<'a> {
+    command: &'static str,
+    volume: &'a Path,
+    dims: [usize; 3],
+    slice: Option<usize>,
+    selection: SelectionFigures<'a>,
+    object: ObjectFigures,
+    topology: BoundaryTopology,
+    backend: &'static str,
+    adapter: Option<String>,
+    options: PolyhedrizeOptions,
+    polyhedron: PolyhedronSummary,
+    sibling_merges: usize,
+    marching_cubes: McFigures,
+    zkh: Vec<ZkhReport>,
+    /// `merged` (the merged surface) or `shells` (the separate shells).
+    mesh: &'static str,
+    merged_faces: Option<usize>,
+    merged_faces_split: Option<usize>,
+    merged_faces_with_holes: Option<usize>,
+    merged_convex_faces: Option<usize>,
+    merged_triangles: Option<usize>,
+    merged_volume_voxels: Option<f64>,
+    merged_area_voxels: Option<f64>,
+    /// Why there is no merged surface.
+    merge_refused: Option<String>,
+    verified: Option<bool>,
+    verify_ray_parity_mismatches: Option<u64>,
+    outputs: PolyhedrizeOutputs<'a>,
+    timings_s: PolyhedrizeTimings,
+}
+
+impl Report for PolyhedrizeReport<'_> {
+    const SCHEMA: &'static str = "chisel.polyhedrize/1";
+}
+
+/// The marching-cubes surface of the same object, for comparison (eq. 8.1).
+#[derive(Debug, Serialize)]
+struct McFigures {
+    triangles: u64,
+    integers_eq_8_1: u64,
+}
+
+#[derive(Debug, Serialize)]
+struct PolyhedrizeOutputs<'a> {
+    cells: Option<&'a Path>,
+    cells_json: Option<&'a Path>,
+    mesh: Option<&'a Path>,
+    preview: Option<&'a Path>,
+}
+
+/// Seconds per stage (`verify*` with `--verify` only).
+#[derive(Debug, Default, Serialize)]
+struct PolyhedrizeTimings {
+    object: f64,
+    topology: f64,
+    polyhedrize: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    verify: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    verify_ray_parity: Option<f64>,
+    merge: f64,
+}
 
 /// Arguments of `chisel polyhedrize`.
 #[derive(Debug, clap::Args)]
@@ -51,8 +120,8 @@ pub struct Args {
     #[arg(long, conflicts_with_all = ["mesh", "preview"])]
     slice: Option<usize>,
     /// Backend of the inside-shell scans.
-    #[arg(long, value_enum, default_value = "cpu")]
-    backend: BackendArg,
+    #[command(flatten)]
+    backend: BackendChoice,
     /// Cell list, binary `.cells` (compact eq. 8.2 encoding), written atomically.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -117,10 +186,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         }
     }
     let (selection, component) = args.select.parse()?;
-    let mut timings = serde_json::Map::new();
-    let mut stage = |name: &str, t: Instant| {
-        timings.insert(name.into(), json!(t.elapsed().as_secs_f64()));
-    };
+    let mut timings = PolyhedrizeTimings::default();
+    let since = |t: Instant| t.elapsed().as_secs_f64();
     let t = Instant::now();
     let mut volume = crate::io::read_volume(&args.volume)?;
     if let Some(z) = args.slice {
@@ -130,14 +197,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     let object = DigitalObject::from_volume(&volume, selection, component)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
-    stage("object", t);
+    timings.object = since(t);
     let t = Instant::now();
     let topology = object.topology()?;
-    stage("topology", t);
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
+    timings.topology = since(t);
+    let gpu = global.backend(&args.backend)?;
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let options = PolyhedrizeOptions {
         candidates: args.hull.kind(),
@@ -156,7 +220,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let (poly, zkh) = polyhedrize(&object, options, backend, &|n| bar.set_position(n as u64))
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     bar.finish_and_clear();
-    stage("polyhedrize", t);
+    timings.polyhedrize = since(t);
     let summary = poly.summary();
     // A mesh needs a 3-D shell; refused before anything is written.
     let needs_mesh = args.mesh.is_some() || args.preview.is_some();
@@ -181,7 +245,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         let t = Instant::now();
         let back = Polyhedron::from_bytes(&bytes, "encoded cell list", object.frame())?;
         let (n, first) = back.mismatches(&object, backend, 10)?;
-        stage("verify", t);
+        timings.verify = Some(since(t));
         if n > 0 {
             anyhow::bail!(
                 "{}: the polyhedron differs from the object in {n} voxels (first: {first:?})",
@@ -198,7 +262,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             }
             _ => None,
         };
-        stage("verify_ray_parity", t);
+        timings.verify_ray_parity = Some(since(t));
         (Some(true), ray_parity)
     } else {
         (None, None)
@@ -209,7 +273,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Ok(m) => (Some(m), None),
         Err(e) => (None, Some(e.to_string())),
     };
-    stage("merge", t);
+    timings.merge = since(t);
     let mesh = match (needs_mesh, &merged) {
         (false, _) => None,
         (true, Some(m)) => Some(m.to_mesh(&poly.frame)?),
@@ -263,43 +327,43 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         crate::render::render_png(gpu, faces.as_ref().unwrap_or(mesh), &opts, path)?;
     }
     let mc_triangles = 2 * object.n_boundary_facets();
-    let value = json!({
-        "command": "polyhedrize",
-        "volume": args.volume,
-        "dims": volume.dims,
-        "slice": args.slice,
-        "selection": args.select.to_json(),
-        "object": object_json(&object),
-        "topology": topology,
-        "backend": format!("{:?}", args.backend).to_lowercase(),
-        "adapter": gpu.as_ref().map(|g| g.describe()),
-        "options": options,
-        "polyhedron": summary,
-        "sibling_merges": poly.merges,
-        "marching_cubes": {
-            "triangles": mc_triangles,
-            "integers_eq_8_1": marching_cubes_integers(mc_triangles),
+    let report = PolyhedrizeReport {
+        command: "polyhedrize",
+        volume: &args.volume,
+        dims: volume.dims,
+        slice: args.slice,
+        selection: args.select.figures(),
+        object: ObjectFigures::of(&object),
+        topology,
+        backend: backend.name(),
+        adapter: gpu.as_ref().map(|g| g.describe()),
+        options,
+        polyhedron: summary.clone(),
+        sibling_merges: poly.merges,
+        marching_cubes: McFigures {
+            triangles: mc_triangles,
+            integers_eq_8_1: marching_cubes_integers(mc_triangles),
         },
-        "zkh": zkh,
-        "mesh": mesh_kind,
-        "merged_faces": merged.as_ref().map(|m| m.n_faces()),
-        "merged_faces_split": merged.as_ref().map(|m| m.n_faces_split()),
-        "merged_faces_with_holes": merged.as_ref().map(|m| m.n_faces_with_holes()),
-        "merged_convex_faces": merged.as_ref().map(|m| m.n_convex_faces()),
-        "merged_triangles": merged.as_ref().map(|m| m.triangles.len()),
-        "merged_volume_voxels": merged.as_ref().map(|m| m.volume_voxels()),
-        "merged_area_voxels": merged.as_ref().map(|m| m.area_voxels()),
-        "merge_refused": merge_refused,
-        "verified": verified,
-        "verify_ray_parity_mismatches": ray_parity.as_ref().map(|r| r.0),
-        "outputs": {
-            "cells": args.output,
-            "cells_json": args.cells_json,
-            "mesh": args.mesh,
-            "preview": args.preview,
+        zkh,
+        mesh: mesh_kind,
+        merged_faces: merged.as_ref().map(|m| m.n_faces()),
+        merged_faces_split: merged.as_ref().map(|m| m.n_faces_split()),
+        merged_faces_with_holes: merged.as_ref().map(|m| m.n_faces_with_holes()),
+        merged_convex_faces: merged.as_ref().map(|m| m.n_convex_faces()),
+        merged_triangles: merged.as_ref().map(|m| m.triangles.len()),
+        merged_volume_voxels: merged.as_ref().map(|m| m.volume_voxels()),
+        merged_area_voxels: merged.as_ref().map(|m| m.area_voxels()),
+        merge_refused,
+        verified,
+        verify_ray_parity_mismatches: ray_parity.as_ref().map(|r| r.0),
+        outputs: PolyhedrizeOutputs {
+            cells: args.output.as_deref(),
+            cells_json: args.cells_json.as_deref(),
+            mesh: args.mesh.as_deref(),
+            preview: args.preview.as_deref(),
         },
-        "timings_s": timings,
-    });
+        timings_s: timings,
+    };
     global.note(format!(
         "polyhedron of {} voxels: {} shells, {} faces, {} integers (eq. 8.2) vs {} for marching cubes; G_nc {}{}",
         object.n_voxels(),
@@ -310,12 +374,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         summary.g_nc,
         if verified.is_some() { "; verified lossless" } else { "" }
     ));
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&value)?);
-    }
-    if let Some(path) = &args.report {
-        super::report::write_json(path, &value)?;
-    }
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())?;
     if let Some((n, first)) = ray_parity.filter(|r| r.0 > 0) {
         anyhow::bail!(
             "{}: ray parity on the merged surface differs from the object in {n} voxels \

@@ -1,5 +1,5 @@
-//! `chisel relax MESH --plan PLAN` / `chisel relax --ct VOLUME --skin L
-//! --bone L --plan PLAN`: takes the epidermis and bone from meshes or from a
+//! `chisel relax MESH [--bone-mesh BONE] --plan PLAN` / `chisel relax --ct
+//! VOLUME --skin-level L --bone-level L --plan PLAN`: takes the epidermis and bone from meshes or from a
 //! CT (marching cubes), cuts the bone by the plan's knives, builds the
 //! layered spring network over it (seed 000 ch. 4), runs the surgery plan
 //! and writes the relaxed skin with per-vertex displacement, the moved
@@ -8,9 +8,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
+use std::collections::BTreeMap;
 
-use super::{BackendArg, Global, ViewAxes, vec3_arg};
+use serde::Serialize;
+
+use super::report::{Report, Show};
+use super::{BackendChoice, Global, ViewAxes, vec3_arg};
+use crate::cut::CutStats;
+use crate::tissue::ct::CtFigures;
+use crate::tissue::fragments::PieceInfo;
 use glam::Vec3;
 
 use crate::mesh::{ScalarField, TriMesh};
@@ -20,8 +26,8 @@ use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, SpringClass, Stiffness};
 use crate::tissue::stepper::bone_displacements;
 use crate::tissue::{
-    CtParams, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver, SpringNetwork,
-    Status, cut_bone, layers_from_ct,
+    CtParams, Dynamics, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver,
+    SpringNetwork, Status, cut_bone, layers_from_ct,
 };
 
 /// Arguments of `chisel relax`.
@@ -31,17 +37,20 @@ pub struct Args {
     /// Epidermis mesh (any format `chisel stats` reads); omit with `--ct`.
     #[arg(required_unless_present = "ct", conflicts_with = "ct")]
     mesh: Option<PathBuf>,
-    /// CT volume: the epidermis is its surface at `--skin`, the bone its
-    /// surface at `--bone` (marching cubes).
-    #[arg(long, requires_all = ["skin", "bone"])]
+    /// CT volume: the epidermis is its surface at `--skin-level`, the bone
+    /// its surface at `--bone-level` (marching cubes).
+    #[arg(long, requires_all = ["skin_level", "bone_level"])]
     ct: Option<PathBuf>,
     /// Skin iso-level of the `--ct` volume (headsq: 500).
     #[arg(long, requires = "ct")]
-    skin: Option<f32>,
-    /// With `--ct`: the bone iso-level (headsq: 1150). Otherwise a bone mesh;
-    /// without it the bone layer is the skin scaled by 0.7 about the origin.
-    #[arg(long)]
-    bone: Option<String>,
+    skin_level: Option<f32>,
+    /// Bone iso-level of the `--ct` volume (headsq: 1150).
+    #[arg(long, requires = "ct")]
+    bone_level: Option<f32>,
+    /// Bone mesh under an epidermis MESH; without it the bone layer is the
+    /// skin scaled by 0.7 about the origin.
+    #[arg(long, conflicts_with = "ct")]
+    bone_mesh: Option<PathBuf>,
     /// Surgery plan, TOML or JSON (see `src/tissue/plans/` for examples);
     /// its `[[cut]]` knives cut the bone before the network is built.
     #[arg(long)]
@@ -65,18 +74,40 @@ pub struct Args {
     /// Solver: `explicit` (the seed's damped dynamics) or `chebyshev` (accelerated equilibrium).
     #[arg(long, default_value = "explicit")]
     solver: Solver,
-    /// Where marching cubes and the relaxation run.
-    #[arg(long, value_enum, default_value = "gpu")]
-    backend: BackendArg,
-    /// Time step Δt (default: 0.9 × the stability limit).
+    #[command(flatten)]
+    backend: BackendChoice,
+    /// Node mass m (overrides the plan's `[dynamics]`; default 1).
+    #[arg(long)]
+    mass: Option<f32>,
+    /// Damping γ (overrides the plan's `[dynamics]`; default 0.5).
+    #[arg(long)]
+    damping: Option<f32>,
+    /// Time step Δt (overrides the plan's `[dynamics]`; default 0.9 × the
+    /// stability limit).
     #[arg(long)]
     dt: Option<f32>,
     /// Accept a Δt at or above the stability limit.
     #[arg(long)]
     force_dt: bool,
-    /// Iteration cap per `converge` increment.
-    #[arg(long, default_value_t = 100_000)]
-    max_iterations: u32,
+    /// ε: converged when max |v| < ε (overrides the plan's `[dynamics]`;
+    /// default 1e-5 × the bounding-box diagonal).
+    #[arg(long)]
+    epsilon: Option<f32>,
+    /// δ: stalled when the nodes moved less than δ over the window
+    /// (overrides the plan's `[dynamics]`; default 10·ε·Δt).
+    #[arg(long)]
+    delta: Option<f32>,
+    /// Stall window in iterations (overrides the plan's `[dynamics]`; default 100).
+    #[arg(long)]
+    window: Option<u32>,
+    /// Iterations between convergence checks (overrides the plan's
+    /// `[dynamics]`; default 25).
+    #[arg(long)]
+    check_every: Option<u32>,
+    /// Iteration cap per `converge` increment (overrides the plan's
+    /// `[dynamics]`; default 100 000).
+    #[arg(long)]
+    max_iterations: Option<u32>,
     /// Relaxed skin (PLY/VTK keep the `displacement` field), written atomically.
     #[arg(short, long)]
     output: PathBuf,
@@ -108,7 +139,7 @@ pub struct Job {
     pub plan: Plan,
     pub fragments: Fragments,
     /// What the plan's cuts did (`None` without cuts).
-    pub cut: Option<serde_json::Value>,
+    pub cut: Option<BoneCutFigures>,
 }
 
 impl Job {
@@ -124,18 +155,20 @@ impl Job {
         let (bone, cut) = match (bone, plan.cuts.is_empty()) {
             (bone, true) => (bone, None),
             (None, false) => anyhow::bail!(
-                "the plan cuts the bone ({} `[[cut]]`), which needs a bone mesh (--bone or --ct)",
+                "the plan cuts the bone ({} `[[cut]]`), which needs a bone mesh (--bone-mesh or --ct)",
                 plan.cuts.len()
             ),
             (Some(b), false) => {
                 let cut = cut_bone(&b, &plan.cuts, plan.source.as_deref())?;
-                let report = json!({
-                    "pieces": cut.pieces,
-                    "fragments": cut.fragments.iter()
-                        .map(|(k, v)| (k.clone(), json!(v.len())))
-                        .collect::<serde_json::Map<_, _>>(),
-                    "knives": cut.stats,
-                });
+                let report = BoneCutFigures {
+                    fragments: cut
+                        .fragments
+                        .iter()
+                        .map(|(k, v)| (k.clone(), v.len()))
+                        .collect(),
+                    pieces: cut.pieces,
+                    knives: cut.stats,
+                };
                 fragments.extend(cut.fragments);
                 (Some(cut.mesh), Some(report))
             }
@@ -255,23 +288,104 @@ pub fn write_preview(
     Ok(())
 }
 
+/// What the plan's cuts did to the bone: its pieces, the vertices of each
+/// named fragment, and per cut what the scalpel did.
+#[derive(Debug, Serialize)]
+pub struct BoneCutFigures {
+    pieces: Vec<PieceInfo>,
+    fragments: BTreeMap<String, usize>,
+    knives: Vec<CutStats>,
+}
+
 /// The report's `network` figures: node, free-node and spring counts, the
-/// springs per class and the subcutis depth used.
-pub fn network_json(net: &SpringNetwork, subcutis_depth: Option<f32>) -> serde_json::Value {
-    json!({
-        "nodes": net.n_nodes(),
-        "free_nodes": net.n_free,
-        "springs": net.springs.len(),
-        "springs_per_class": net.class_counts(),
-        "subcutis_depth": subcutis_depth,
-    })
+/// springs per class and the subcutis depth used (`relax` adds the origin
+/// and the build time).
+#[derive(Debug, Serialize)]
+pub struct NetworkFigures {
+    nodes: usize,
+    free_nodes: usize,
+    springs: usize,
+    springs_per_class: [usize; 6],
+    subcutis_depth: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    origin: Option<Vec3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    build_seconds: Option<f64>,
+}
+
+impl NetworkFigures {
+    pub fn of(net: &SpringNetwork, subcutis_depth: Option<f32>) -> Self {
+        NetworkFigures {
+            nodes: net.n_nodes(),
+            free_nodes: net.n_free,
+            springs: net.springs.len(),
+            springs_per_class: net.class_counts(),
+            subcutis_depth,
+            origin: None,
+            build_seconds: None,
+        }
+    }
+}
+
+/// Crossing triangle pairs of the skin before and after relaxing.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Crossings {
+    before: usize,
+    after: usize,
+}
+
+/// The largest skin and bone displacements and their ratio.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Overshoot {
+    skin_max: f32,
+    bone_max: f32,
+    /// `null` when the bone hardly moved.
+    ratio: Option<f32>,
+}
+
+/// The report of `chisel relax`.
+#[derive(Debug, Serialize)]
+pub struct RelaxRunReport<'a> {
+    command: &'static str,
+    mesh: Option<&'a Path>,
+    ct: Option<CtInput<'a>>,
+    bone_mesh: Option<&'a Path>,
+    plan: &'a Path,
+    cut: Option<&'a BoneCutFigures>,
+    network: NetworkFigures,
+    relax: &'a RelaxReport,
+    /// `null` when the relaxation diverged (nothing was written).
+    outputs: Option<RelaxOutputs<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    skin_self_intersecting_pairs: Option<Crossings>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    skin_overshoot: Option<Overshoot>,
+}
+
+impl Report for RelaxRunReport<'_> {
+    const SCHEMA: &'static str = "chisel.relax/1";
+}
+
+/// The CT the layers came from, with what marching cubes found.
+#[derive(Debug, Serialize)]
+struct CtInput<'a> {
+    volume: &'a Path,
+    figures: &'a CtFigures,
+}
+
+#[derive(Debug, Serialize)]
+struct RelaxOutputs<'a> {
+    mesh: &'a Path,
+    bone: Option<&'a Path>,
+    preview: Option<&'a Path>,
+    bone_preview: Option<&'a Path>,
 }
 
 /// Where the epidermis and bone come from.
 enum Input<'a> {
     /// A CT volume with the skin and bone iso-levels.
     Ct(&'a Path, f32, f32),
-    /// An epidermis mesh (the bone mesh is `--bone`, if any).
+    /// An epidermis mesh (the bone mesh is `--bone-mesh`, if any).
     Mesh(&'a Path),
 }
 
@@ -290,22 +404,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
         crate::foundation::fs::check_output_path(path)?;
     }
-    if args.bone.is_none() {
+    if args.bone_mesh.is_none() && args.ct.is_none() {
         if args.bone_output.is_some() {
-            anyhow::bail!("--bone-output needs a bone mesh (--bone or --ct)");
+            anyhow::bail!("--bone-output needs a bone (--bone-mesh or --ct)");
         }
         if args.bone_preview.is_some() {
-            anyhow::bail!("--bone-preview needs a bone mesh (--bone or --ct)");
+            anyhow::bail!("--bone-preview needs a bone (--bone-mesh or --ct)");
         }
     }
     let input = match (&args.ct, &args.mesh) {
         (Some(ct), _) => {
-            let (Some(skin_level), Some(bone_text)) = (args.skin, args.bone.as_deref()) else {
-                anyhow::bail!("--ct needs --skin LEVEL and --bone LEVEL");
+            let (Some(skin_level), Some(bone_level)) = (args.skin_level, args.bone_level) else {
+                anyhow::bail!("--ct needs --skin-level LEVEL and --bone-level LEVEL");
             };
-            let bone_level: f32 = bone_text.parse().map_err(|_| {
-                anyhow::anyhow!("with --ct, --bone is the bone iso-level; got `{bone_text}`")
-            })?;
             Input::Ct(ct, skin_level, bone_level)
         }
         (None, Some(mesh)) => Input::Mesh(mesh),
@@ -315,10 +426,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     // its steps may select only fragments its own cuts free.
     let plan = Plan::from_path(&args.plan)?;
     plan.check_fragments(&Fragments::new())?;
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
+    let dynamics = plan.dynamics.overridden_by(&Dynamics {
+        mass: args.mass,
+        damping: args.damping,
+        dt: args.dt,
+        epsilon: args.epsilon,
+        delta: args.delta,
+        window: args.window,
+        check_every: args.check_every,
+        max_iterations: args.max_iterations,
+    });
+    let gpu = global.backend(&args.backend)?;
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let (skin, bone, ct) = match input {
         Input::Ct(ct, skin_level, bone_level) => {
@@ -345,14 +463,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Input::Mesh(mesh) => {
             let skin = crate::io::read_mesh(mesh)?;
             let bone = args
-                .bone
+                .bone_mesh
                 .as_deref()
-                .map(|b| crate::io::read_mesh(Path::new(b)))
+                .map(crate::io::read_mesh)
                 .transpose()?;
             (skin, bone, None)
         }
     };
-    let params = NetworkParams {
+    let mut params = NetworkParams {
         origin: vec3_arg("origin", args.origin.as_deref())?.map(|o| o.to_array()),
         subcutis_depth: args
             .subcutis_depth
@@ -367,6 +485,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
+    dynamics.apply_to_network(&mut params);
     let job = Job::build(skin, bone, plan, Fragments::new(), &params)?;
     let build_s = t.elapsed().as_secs_f64();
     global.note(format!(
@@ -378,41 +497,38 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         job.plan.cuts.len(),
         job.plan.steps.len()
     ));
-    let opts = RelaxOptions {
+    let mut opts = RelaxOptions {
         solver: args.solver,
-        dt: args.dt,
         force_dt: args.force_dt,
-        max_iterations: args.max_iterations,
         ..Default::default()
     };
+    dynamics.apply_to_options(&mut opts);
     let report = run_job(global, &job, &opts, backend)?;
     let diverged =
         report.status == Status::Diverged || report.epidermis.iter().any(|p| !p.is_finite());
-    let mut network = network_json(&job.network, params.subcutis_depth);
-    network["origin"] = json!(job.network.origin);
-    network["build_seconds"] = json!(build_s);
-    let value = |outputs: bool| {
-        json!({
-            "command": "relax",
-            "mesh": args.mesh,
-            "ct": ct.as_ref().map(|figures| json!({ "volume": args.ct, "figures": figures })),
-            "bone": args.bone,
-            "plan": args.plan,
-            "cut": job.cut,
-            "network": network,
-            "relax": report,
-            "outputs": outputs.then(|| json!({
-                "mesh": args.output,
-                "bone": args.bone_output,
-                "preview": args.preview,
-                "bone_preview": args.bone_preview,
-            })),
-        })
+    let mut network = NetworkFigures::of(&job.network, params.subcutis_depth);
+    network.origin = Some(job.network.origin);
+    network.build_seconds = Some(build_s);
+    let mut run_report = RelaxRunReport {
+        command: "relax",
+        mesh: args.mesh.as_deref(),
+        ct: match (&args.ct, &ct) {
+            (Some(volume), Some(figures)) => Some(CtInput { volume, figures }),
+            _ => None,
+        },
+        bone_mesh: args.bone_mesh.as_deref(),
+        plan: &args.plan,
+        cut: job.cut.as_ref(),
+        network,
+        relax: &report,
+        outputs: None,
+        skin_self_intersecting_pairs: None,
+        skin_overshoot: None,
     };
     if diverged {
         // The report says where and how; the garbage state is not written.
         if let Some(path) = &args.report {
-            super::report::write_json(path, &value(false))?;
+            super::report::write(path, &run_report)?;
         }
         let at = report
             .steps
@@ -495,16 +611,20 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         report.max_displacement,
         args.output.display()
     ));
-    let mut done = value(true);
-    done["skin_self_intersecting_pairs"] = crossings;
-    done["skin_overshoot"] = overshoot;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&done)?);
-    }
-    if let Some(path) = &args.report {
-        super::report::write_json(path, &done)?;
-    }
-    Ok(())
+    run_report.outputs = Some(RelaxOutputs {
+        mesh: &args.output,
+        bone: args.bone_output.as_deref(),
+        preview: args.preview.as_deref(),
+        bone_preview: args.bone_preview.as_deref(),
+    });
+    run_report.skin_self_intersecting_pairs = Some(crossings);
+    run_report.skin_overshoot = Some(overshoot);
+    super::report::emit(
+        &run_report,
+        Show::WithJson,
+        args.json,
+        args.report.as_deref(),
+    )
 }
 
 /// Skin moves above this multiple of the bone's largest move are warned about.
@@ -523,7 +643,7 @@ pub fn skin_overshoot(
     network: &SpringNetwork,
     plan: &Plan,
     report: &RelaxReport,
-) -> anyhow::Result<serde_json::Value> {
+) -> anyhow::Result<Overshoot> {
     let length = |u: &[f32; 4]| Vec3::new(u[0], u[1], u[2]).length();
     let bone = bone_displacements(network.bone_rest(), &report.positions[network.n_free..])?
         .iter()
@@ -555,14 +675,18 @@ pub fn skin_overshoot(
             (r - 1.0) * 100.0
         );
     }
-    Ok(json!({ "skin_max": skin, "bone_max": bone, "ratio": ratio }))
+    Ok(Overshoot {
+        skin_max: skin,
+        bone_max: bone,
+        ratio,
+    })
 }
 
 /// Crossing triangle pairs of the skin before and after relaxing (exact,
 /// [`crate::mesh::self_intersections`]), with a warning when the relaxation
 /// added some: the seed's springs carry no bending, so thin triangles can
 /// fold over.
-pub fn skin_crossings(before: &TriMesh, after: &TriMesh) -> serde_json::Value {
+pub fn skin_crossings(before: &TriMesh, after: &TriMesh) -> Crossings {
     let n = |m: &TriMesh| crate::mesh::self_intersections(m).pairs.len();
     let (b, a) = (n(before), n(after));
     if a > b {
@@ -572,5 +696,8 @@ pub fn skin_crossings(before: &TriMesh, after: &TriMesh) -> serde_json::Value {
              (--skin-min-edge with --ct) prevent it"
         );
     }
-    json!({ "before": b, "after": a })
+    Crossings {
+        before: b,
+        after: a,
+    }
 }

@@ -1,15 +1,76 @@
-//! JSON reports: printed with `--json`, written atomically with `--report`,
-//! and the human-readable text form of the same data.
+//! Reports: one typed serde struct per command ([`Report`]), printed with
+//! `--json`, written atomically with `--report`, shown as text otherwise —
+//! all through [`emit`] and [`write`]. Every report starts with its
+//! `schema`, `chisel.<command>/<version>`: the version goes up when a
+//! field changes meaning or goes away (new fields keep it).
 
 use std::path::Path;
 
+use serde::Serialize;
 use serde_json::Value;
 
-/// Writes `value` as pretty JSON to `path` (atomically).
-pub fn write_json(path: &Path, value: &Value) -> anyhow::Result<()> {
-    let mut text = serde_json::to_string_pretty(value)?;
+/// A command's report.
+pub trait Report: Serialize {
+    /// `chisel.<command>/<version>`.
+    const SCHEMA: &'static str;
+}
+
+/// A report with its schema as the first field.
+#[derive(Serialize)]
+struct Versioned<'a, R> {
+    schema: &'static str,
+    #[serde(flatten)]
+    report: &'a R,
+}
+
+/// The report as pretty JSON: its schema first, then the fields in the
+/// struct's order.
+pub fn to_json<R: Report>(report: &R) -> anyhow::Result<String> {
+    Ok(serde_json::to_string_pretty(&Versioned {
+        schema: R::SCHEMA,
+        report,
+    })?)
+}
+
+/// Writes `report` as pretty JSON to `path` (atomically).
+pub fn write<R: Report>(path: &Path, report: &R) -> anyhow::Result<()> {
+    let mut text = to_json(report)?;
     text.push('\n');
     crate::foundation::fs::write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
+/// Whether a report shows on stdout without `--json`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Show {
+    /// The report is the command's output (`stats`, `info`, `hull`,
+    /// `scan`, `polyhedrize`, `phantom`): as text without `--json`.
+    Always,
+    /// The command's output is a file (`mc`, `cut`, `relax`, `demo`,
+    /// `bench`): the report shows only with `--json`.
+    WithJson,
+}
+
+/// Prints `report` (JSON with `json`, else text where `show` says so) and
+/// writes it to `path`.
+pub fn emit<R: Report>(
+    report: &R,
+    show: Show,
+    json: bool,
+    path: Option<&Path>,
+) -> anyhow::Result<()> {
+    if json {
+        println!("{}", to_json(report)?);
+    } else if show == Show::Always {
+        let value = serde_json::to_value(Versioned {
+            schema: R::SCHEMA,
+            report,
+        })?;
+        print!("{}", to_text(&value));
+    }
+    if let Some(path) = path {
+        write(path, report)?;
+    }
     Ok(())
 }
 
@@ -80,31 +141,6 @@ fn write_text(out: &mut String, value: &Value, depth: usize) {
         }
         other => out.push_str(&format!("{pad}{}\n", inline(other))),
     }
-}
-
-/// Prints `value` as JSON (`json`) or text on stdout and writes it to `report`.
-pub fn emit(value: &Value, json: bool, report: Option<&Path>) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string_pretty(value)?);
-    } else {
-        print!("{}", to_text(value));
-    }
-    if let Some(path) = report {
-        write_json(path, value)?;
-    }
-    Ok(())
-}
-
-/// Writes `value` to `report` and prints it only with `json` (commands whose
-/// main output is a file, not a table).
-pub fn emit_optional(value: &Value, json: bool, report: Option<&Path>) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string_pretty(value)?);
-    }
-    if let Some(path) = report {
-        write_json(path, value)?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! `chisel scan VOLUME (--threshold T | --labels)`: the large-volume hull
+//! `chisel scan VOLUME (--level T | --labels)`: the large-volume hull
 //! scan (SPEC §4.3, seed 003 §4.1–4.2). Every structure of the volume gets
 //! one report row: its exact convex hull (§4.1, cell list and eq. 8.2
 //! storage), the inside / on / outside counts of the hull's voxel bounding
@@ -6,13 +6,13 @@
 //! GPU or its CPU mirror, bit-exact either way) and its ZKHs summarised by
 //! class (Def. CO/CA/TU).
 //!
-//! **Structures.** With `--threshold T`: every 6-connected component of the
+//! **Structures.** With `--level T`: every 6-connected component of the
 //! samples `≥ T`, numbered in file order as `chisel hull --component N`
 //! numbers them. With `--labels`: every distinct non-zero sample value (NaN
 //! samples count as background); the object is *all* voxels of that label,
 //! which may form several 6-connected components (counted in the row) —
 //! one hull per tissue, so background and other tissues enclosed by it
-//! show up as its ZKHs; `--threshold T` plus `chisel hull --label L
+//! show up as its ZKHs; `--level T` plus `chisel hull --label L
 //! --component N` gives the per-component view. Structures with fewer
 //! than `--min-voxels` voxels are skipped and counted.
 //!
@@ -47,20 +47,150 @@
 //! total). Reports of the two backends differ only in `backend`,
 //! `adapter`, `arithmetic` and `timings_s`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::{Value, json};
+use serde::Serialize;
 
-use super::hull::{HullArgs, object_json};
-use super::{BackendArg, Global};
-use crate::hull::ConvexHull;
+use super::hull::{HullArgs, ObjectFigures};
+use super::report::{Report, Show};
+use super::{BackendChoice, Global};
+use crate::hull::{ConvexHull, HullOptions};
 use crate::hull_scan::zkh::{ZkhClass, analyse};
 use crate::hull_scan::{self, Classification, VoxelBox};
 use crate::parity::Backend;
 use crate::volume::Volume;
 use crate::volume::analysis::label_6_connected;
-use crate::voxel::{DigitalObject, Frame};
+use crate::voxel::{CandidateKind, DigitalObject, Frame};
+
+/// The report of `chisel scan`.
+#[derive(Debug, Serialize)]
+pub struct ScanReport<'a> {
+    command: &'static str,
+    volume: &'a Path,
+    dims: [usize; 3],
+    spacing: [f64; 3],
+    selection: ScanSelection,
+    min_voxels: u64,
+    backend: &'static str,
+    adapter: Option<String>,
+    /// `int64` or `i32x2`: how the GPU does the exact arithmetic.
+    arithmetic: Option<String>,
+    candidates: CandidateKind,
+    hull_options: HullOptions,
+    structures: usize,
+    scanned: usize,
+    degenerate: u64,
+    skipped: Skipped,
+    zkh: ZkhFigures,
+    rows: Vec<ScanRow>,
+    timings_s: ScanTimings,
+}
+
+impl Report for ScanReport<'_> {
+    const SCHEMA: &'static str = "chisel.scan/1";
+}
+
+/// `{"level": T}` or `{"labels": true}`.
+#[derive(Debug, Serialize)]
+#[serde(rename_all = "snake_case")]
+enum ScanSelection {
+    Level(f64),
+    Labels(bool),
+}
+
+#[derive(Debug, Serialize)]
+struct Skipped {
+    count: usize,
+    voxels: u64,
+}
+
+/// Seconds per stage (structures summed).
+#[derive(Debug, Serialize)]
+struct ScanTimings {
+    read: f64,
+    label: f64,
+    adapter: Option<f64>,
+    object: f64,
+    candidates: f64,
+    hull: f64,
+    scan: f64,
+    zkh: f64,
+    total: f64,
+}
+
+/// One structure's row.
+#[derive(Debug, Serialize)]
+struct ScanRow {
+    id: u32,
+    label: Option<f64>,
+    components: usize,
+    object: ObjectFigures,
+    candidates: usize,
+    /// `collinear`: no polygon, no polyhedron (the row ends here).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    degenerate: Option<&'static str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hull: Option<HullFigures>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    scan: Option<ScanFigures>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    convexity: Option<Convexity>,
+    /// Absent for a degenerate row, `null` for a flat hull (no inside).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    zkh: Option<Option<ZkhFigures>>,
+}
+
+/// The hull figures a scan row keeps.
+#[derive(Debug, Serialize)]
+struct HullFigures {
+    faces: usize,
+    vertices: usize,
+    edges: usize,
+    integers_eq_8_2: usize,
+    integers_compact: usize,
+    volume_voxels: f64,
+    area_voxels: f64,
+    volume_world: f64,
+    area_world: f64,
+    planar: bool,
+}
+
+/// Voxels of the hull's box inside, on and outside the hull.
+#[derive(Debug, Serialize)]
+struct ScanFigures {
+    #[serde(rename = "box")]
+    bbox: VoxelBox,
+    inside: u64,
+    on: u64,
+    outside: u64,
+}
+
+/// The object's share of its hull: by voxels and by volume.
+#[derive(Debug, Serialize)]
+struct Convexity {
+    hull_voxels: u64,
+    digital: f64,
+    volume: Option<f64>,
+}
+
+/// ZKH totals per class.
+#[derive(Debug, Serialize)]
+struct ZkhFigures {
+    count: u64,
+    voxels: u64,
+    largest: u64,
+    cavities: ClassFigures,
+    concavities: ClassFigures,
+    tunnels: ClassFigures,
+    branched_tunnels: ClassFigures,
+}
+
+#[derive(Debug, Serialize)]
+struct ClassFigures {
+    count: u64,
+    voxels: u64,
+}
 
 /// Most distinct non-zero values `--labels` accepts.
 const MAX_SCAN_LABELS: usize = 65_536;
@@ -76,7 +206,7 @@ pub struct Args {
     volume: PathBuf,
     /// Structures = 6-connected components of the samples ≥ T.
     #[arg(long, conflicts_with = "labels", required_unless_present = "labels")]
-    threshold: Option<f64>,
+    level: Option<f64>,
     /// Structures = the non-zero label values (all voxels of each label).
     #[arg(long)]
     labels: bool,
@@ -84,8 +214,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     min_voxels: u64,
     /// Where the inside-hull scan runs (`hull_rows` kernel or its CPU mirror).
-    #[arg(long, value_enum, default_value = "cpu")]
-    backend: BackendArg,
+    #[command(flatten)]
+    backend: BackendChoice,
     #[command(flatten)]
     hull: HullArgs,
     /// JSON report.
@@ -148,17 +278,20 @@ impl ZkhTotals {
         self.largest = self.largest.max(o.largest);
     }
 
-    fn json(&self) -> Value {
-        let class = |k: usize| json!({ "count": self.count[k], "voxels": self.voxels[k] });
-        json!({
-            "count": self.count.iter().sum::<u64>(),
-            "voxels": self.voxels.iter().sum::<u64>(),
-            "largest": self.largest,
-            "cavities": class(0),
-            "concavities": class(1),
-            "tunnels": class(2),
-            "branched_tunnels": class(3),
-        })
+    fn figures(&self) -> ZkhFigures {
+        let class = |k: usize| ClassFigures {
+            count: self.count[k],
+            voxels: self.voxels[k],
+        };
+        ZkhFigures {
+            count: self.count.iter().sum(),
+            voxels: self.voxels.iter().sum(),
+            largest: self.largest,
+            cavities: class(0),
+            concavities: class(1),
+            tunnels: class(2),
+            branched_tunnels: class(3),
+        }
     }
 }
 
@@ -172,7 +305,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let volume = crate::io::read_volume(&args.volume)?;
     let read_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (ids, structures) = match args.threshold {
+    let (ids, structures) = match args.level {
         Some(threshold) => {
             components(&volume, threshold).map_err(|e| anyhow::anyhow!("{name}: {e}"))?
         }
@@ -181,24 +314,21 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
         !structures.is_empty(),
         "{name}: {}",
-        match args.threshold {
+        match args.level {
             Some(t) => format!("no sample ≥ {t}: nothing to scan"),
             None => "no non-zero label: nothing to scan".to_string(),
         }
     );
-    if args.threshold.is_none() && structures.len() > MANY_LABELS {
+    if args.level.is_none() && structures.len() > MANY_LABELS {
         eprintln!(
             "warning: {name}: {} distinct labels; an intensity volume (a CT) is scanned \
-             per threshold (--threshold T), not per label",
+             per threshold (--level T), not per label",
             structures.len()
         );
     }
     let label_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let gpu = match args.backend {
-        BackendArg::Gpu => Some(global.gpu()?),
-        BackendArg::Cpu => None,
-    };
+    let gpu = global.backend(&args.backend)?;
     let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let frame = Frame {
@@ -222,47 +352,50 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let value = json!({
-        "command": "scan",
-        "volume": args.volume,
-        "dims": volume.dims,
-        "spacing": volume.spacing,
-        "selection": match args.threshold {
-            Some(t) => json!({ "threshold": t }),
-            None => json!({ "labels": true }),
+    let n_rows = rows.len();
+    let report = ScanReport {
+        command: "scan",
+        volume: &args.volume,
+        dims: volume.dims,
+        spacing: volume.spacing,
+        selection: match args.level {
+            Some(t) => ScanSelection::Level(t),
+            None => ScanSelection::Labels(true),
         },
-        "min_voxels": args.min_voxels,
-        "backend": backend.name(),
-        "adapter": gpu.as_ref().map(|g| g.describe()),
-        "arithmetic": gpu.as_ref().map(|g| format!("{:?}", hull_scan::gpu::Arithmetic::of(g)).to_lowercase()),
-        "candidates": kind,
-        "hull_options": options,
-        "structures": structures.len(),
-        "scanned": rows.len(),
-        "degenerate": n_degenerate,
-        "skipped": {
-            "count": skipped.len(),
-            "voxels": skipped.iter().map(|s| s.voxels).sum::<u64>(),
+        min_voxels: args.min_voxels,
+        backend: backend.name(),
+        adapter: gpu.as_ref().map(|g| g.describe()),
+        arithmetic: gpu
+            .as_ref()
+            .map(|g| format!("{:?}", hull_scan::gpu::Arithmetic::of(g)).to_lowercase()),
+        candidates: kind,
+        hull_options: options,
+        structures: structures.len(),
+        scanned: n_rows,
+        degenerate: n_degenerate,
+        skipped: Skipped {
+            count: skipped.len(),
+            voxels: skipped.iter().map(|s| s.voxels).sum(),
         },
-        "zkh": totals.json(),
-        "rows": rows,
-        "timings_s": {
-            "read": read_s,
-            "label": label_s,
-            "adapter": adapter_s,
-            "object": times.object,
-            "candidates": times.candidates,
-            "hull": times.hull,
-            "scan": times.scan,
-            "zkh": times.zkh,
-            "total": t_total.elapsed().as_secs_f64(),
+        zkh: totals.figures(),
+        rows,
+        timings_s: ScanTimings {
+            read: read_s,
+            label: label_s,
+            adapter: adapter_s,
+            object: times.object,
+            candidates: times.candidates,
+            hull: times.hull,
+            scan: times.scan,
+            zkh: times.zkh,
+            total: t_total.elapsed().as_secs_f64(),
         },
-    });
+    };
     global.note(format!(
         "{} structures ({} scanned, {} skipped below {} voxels, {} degenerate); {} ZKHs \
          ({} cavities, {} concavities, {} tunnels, {} branched) in {:.3} s on {}",
         structures.len(),
-        rows.len(),
+        n_rows,
         skipped.len(),
         args.min_voxels,
         n_degenerate,
@@ -274,7 +407,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         t_total.elapsed().as_secs_f64(),
         backend.name(),
     ));
-    super::report::emit_optional(&value, args.json, args.report.as_deref())
+    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
 }
 
 /// The 6-connected components of the samples `≥ threshold`: the per-voxel
@@ -300,7 +433,8 @@ fn components(volume: &Volume, threshold: f64) -> crate::Result<(Vec<u32>, Vec<S
 /// per-voxel index into them (1-based; 0 = background) and one
 /// [`Structure`] per value.
 ///
-/// Errors: [`crate::Error::InvalidInput`] past [`MAX_SCAN_LABELS`] values.
+/// Errors: [`crate::Error::InvalidData`] for a fractional value,
+/// [`crate::Error::Limit`] past [`MAX_SCAN_LABELS`] values.
 fn labels(volume: &Volume) -> crate::Result<(Vec<u32>, Vec<Structure>)> {
     let n = volume.data.len();
     let is_label = |v: f64| v != 0.0 && !v.is_nan();
@@ -312,16 +446,23 @@ fn labels(volume: &Volume) -> crate::Result<(Vec<u32>, Vec<Structure>)> {
             last = v;
             if let Err(at) = values.binary_search_by(|x| x.total_cmp(&v)) {
                 if v.fract() != 0.0 {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "--labels takes whole-number labels, found the value {v}: an \
-                         intensity volume? (use --threshold)"
-                    )));
+                    return Err(crate::Error::data(
+                        "label volume",
+                        "sample",
+                        i,
+                        format!(
+                            "--labels takes whole-number labels, found the value {v}: an \
+                             intensity volume? (use --level)"
+                        ),
+                    ));
                 }
                 if values.len() == MAX_SCAN_LABELS {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "more than {MAX_SCAN_LABELS} distinct non-zero values: not a label \
-                         volume (use --threshold)"
-                    )));
+                    return Err(crate::Error::limit(
+                        "distinct non-zero values of a label volume (use --level for \
+                         an intensity volume)",
+                        MAX_SCAN_LABELS + 1,
+                        MAX_SCAN_LABELS,
+                    ));
                 }
                 values.insert(at, v);
             }
@@ -378,7 +519,7 @@ fn boxes(ids: &[u32], dims: [usize; 3], n: usize) -> Vec<([usize; 3], [usize; 3]
 
 /// One report row and what the totals need.
 struct Row {
-    value: Value,
+    value: ScanRow,
     zkh: ZkhTotals,
     degenerate: bool,
 }
@@ -432,20 +573,25 @@ fn scan_structure(
     } else {
         1
     };
-    let mut row = json!({
-        "id": s.id,
-        "label": s.label,
-        "components": n_components,
-        "object": object_json(&object),
-    });
     times.object += t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let candidates = object.candidates(hull_args.kind());
-    row["candidates"] = json!(candidates.len());
+    let mut row = ScanRow {
+        id: s.id,
+        label: s.label,
+        components: n_components,
+        object: ObjectFigures::of(&object),
+        candidates: candidates.len(),
+        degenerate: None,
+        hull: None,
+        scan: None,
+        convexity: None,
+        zkh: None,
+    };
     times.candidates += t.elapsed().as_secs_f64();
     if collinear(&candidates) {
-        row["degenerate"] = json!("collinear");
+        row.degenerate = Some("collinear");
         return Ok(Row {
             value: row,
             zkh: ZkhTotals::default(),
@@ -456,17 +602,17 @@ fn scan_structure(
     let t = Instant::now();
     let hull = ConvexHull::build(&candidates, hull_args.options())?;
     let summary = hull.summary(&frame);
-    row["hull"] = json!({
-        "faces": summary.faces,
-        "vertices": summary.vertices,
-        "edges": summary.edges,
-        "integers_eq_8_2": summary.integers_eq_8_2,
-        "integers_compact": summary.integers_compact,
-        "volume_voxels": summary.volume_voxels,
-        "area_voxels": summary.area_voxels,
-        "volume_world": summary.volume_world,
-        "area_world": summary.area_world,
-        "planar": summary.planar,
+    row.hull = Some(HullFigures {
+        faces: summary.faces,
+        vertices: summary.vertices,
+        edges: summary.edges,
+        integers_eq_8_2: summary.integers_eq_8_2,
+        integers_compact: summary.integers_compact,
+        volume_voxels: summary.volume_voxels,
+        area_voxels: summary.area_voxels,
+        volume_world: summary.volume_world,
+        area_world: summary.area_world,
+        planar: summary.planar,
     });
     let faces: Vec<hull_scan::HalfSpace> = hull.half_spaces().into_iter().map(Into::into).collect();
     times.hull += t.elapsed().as_secs_f64();
@@ -479,17 +625,18 @@ fn scan_structure(
     };
     let classification: Classification = hull.row_spans(&bbox, backend)?.to_classification()?;
     let [outside, on, inside] = classification.counts();
-    row["scan"] = json!({
-        "box": bbox,
-        "inside": inside,
-        "on": on,
-        "outside": outside,
+    row.scan = Some(ScanFigures {
+        bbox,
+        inside,
+        on,
+        outside,
     });
     let closed = inside + on;
-    row["convexity"] = json!({
-        "hull_voxels": closed,
-        "digital": object.n_voxels() as f64 / closed as f64,
-        "volume": (summary.volume_voxels > 0.0).then(|| object.n_voxels() as f64 / summary.volume_voxels),
+    row.convexity = Some(Convexity {
+        hull_voxels: closed,
+        digital: object.n_voxels() as f64 / closed as f64,
+        volume: (summary.volume_voxels > 0.0)
+            .then(|| object.n_voxels() as f64 / summary.volume_voxels),
     });
     times.scan += t.elapsed().as_secs_f64();
 
@@ -515,11 +662,7 @@ fn scan_structure(
         }
         times.zkh += t.elapsed().as_secs_f64();
     }
-    row["zkh"] = if hull.is_planar() {
-        Value::Null
-    } else {
-        zkh.json()
-    };
+    row.zkh = Some((!hull.is_planar()).then(|| zkh.figures()));
     Ok(Row {
         value: row,
         zkh,

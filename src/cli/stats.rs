@@ -4,13 +4,89 @@
 
 use std::path::PathBuf;
 
-use serde_json::{Value, json};
+use serde::Serialize;
 
-use super::{BackendArg, Global};
+use super::report::{Report, Show};
+use super::{BackendChoice, Global};
 use crate::foundation::vertex_components;
 use crate::mesh::{Topology, self_intersections};
 use crate::parity::Backend;
-use crate::volume::analysis::{VolumeStats, label_components, threshold_components};
+use crate::reduce::{Bounds, SampleRange};
+use crate::volume::analysis::{
+    ComponentCount, VolumeStats, label_components, threshold_components,
+};
+
+/// The report of `chisel stats`: a mesh's or a volume's.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+pub enum StatsReport {
+    Mesh(MeshStats),
+    Volume(VolumeStatsReport),
+}
+
+impl Report for StatsReport {
+    const SCHEMA: &'static str = "chisel.stats/1";
+}
+
+/// `stats` of a mesh.
+#[derive(Debug, Serialize)]
+pub struct MeshStats {
+    file: PathBuf,
+    /// `mesh`.
+    kind: &'static str,
+    backend: &'static str,
+    /// Names of the per-vertex scalar fields.
+    scalars: Vec<String>,
+    topology: Topology,
+    self_intersections: CrossingFigures,
+    /// With the GPU: its bounds and whether they equal the CPU mirror's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gpu: Option<GpuBounds>,
+}
+
+/// Exactly crossing triangle pairs of a mesh.
+#[derive(Debug, Serialize)]
+struct CrossingFigures {
+    pairs: usize,
+    /// Pairs within one connected component.
+    within_components: usize,
+    /// The first ten pairs.
+    first_pairs: Vec<[u32; 2]>,
+    zero_area_triangles: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct GpuBounds {
+    adapter: String,
+    bounds: Option<Bounds>,
+    matches_cpu: bool,
+}
+
+/// `stats` of a volume.
+#[derive(Debug, Serialize)]
+pub struct VolumeStatsReport {
+    file: PathBuf,
+    /// `volume`.
+    kind: &'static str,
+    backend: &'static str,
+    stats: VolumeStats,
+    /// Samples ≥ `--level` and their 6-connected components.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    level: Option<ComponentCount>,
+    /// Samples equal to `--label` and their 6-connected components.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    label: Option<ComponentCount>,
+    /// With the GPU: its value range and whether it equals the CPU mirror's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gpu: Option<GpuRange>,
+}
+
+#[derive(Debug, Serialize)]
+struct GpuRange {
+    adapter: String,
+    range: Option<SampleRange>,
+    matches_cpu: bool,
+}
 
 /// Arguments of `chisel stats`.
 #[derive(Debug, clap::Args)]
@@ -24,16 +100,16 @@ pub struct Args {
     /// Also write the JSON report to this file.
     #[arg(long)]
     report: Option<PathBuf>,
-    /// Volumes: count voxels with value ≥ T and their 6-connected components.
+    /// Volumes: count voxels with value ≥ this level and their 6-connected components.
     #[arg(long)]
-    threshold: Option<f64>,
-    /// Volumes: count voxels with value = L and their 6-connected components.
+    level: Option<f64>,
+    /// Volumes: count voxels with value = this label and their 6-connected components.
     #[arg(long)]
     label: Option<f64>,
-    /// Where the bounds / value range are reduced (the GPU result is checked
-    /// against the CPU mirror and the report says whether they agree).
-    #[arg(long, value_enum, default_value = "cpu")]
-    backend: BackendArg,
+    /// With the GPU, the bounds / value range are also reduced there and
+    /// checked against the CPU mirror (the report says whether they agree).
+    #[command(flatten)]
+    backend: BackendChoice,
 }
 
 /// Whether `path` names a volume (by extension) rather than a mesh.
@@ -51,21 +127,21 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.report {
         crate::foundation::fs::check_output_path(path)?;
     }
-    let value = if is_volume(&args.file) {
-        volume_stats(global, args)?
+    let report = if is_volume(&args.file) {
+        StatsReport::Volume(volume_stats(global, args)?)
     } else {
-        if args.threshold.is_some() || args.label.is_some() {
+        if args.level.is_some() || args.label.is_some() {
             anyhow::bail!(
-                "--threshold and --label apply to volumes, not to the mesh {}",
+                "--level and --label apply to volumes, not to the mesh {}",
                 args.file.display()
             );
         }
-        mesh_stats(global, args)?
+        StatsReport::Mesh(mesh_stats(global, args)?)
     };
-    super::report::emit(&value, args.json, args.report.as_deref())
+    super::report::emit(&report, Show::Always, args.json, args.report.as_deref())
 }
 
-fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<Value> {
+fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<MeshStats> {
     let mesh = crate::io::read_mesh(&args.file)?;
     let topology = Topology::of(&mesh);
     let crossings = self_intersections(&mesh);
@@ -75,50 +151,53 @@ fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<Value> {
         .iter()
         .filter(|&&[i, j]| component[i as usize] == component[j as usize])
         .count();
-    let mut value = json!({
-        "file": args.file,
-        "kind": "mesh",
-        "scalars": mesh.scalars.iter().map(|s| s.name.clone()).collect::<Vec<_>>(),
-        "topology": topology,
-        "self_intersections": {
-            "pairs": crossings.pairs.len(),
-            "within_components": within,
-            "first_pairs": &crossings.pairs[..crossings.pairs.len().min(10)],
-            "zero_area_triangles": crossings.degenerate.len(),
+    let gpu = match global.backend(&args.backend)? {
+        Some(gpu) => {
+            let bounds = crate::reduce::mesh_bounds(&mesh, Backend::Gpu(&gpu))?;
+            Some(GpuBounds {
+                adapter: gpu.describe(),
+                matches_cpu: bounds == crate::reduce::mesh_bounds(&mesh, Backend::Cpu)?,
+                bounds,
+            })
+        }
+        None => None,
+    };
+    Ok(MeshStats {
+        file: args.file.clone(),
+        kind: "mesh",
+        backend: if gpu.is_some() { "gpu" } else { "cpu" },
+        scalars: mesh.scalars.iter().map(|s| s.name.clone()).collect(),
+        topology,
+        self_intersections: CrossingFigures {
+            pairs: crossings.pairs.len(),
+            within_components: within,
+            first_pairs: crossings.pairs[..crossings.pairs.len().min(10)].to_vec(),
+            zero_area_triangles: crossings.degenerate.len(),
         },
-    });
-    if args.backend == BackendArg::Gpu {
-        let gpu = global.gpu()?;
-        let gpu_bounds = crate::reduce::mesh_bounds(&mesh, Backend::Gpu(&gpu))?;
-        let cpu_bounds = crate::reduce::mesh_bounds(&mesh, Backend::Cpu)?;
-        value["gpu"] = json!({
-            "adapter": gpu.describe(),
-            "bounds": gpu_bounds,
-            "matches_cpu": gpu_bounds == cpu_bounds,
-        });
-    }
-    Ok(value)
+        gpu,
+    })
 }
 
-fn volume_stats(global: &Global, args: &Args) -> anyhow::Result<Value> {
+fn volume_stats(global: &Global, args: &Args) -> anyhow::Result<VolumeStatsReport> {
     let volume = crate::io::read_volume(&args.file)?;
-    let stats = VolumeStats::of(&volume);
-    let mut value = json!({ "file": args.file, "kind": "volume", "stats": stats });
-    if let Some(t) = args.threshold {
-        value["threshold"] = serde_json::to_value(threshold_components(&volume, t))?;
-    }
-    if let Some(l) = args.label {
-        value["label"] = serde_json::to_value(label_components(&volume, l))?;
-    }
-    if args.backend == BackendArg::Gpu {
-        let gpu = global.gpu()?;
-        let gpu_range = crate::reduce::volume_range(&volume, Backend::Gpu(&gpu))?;
-        let cpu_range = crate::reduce::volume_range(&volume, Backend::Cpu)?;
-        value["gpu"] = json!({
-            "adapter": gpu.describe(),
-            "range": gpu_range,
-            "matches_cpu": gpu_range == cpu_range,
-        });
-    }
-    Ok(value)
+    let gpu = match global.backend(&args.backend)? {
+        Some(gpu) => {
+            let range = crate::reduce::volume_range(&volume, Backend::Gpu(&gpu))?;
+            Some(GpuRange {
+                adapter: gpu.describe(),
+                matches_cpu: range == crate::reduce::volume_range(&volume, Backend::Cpu)?,
+                range,
+            })
+        }
+        None => None,
+    };
+    Ok(VolumeStatsReport {
+        file: args.file.clone(),
+        kind: "volume",
+        backend: if gpu.is_some() { "gpu" } else { "cpu" },
+        stats: VolumeStats::of(&volume),
+        level: args.level.map(|t| threshold_components(&volume, t)),
+        label: args.label.map(|l| label_components(&volume, l)),
+        gpu,
+    })
 }

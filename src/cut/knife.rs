@@ -96,16 +96,18 @@ fn check_finite(what: &str, v: DVec3) -> crate::Result<()> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(crate::Error::InvalidInput(format!(
-            "knife {what} {v} is not finite"
-        )))
+        Err(crate::Error::param(
+            format!("knife {what}"),
+            v,
+            "must be finite",
+        ))
     }
 }
 
 fn unit(what: &str, v: DVec3) -> crate::Result<DVec3> {
     check_finite(what, v)?;
     v.try_normalize()
-        .ok_or_else(|| crate::Error::InvalidInput(format!("knife {what} has zero length")))
+        .ok_or_else(|| crate::Error::param(format!("knife {what}"), v, "must not have zero length"))
 }
 
 impl Knife {
@@ -131,14 +133,18 @@ impl Knife {
                 let n = unit("normal", *normal)?;
                 unit("u axis", *u_axis)?;
                 let u = unit("u axis", *u_axis - n * u_axis.dot(n)).map_err(|_| {
-                    crate::Error::InvalidInput(format!(
-                        "knife rectangle u axis {u_axis} is parallel to its normal {normal}"
-                    ))
+                    crate::Error::param(
+                        "knife rectangle u axis",
+                        u_axis,
+                        format!("must not be parallel to the normal {normal}"),
+                    )
                 })?;
                 if half_extents.iter().any(|h| !h.is_finite() || *h <= 0.0) {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "knife rectangle half extents {half_extents:?} must be positive"
-                    )));
+                    return Err(crate::Error::param(
+                        "knife rectangle half extents",
+                        format!("{half_extents:?}"),
+                        "must be finite and > 0",
+                    ));
                 }
                 Kind::Rect {
                     p: *centre,
@@ -151,9 +157,11 @@ impl Knife {
             Knife::Sphere { centre, radius } => {
                 check_finite("centre", *centre)?;
                 if !radius.is_finite() || *radius <= 0.0 {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "knife sphere radius {radius} must be positive"
-                    )));
+                    return Err(crate::Error::param(
+                        "knife sphere radius",
+                        radius,
+                        "must be finite and > 0",
+                    ));
                 }
                 Kind::Sphere {
                     c: *centre,
@@ -163,9 +171,7 @@ impl Knife {
             Knife::Mesh(mesh) => {
                 mesh.validate()?;
                 if mesh.triangles.is_empty() {
-                    return Err(crate::Error::InvalidInput(
-                        "knife mesh has no triangles".into(),
-                    ));
+                    return Err(crate::Error::empty("knife mesh triangles"));
                 }
                 // Sides come from the knife's normals: each directed edge
                 // may be used once (a consistently oriented manifold).
@@ -174,11 +180,12 @@ impl Knife {
                     for e in 0..3 {
                         let (a, b) = (tri[e], tri[(e + 1) % 3]);
                         if a == b || !directed.insert((a, b)) {
-                            return Err(crate::Error::InvalidInput(format!(
-                                "knife mesh triangle {t}: edge {a}->{b} is degenerate or used \
-                                 twice in one direction; the knife must be a consistently \
-                                 oriented manifold"
-                            )));
+                            return Err(crate::Refusal::KnifeNotManifold {
+                                triangle: t as u32,
+                                from: a,
+                                to: b,
+                            }
+                            .into());
                         }
                     }
                 }

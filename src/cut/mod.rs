@@ -58,7 +58,7 @@ pub use corefine::{KnifeSegment, PointOrigin};
 pub use knife::{Crossing, Knife, SPHERE_CHORD_ERROR, Side};
 
 use crate::foundation::Forest;
-use crate::{Result, TriMesh};
+use crate::{Error, Refusal, Result, TriMesh};
 use locate::{locate_prepared, locate_scan_prepared};
 use split::assemble;
 
@@ -204,14 +204,19 @@ fn polyhedral_if_crossed(
     }
     for attempt in 0..POLYHEDRAL_ATTEMPTS {
         let poly = Knife::Mesh(Knife::polyhedral_sphere(*centre, *radius, attempt));
-        if let Ok(mut r) = run(&poly) {
-            let (a, s) = (&analytic.stats, &mut r.stats);
-            s.cap_repair_rounds = a.cap_repair_rounds;
-            s.cap_crossings = a.cap_crossings;
-            s.sphere_polyhedral = true;
-            s.locate_seconds += a.locate_seconds;
-            s.assemble_seconds += a.assemble_seconds;
-            return Ok(r);
+        match run(&poly) {
+            Ok(mut r) => {
+                let (a, s) = (&analytic.stats, &mut r.stats);
+                s.cap_repair_rounds = a.cap_repair_rounds;
+                s.cap_crossings = a.cap_crossings;
+                s.sphere_polyhedral = true;
+                s.locate_seconds += a.locate_seconds;
+                s.assemble_seconds += a.assemble_seconds;
+                return Ok(r);
+            }
+            // A degenerate touch of this orientation: try the next one.
+            Err(Error::Refused(Refusal::KnifeContact { .. } | Refusal::CutCurve { .. })) => {}
+            Err(e) => return Err(e),
         }
     }
     Ok(analytic)

@@ -37,15 +37,11 @@ pub struct ScanBuffers {
 impl ScanBuffers {
     /// Uploads `values` (1 ≤ #N, one storage binding) and allocates the levels.
     pub fn upload(gpu: &Gpu, values: &[u32]) -> Result<Self> {
+        if values.is_empty() {
+            return Err(Error::empty("exclusive_scan: values"));
+        }
         let mut n = u32::try_from(values.len())
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "exclusive_scan: {} values (need 1 to 2^32 − 1 on the GPU)",
-                    values.len()
-                ))
-            })?;
+            .map_err(|_| Error::limit("exclusive_scan: values", values.len(), u32::MAX))?;
         let values = GpuArray::from_slice(gpu, "exclusive_scan.values", values)?;
         // Elements per block: the workgroup size of both kernels.
         let block = Kernel::ExclusiveScanBlocks.spec()?.wg_size;

@@ -134,12 +134,11 @@ impl<T: Pod> GpuArray<T> {
     /// Overwrites the elements from `data` (same length).
     pub fn write(&self, gpu: &Gpu, data: &[T]) -> Result<()> {
         if data.len() != self.len {
-            return Err(Error::InvalidInput(format!(
-                "write to `{}`: {} elements for a buffer of {}",
-                self.label,
+            return Err(Error::mismatch(
+                format!("elements written to `{}`", self.label),
+                self.len,
                 data.len(),
-                self.len
-            )));
+            ));
         }
         if !data.is_empty() {
             gpu.queue

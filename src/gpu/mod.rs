@@ -333,6 +333,16 @@ impl Gpu {
     }
 }
 
+/// The adapter `choice` names, without opening a device: its one-line
+/// description and whether it is a software rasteriser (lavapipe).
+pub fn probe_adapter(choice: &AdapterChoice) -> Result<(String, bool)> {
+    let info = adapter::select(&instance(), choice)?.get_info();
+    Ok((
+        adapter::describe(&info),
+        info.device_type == wgpu::DeviceType::Cpu,
+    ))
+}
+
 /// A wgpu instance over the primary backends (Vulkan, Metal, DX12); the GL
 /// backend only when `WGPU_BACKEND` asks for it (its probing is slow and noisy
 /// on headless machines, and it duplicates Vulkan adapters with fewer features).

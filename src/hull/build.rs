@@ -10,16 +10,20 @@ use crate::voxel::{CandidateKind, DigitalObject};
 impl ConvexHull {
     /// Hull of `points` (combinatorial coordinates, |c| ≤ [`MAX_COORD`]).
     ///
-    /// Errors: [`crate::Error::InvalidInput`] for coordinates out of range and
-    /// when the points are collinear (no polygon, no polyhedron).
+    /// Errors: [`crate::Error::InvalidData`] for coordinates out of range,
+    /// [`crate::Refusal::Collinear`] when the points are collinear (no
+    /// polygon, no polyhedron).
     pub fn build(points: &[[i64; 3]], options: HullOptions) -> crate::Result<ConvexHull> {
-        if let Some(p) = points
+        if let Some(i) = points
             .iter()
-            .find(|p| p.iter().any(|c| c.abs() > MAX_COORD))
+            .position(|p| p.iter().any(|c| c.abs() > MAX_COORD))
         {
-            return Err(crate::Error::InvalidInput(format!(
-                "hull point {p:?} exceeds the coordinate bound ±{MAX_COORD}"
-            )));
+            return Err(crate::Error::data(
+                "hull points",
+                "point",
+                i,
+                format!("{:?} exceeds the coordinate bound ±{MAX_COORD}", points[i]),
+            ));
         }
         let mut pts = points.to_vec();
         pts.sort_unstable();
@@ -70,28 +74,30 @@ impl ConvexHull {
     /// exactly (`Σ vᵢ × vᵢ₊₁`, made primitive); a flat polygon is two
     /// opposite faces over the same cycle.
     ///
-    /// Errors: [`crate::Error::InvalidInput`] when a coordinate is out of
-    /// range, a face has fewer than three vertices, an index is out of range,
+    /// Errors: [`crate::Error::InvalidData`] (naming the vertex or face)
+    /// when a coordinate is out of range, a face has fewer than three vertices, an index is out of range,
     /// a face is not planar, or some vertex lies outside a face's plane (the
     /// faces do not bound a convex polytope).
     pub fn from_faces(vertices: Vec<[i64; 3]>, cycles: Vec<Vec<u32>>) -> crate::Result<ConvexHull> {
-        let bad = |what: String| crate::Error::InvalidInput(format!("convex polytope: {what}"));
-        if let Some(p) = vertices
+        let bad = |f: usize, what: String| crate::Error::data("convex polytope", "face", f, what);
+        if let Some(i) = vertices
             .iter()
-            .find(|p| p.iter().any(|c| c.abs() > MAX_COORD))
+            .position(|p| p.iter().any(|c| c.abs() > MAX_COORD))
         {
-            return Err(bad(format!("vertex {p:?} exceeds ±{MAX_COORD}")));
+            return Err(crate::Error::data(
+                "convex polytope",
+                "vertex",
+                i,
+                format!("{:?} exceeds ±{MAX_COORD}", vertices[i]),
+            ));
         }
         let mut faces = Vec::with_capacity(cycles.len());
         for (f, cycle) in cycles.into_iter().enumerate() {
             if cycle.len() < 3 {
-                return Err(bad(format!("face {f} has {} vertices", cycle.len())));
+                return Err(bad(f, format!("has {} vertices", cycle.len())));
             }
             if let Some(v) = cycle.iter().find(|&&v| v as usize >= vertices.len()) {
-                return Err(bad(format!(
-                    "face {f} names vertex {v} of {}",
-                    vertices.len()
-                )));
+                return Err(bad(f, format!("names vertex {v} of {}", vertices.len())));
             }
             let p = |k: usize| vertices[cycle[k % cycle.len()] as usize];
             // Twice the area vector; a convex face within ±MAX_COORD has
@@ -102,12 +108,13 @@ impl ConvexHull {
                 n = std::array::from_fn(|a| n[a] + i128::from(c[a]));
             }
             if n == [0, 0, 0] {
-                return Err(bad(format!("face {f} is degenerate")));
+                return Err(bad(f, "is degenerate".into()));
             }
             if n.iter().any(|c| c.abs() >= 1 << 36) {
-                return Err(bad(format!(
-                    "face {f} is not a convex polygon of the coordinate range"
-                )));
+                return Err(bad(
+                    f,
+                    "is not a convex polygon of the coordinate range".into(),
+                ));
             }
             let normal = primitive(n.map(|c| c as i64));
             let plane = HalfSpace {
@@ -115,10 +122,10 @@ impl ConvexHull {
                 offset: dot(normal, p(0)),
             };
             if (0..cycle.len()).any(|k| plane.side(p(k)) != 0) {
-                return Err(bad(format!("face {f} is not planar")));
+                return Err(bad(f, "is not planar".into()));
             }
             if let Some(v) = vertices.iter().find(|&&v| plane.side(v) > 0) {
-                return Err(bad(format!("vertex {v:?} lies outside face {f}")));
+                return Err(bad(f, format!("vertex {v:?} lies outside its plane")));
             }
             faces.push(HullFace {
                 vertices: cycle,
@@ -138,7 +145,11 @@ impl ConvexHull {
             options: HullOptions::default(),
         };
         if hull.faces.len() < 4 && planar.is_none() {
-            return Err(bad(format!("{} faces bound no polytope", hull.faces.len())));
+            return Err(crate::Error::param(
+                "convex polytope faces",
+                hull.faces.len(),
+                "fewer than 4 faces (and not a flat polygon's 2) bound no polytope",
+            ));
         }
         hull.vol6 = hull.volume6_from_faces();
         Ok(hull)
@@ -241,13 +252,7 @@ fn compact(
 /// Coplanar input: the convex polygon (monotone chain in the plane, exact),
 /// stored as two opposite faces.
 fn planar_hull(pts: &[P3], options: HullOptions) -> crate::Result<ConvexHull> {
-    let degenerate = || {
-        crate::Error::InvalidInput(format!(
-            "the {} hull candidates are collinear: no polygon or polyhedron \
-             (a line of voxels has a hull through its cell corners: `--vertices corners`)",
-            pts.len()
-        ))
-    };
+    let degenerate = || crate::Error::from(crate::Refusal::Collinear { points: pts.len() });
     let a = *pts.first().ok_or_else(degenerate)?;
     let b = *pts.iter().find(|&&p| p != a).ok_or_else(degenerate)?;
     let c = *pts

@@ -134,14 +134,24 @@ impl CellList {
     /// (planes recomputed from the first three vertices of each face, which
     /// are never collinear on a hull).
     ///
-    /// Errors: [`crate::Error::InvalidInput`] on truncated or inconsistent data.
+    /// Errors: [`crate::Error::InvalidData`] naming the integer, on
+    /// truncated or inconsistent data.
     pub fn decode_compact(data: &[i64]) -> crate::Result<CellList> {
-        let bad = |what: &str| crate::Error::InvalidInput(format!("compact cell list: {what}"));
-        let mut it = data.iter().copied();
-        let mut next = |what: &str| it.next().ok_or_else(|| bad(what));
-        let n_v =
-            usize::try_from(next("vertex count")?).map_err(|_| bad("negative vertex count"))?;
-        let n_f = usize::try_from(next("face count")?).map_err(|_| bad("negative face count"))?;
+        let bad =
+            |at: usize, what: &str| crate::Error::data("compact cell list", "integer", at, what);
+        let pos = std::cell::Cell::new(0usize);
+        let next = |what: &str| {
+            let at = pos.get();
+            pos.set(at + 1);
+            data.get(at)
+                .copied()
+                .ok_or_else(|| bad(at, &format!("the list ends where the {what} was expected")))
+        };
+        let last = || pos.get() - 1;
+        let n_v = usize::try_from(next("vertex count")?)
+            .map_err(|_| bad(last(), "negative vertex count"))?;
+        let n_f =
+            usize::try_from(next("face count")?).map_err(|_| bad(last(), "negative face count"))?;
         let mut coords = Vec::with_capacity(n_v.min(data.len()));
         for _ in 0..n_v {
             coords.push([
@@ -152,15 +162,16 @@ impl CellList {
         }
         let mut cycles = Vec::with_capacity(n_f.min(data.len()));
         for _ in 0..n_f {
-            let k = usize::try_from(next("face size")?).map_err(|_| bad("negative face size"))?;
+            let k = usize::try_from(next("face size")?)
+                .map_err(|_| bad(last(), "negative face size"))?;
             if k < 3 {
-                return Err(bad("face with fewer than 3 vertices"));
+                return Err(bad(last(), "face with fewer than 3 vertices"));
             }
             let mut cycle = Vec::with_capacity(k.min(data.len()));
             for _ in 0..k {
                 let v = next("face vertex")?;
                 if v < 0 || v as usize >= n_v {
-                    return Err(bad("vertex index out of range"));
+                    return Err(bad(last(), "vertex index out of range"));
                 }
                 cycle.push(v as u32);
             }

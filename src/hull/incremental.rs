@@ -193,8 +193,8 @@ impl<'a> Builder<'a> {
     fn twin(&self, f: u32, e: usize) -> crate::Result<u32> {
         match self.faces[f as usize].as_ref().map(|fc| fc.twins[e]) {
             Some(g) if g != NONE && self.faces[g as usize].is_some() => Ok(g),
-            _ => Err(crate::Error::InvalidInput(format!(
-                "edge {e} of hull face {f} has no twin (internal error)"
+            _ => Err(crate::Error::Internal(format!(
+                "edge {e} of hull face {f} has no twin"
             ))),
         }
     }
@@ -221,9 +221,7 @@ impl<'a> Builder<'a> {
         }
         self.cur = pi;
         if self.side(start_face, p) <= 0 {
-            return Err(crate::Error::InvalidInput(
-                "stale conflict face (internal error)".into(),
-            ));
+            return Err(crate::Error::Internal("stale conflict face".into()));
         }
         // Visibility walk: the visible faces are edge-connected.
         let mut visible = vec![start_face];
@@ -253,7 +251,7 @@ impl<'a> Builder<'a> {
             }
         }
         next.sort_unstable();
-        let internal = |what: &str| crate::Error::InvalidInput(format!("{what} (internal error)"));
+        let internal = |what: &str| crate::Error::Internal(what.into());
         if next.is_empty() || next.windows(2).any(|w| w[0].0 == w[1].0) {
             return Err(internal("visible region of a hull point is not a disk"));
         }
@@ -306,9 +304,7 @@ impl<'a> Builder<'a> {
                 .map(|i| det(sub(h(i + 1), h(i)), sub(h(i + 2), h(i)), sub(p, h(i))) == 0)
                 .collect();
             let Some(first) = (0..m).find(|&i| !joins[(i + m - 1) % m]) else {
-                return Err(crate::Error::InvalidInput(
-                    "flat cone (internal error)".into(),
-                ));
+                return Err(crate::Error::Internal("flat cone".into()));
             };
             let mut i = first;
             while i < first + m {

@@ -118,10 +118,11 @@ fn slabs(gpu: &Gpu, nz: usize, layer_bytes: u64, pad: u64) -> Result<Vec<Range<u
     let cap = gpu.max_binding_bytes().min(MAX_SLAB_BYTES);
     let layers = cap.saturating_sub(pad) / layer_bytes.max(1);
     if layers == 0 {
-        return Err(Error::OutOfMemory(format!(
-            "hull scan: one z layer needs {layer_bytes} bytes, more than one storage \
-             binding ({cap} bytes)"
-        )));
+        return Err(Error::limit(
+            "hull scan: bytes of one z layer (one storage binding)",
+            layer_bytes + pad,
+            cap,
+        ));
     }
     let per = usize::try_from(layers).unwrap_or(usize::MAX);
     Ok((0..nz.div_ceil(per))
@@ -146,11 +147,11 @@ fn row_slabs(cap: u64, ny: usize, ids: &[u64], shared: u64) -> Result<Vec<Range<
         span_bytes += layer_bytes;
         words += 2 + n;
         if !fits(span_bytes, words) {
-            return Err(Error::OutOfMemory(format!(
-                "hull scan: the spans ({span_bytes} bytes) or face lists ({} bytes) of one z \
-                 layer exceed one storage binding ({cap} bytes)",
-                4 * words
-            )));
+            return Err(Error::limit(
+                "hull scan: bytes of the spans or face lists of one z layer (one storage binding)",
+                span_bytes.max(4 * words),
+                cap,
+            ));
         }
     }
     if start < ids.len() {
@@ -160,7 +161,7 @@ fn row_slabs(cap: u64, ny: usize, ids: &[u64], shared: u64) -> Result<Vec<Range<
 }
 
 fn to_u32(what: &str, v: usize) -> Result<u32> {
-    u32::try_from(v).map_err(|_| Error::InvalidInput(format!("hull scan: {what} {v} exceeds u32")))
+    u32::try_from(v).map_err(|_| Error::limit(format!("hull scan: {what}"), v, u32::MAX))
 }
 
 /// Uploaded faces and the box, shared by the slabs of one scan.
@@ -279,11 +280,11 @@ impl HullScanInput {
     /// Errors: not one range per face.
     pub fn culled(mut self, z_extents: &[[i64; 2]]) -> Result<Self> {
         if z_extents.len() != self.n_faces as usize {
-            return Err(Error::InvalidInput(format!(
-                "hull scan: {} z ranges for {} faces",
+            return Err(Error::mismatch(
+                "hull scan: z ranges (one per face)",
+                self.n_faces as usize,
                 z_extents.len(),
-                self.n_faces
-            )));
+            ));
         }
         self.culling = Some(Culling::new(z_extents, &self.bbox));
         Ok(self)
@@ -454,8 +455,12 @@ mod tests {
             row_slabs(1024, 1, &[100, 10, 10, 100, 200, 60], 0).unwrap(),
             [0..4, 4..5, 5..6]
         );
-        assert!(row_slabs(1024, 65, &[0], 0).is_err());
-        assert!(row_slabs(1024, 1, &[300], 0).is_err());
+        for (ny, ids) in [(65, [0]), (1, [300])] {
+            assert!(matches!(
+                row_slabs(1024, ny, &ids, 0),
+                Err(Error::Limit { allowed: 1024, .. })
+            ));
+        }
         assert!(row_slabs(1024, 1, &[], 0).unwrap().is_empty());
     }
 

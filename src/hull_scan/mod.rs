@@ -98,7 +98,13 @@ impl VoxelBox {
         self.dims
             .iter()
             .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-            .ok_or_else(|| Error::InvalidInput(format!("voxel box {:?} overflows", self.dims)))
+            .ok_or_else(|| {
+                Error::param(
+                    "voxel box dims",
+                    format!("{:?}", self.dims),
+                    "the voxel count overflows usize",
+                )
+            })
     }
 
     /// Number of rows (fixed y, z): `ny·nz`.
@@ -219,21 +225,24 @@ fn fill(row: &mut [u8], lo: i32, hi: i32, side: Side) {
 }
 
 /// Refuses inputs for which the exact 64-bit arithmetic could overflow
-/// (bounds in the module docs) with [`Error::InvalidInput`] naming the
-/// offending value.
+/// (bounds in the module docs) with [`Error::Limit`] naming the offending
+/// face or axis.
 pub fn check_range(half_spaces: &[HalfSpace], bbox: &VoxelBox) -> Result<()> {
     bbox.n_voxels()?;
     for (f, h) in half_spaces.iter().enumerate() {
         if let Some(c) = h.normal.iter().find(|c| c.abs() > MAX_NORMAL) {
-            return Err(Error::InvalidInput(format!(
-                "hull scan: face {f} normal component {c} exceeds ±{MAX_NORMAL} (i32)"
-            )));
+            return Err(Error::limit(
+                format!("hull scan: |normal component| of face {f}"),
+                c.unsigned_abs(),
+                MAX_NORMAL as u64,
+            ));
         }
         if h.offset.abs() > MAX_OFFSET {
-            return Err(Error::InvalidInput(format!(
-                "hull scan: face {f} offset {} exceeds ±2^60",
-                h.offset
-            )));
+            return Err(Error::limit(
+                format!("hull scan: |offset| of face {f}"),
+                h.offset.unsigned_abs(),
+                MAX_OFFSET as u64,
+            ));
         }
     }
     for a in 0..3 {
@@ -244,11 +253,11 @@ pub fn check_range(half_spaces: &[HalfSpace], bbox: &VoxelBox) -> Result<()> {
             .and_then(|e| e.checked_mul(2));
         let ok = matches!((lo, hi), (Some(lo), Some(hi)) if lo >= -MAX_COORD && hi <= MAX_COORD);
         if !ok {
-            return Err(Error::InvalidInput(format!(
-                "hull scan: box axis {a} (origin {}, {} voxels) leaves the combinatorial \
-                 range ±2^16 (voxel indices −32768..32768)",
-                bbox.origin[a], bbox.dims[a]
-            )));
+            return Err(Error::param(
+                format!("hull scan: box axis {a}"),
+                format!("origin {}, {} voxels", bbox.origin[a], bbox.dims[a]),
+                "leaves the combinatorial range ±2^16 (voxel indices −32768..32768)",
+            ));
         }
     }
     Ok(())
@@ -283,11 +292,11 @@ pub fn row_spans_culled(
     backend: Backend<'_>,
 ) -> Result<RowSpans> {
     if z_extents.len() != half_spaces.len() {
-        return Err(Error::InvalidInput(format!(
-            "hull scan: {} z ranges for {} faces",
+        return Err(Error::mismatch(
+            "hull scan: z ranges (one per face)",
+            half_spaces.len(),
             z_extents.len(),
-            half_spaces.len()
-        )));
+        ));
     }
     check_range(half_spaces, bbox)?;
     match backend {

@@ -92,9 +92,9 @@ pub struct ZkhAnalysis {
 /// * `faces`: the hull faces, the same half-spaces that were scanned;
 /// * `adjacency`: `adjacency[f]`, the faces sharing an edge with face `f`.
 ///
-/// Errors: [`Error::InvalidInput`] when lengths disagree, an adjacency
-/// index is out of range, or the input leaves the range of
-/// [`super::check_range`].
+/// Errors: [`Error::Mismatch`] when lengths disagree,
+/// [`Error::InvalidData`] when an adjacency index is out of range, and
+/// what [`super::check_range`] refuses.
 pub fn analyse(
     object: &[bool],
     classification: &Classification,
@@ -105,18 +105,35 @@ pub fn analyse(
     check_range(faces, &bbox)?;
     let n = bbox.n_voxels()?;
     if object.len() != n || classification.sides.len() != n {
-        return Err(Error::InvalidInput(format!(
-            "zkh: {} object flags and {} side codes for a box of {n} voxels",
-            object.len(),
+        let found = if object.len() != n {
+            object.len()
+        } else {
             classification.sides.len()
-        )));
+        };
+        return Err(Error::mismatch(
+            "zkh: object flags and side codes (one per voxel of the box)",
+            n,
+            found,
+        ));
     }
-    if adjacency.len() != faces.len() || adjacency.iter().flatten().any(|&g| g >= faces.len()) {
-        return Err(Error::InvalidInput(format!(
-            "zkh: adjacency of {} faces does not index the {} faces",
+    if adjacency.len() != faces.len() {
+        return Err(Error::mismatch(
+            "zkh: adjacency lists (one per face)",
+            faces.len(),
             adjacency.len(),
-            faces.len()
-        )));
+        ));
+    }
+    if let Some((f, &g)) = adjacency
+        .iter()
+        .enumerate()
+        .find_map(|(f, a)| a.iter().find(|&&g| g >= faces.len()).map(|g| (f, g)))
+    {
+        return Err(Error::data(
+            "zkh adjacency",
+            "face",
+            f,
+            format!("neighbour {g} is not one of the {} faces", faces.len()),
+        ));
     }
     let labelling = label_6_connected(bbox.dims, |i| {
         !object[i] && classification.sides[i] != Side::Outside as u8

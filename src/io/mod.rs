@@ -151,7 +151,17 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh> {
         MeshFormat::Byu => byu::read(path, &bytes)?,
     };
     mesh.validate().map_err(|e| match e {
-        Error::InvalidInput(msg) => Error::format(path, Position::Whole, "a valid mesh", msg),
+        Error::InvalidData { at, problem, .. } => Error::format(path, at, "a valid mesh", problem),
+        Error::Mismatch {
+            what,
+            expected,
+            found,
+        } => Error::format(
+            path,
+            Position::Whole,
+            format!("{expected} {what}"),
+            found.to_string(),
+        ),
         other => other,
     })?;
     Ok(mesh)

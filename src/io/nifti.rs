@@ -271,10 +271,11 @@ fn header(v: &Volume) -> Result<Vec<u8>> {
     let ty = v.data.scalar_type();
     let dims = v.dims.map(i16::try_from);
     let [Ok(nx), Ok(ny), Ok(nz)] = dims else {
-        return Err(Error::InvalidInput(format!(
-            "NIfTI-1 holds at most 32767 samples per axis; dims are {:?}",
-            v.dims
-        )));
+        return Err(Error::limit(
+            format!("NIfTI-1 samples per axis (dims {:?})", v.dims),
+            v.dims.into_iter().max().unwrap_or(0),
+            i16::MAX,
+        ));
     };
     for (i, d) in [3, nx, ny, nz, 1, 1, 1, 1].iter().enumerate() {
         put(&mut b, 40 + 2 * i, &d.to_le_bytes());

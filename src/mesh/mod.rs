@@ -57,25 +57,30 @@ impl TriMesh {
     pub fn validate(&self) -> crate::Result<()> {
         let n = self.positions.len();
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return Err(crate::Error::InvalidInput(format!(
-                "vertex {i} has a non-finite coordinate {:?}",
-                self.positions[i]
-            )));
+            return Err(crate::Error::data(
+                "mesh",
+                "vertex",
+                i,
+                format!("coordinate {} is not finite", self.positions[i]),
+            ));
         }
         for (t, tri) in self.triangles.iter().enumerate() {
             if let Some(&v) = tri.iter().find(|&&v| v as usize >= n) {
-                return Err(crate::Error::InvalidInput(format!(
-                    "triangle {t} references vertex {v} but the mesh has {n} vertices"
-                )));
+                return Err(crate::Error::data(
+                    "mesh",
+                    "triangle",
+                    t,
+                    format!("references vertex {v} but the mesh has {n} vertices"),
+                ));
             }
         }
         for s in &self.scalars {
             if s.values.len() != n {
-                return Err(crate::Error::InvalidInput(format!(
-                    "scalar field `{}` has {} values for {n} vertices",
-                    s.name,
-                    s.values.len()
-                )));
+                return Err(crate::Error::mismatch(
+                    format!("values of scalar field `{}` (one per vertex)", s.name),
+                    n,
+                    s.values.len(),
+                ));
             }
         }
         Ok(())

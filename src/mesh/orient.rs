@@ -6,7 +6,7 @@
 
 use super::TriMesh;
 use super::topology::{HalfEdges, NONE, Orientation, analyse, propagate_winding};
-use crate::{Error, Result};
+use crate::{Refusal, Result};
 
 /// Flips triangles so that, in every patch of triangles connected through
 /// manifold edges, each manifold edge is traversed once in each direction.
@@ -17,17 +17,17 @@ use crate::{Error, Result};
 /// `consistently_oriented`. Patches meeting only at non-manifold edges or
 /// vertices are wound independently. O(F log F).
 ///
-/// Errors: [`Error::InvalidInput`] when some patch is non-orientable (a
+/// Errors: [`Refusal::NonOrientable`] when some patch is non-orientable (a
 /// Möbius strip, a Klein bottle); the mesh is then left unchanged.
 pub fn orient_consistently(mesh: &mut TriMesh) -> Result<usize> {
     let he = HalfEdges::of(&mesh.triangles);
     let winding = propagate_winding(&mesh.triangles, &he);
     if let Some(&seed) = winding.nonorientable_patches.first() {
-        return Err(Error::InvalidInput(format!(
-            "{} patch(es) of the mesh are non-orientable (like a Möbius strip), \
-             the first one contains triangle {seed}; no triangle was flipped",
-            winding.nonorientable_patches.len()
-        )));
+        return Err(Refusal::NonOrientable {
+            patches: winding.nonorientable_patches.len(),
+            triangle: seed as u32,
+        }
+        .into());
     }
     let mut flipped = 0;
     for (tri, &flip) in mesh.triangles.iter_mut().zip(&winding.flip) {

@@ -28,7 +28,7 @@ impl NormalsBuffers {
     /// Uploads `input`; the output is a kernel output ([`GpuArray::output`]).
     pub fn upload(gpu: &Gpu, input: &NormalsInput) -> Result<Self> {
         let n_vertices = u32::try_from(input.positions.len()).map_err(|_| {
-            crate::Error::InvalidInput("vertex_normals: more than 2^32 vertices".into())
+            crate::Error::limit("vertex_normals: vertices", input.positions.len(), u32::MAX)
         })?;
         Ok(NormalsBuffers {
             params: UniformBuffer::new(gpu, "vertex_normals.params", &Params { n_vertices })?,

@@ -66,9 +66,11 @@ fn mask_volume(
 
 fn check_size(what: &str, value: u32, max: u32) -> crate::Result<()> {
     if value == 0 || value > max {
-        return Err(crate::Error::InvalidInput(format!(
-            "{what} must be in 1..={max}, got {value}"
-        )));
+        return Err(crate::Error::param(
+            what,
+            value,
+            format!("must be in 1..={max}"),
+        ));
     }
     Ok(())
 }
@@ -110,9 +112,11 @@ pub fn cylinder_tunnel(d_outer: u32, d_inner: u32, h: u32) -> crate::Result<Volu
     check_size("outer diameter", d_outer, 2000)?;
     check_size("height", h, 2000)?;
     if d_inner >= d_outer {
-        return Err(crate::Error::InvalidInput(format!(
-            "inner diameter {d_inner} must be below the outer diameter {d_outer}"
-        )));
+        return Err(crate::Error::param(
+            "inner diameter",
+            d_inner,
+            format!("must be below the outer diameter {d_outer}"),
+        ));
     }
     let (d_o, d_i, h) = (i64::from(d_outer), i64::from(d_inner), i64::from(h));
     let n = (d_o + 1) as usize;
@@ -132,9 +136,11 @@ pub fn torus(big_r: u32, small_r: u32) -> crate::Result<Volume> {
     check_size("torus major radius", big_r, 2000)?;
     check_size("torus tube radius", small_r, big_r.saturating_sub(1).max(1))?;
     if small_r >= big_r {
-        return Err(crate::Error::InvalidInput(format!(
-            "tube radius {small_r} must be below the major radius {big_r}"
-        )));
+        return Err(crate::Error::param(
+            "torus tube radius",
+            small_r,
+            format!("must be below the major radius {big_r}"),
+        ));
     }
     let (br, sr) = (i128::from(big_r), i128::from(small_r));
     let mxy = i64::from((big_r + small_r).div_ceil(2));
@@ -162,9 +168,11 @@ pub fn ellipsoid_dent(a: u32, b: u32, c: u32, dent_r: u32) -> crate::Result<Volu
         check_size(what, v, 1000)?;
     }
     if dent_r >= c {
-        return Err(crate::Error::InvalidInput(format!(
-            "dent radius {dent_r} must be below the semi-axis c = {c}"
-        )));
+        return Err(crate::Error::param(
+            "dent radius",
+            dent_r,
+            format!("must be below the semi-axis c = {c}"),
+        ));
     }
     let (a, b, c, d) = (
         i128::from(a),
@@ -195,9 +203,11 @@ pub fn ellipsoid_dent(a: u32, b: u32, c: u32, dent_r: u32) -> crate::Result<Volu
 /// from the border. `16 ≤ n ≤ 2048`.
 pub fn blob(n: u32, seed: u64) -> crate::Result<Volume> {
     if !(16..=2048).contains(&n) {
-        return Err(crate::Error::InvalidInput(format!(
-            "blob grid must be in 16..=2048 voxels, got {n}"
-        )));
+        return Err(crate::Error::param(
+            "blob grid",
+            n,
+            "must be in 16..=2048 voxels",
+        ));
     }
     let mut state = seed;
     let mut next = |lo: i64, hi: i64| {

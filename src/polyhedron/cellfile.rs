@@ -61,10 +61,12 @@ struct Reader<'a> {
 impl Reader<'_> {
     fn next(&mut self, what: &str) -> crate::Result<i64> {
         let v = self.data.get(self.pos).copied().ok_or_else(|| {
-            crate::Error::InvalidInput(format!(
-                "cell list ends at integer {} where the {what} was expected",
-                self.pos
-            ))
+            crate::Error::data(
+                "cell list",
+                "integer",
+                self.pos,
+                format!("the list ends where the {what} was expected"),
+            )
         })?;
         self.pos += 1;
         Ok(v)
@@ -116,19 +118,21 @@ impl Polyhedron {
 
     /// Rebuilds a polyhedron from [`Polyhedron::encode`] output.
     ///
-    /// Errors: [`crate::Error::InvalidInput`] naming the shell and what is
-    /// wrong for truncated, inconsistent or non-convex data.
+    /// Errors: [`crate::Error::InvalidData`] naming the shell (or the
+    /// integer) and what is wrong for truncated, inconsistent or non-convex
+    /// data.
     pub fn decode(data: &[i64], frame: Frame) -> crate::Result<Polyhedron> {
         let mut r = Reader { data, pos: 0 };
         let n = r.next("shell count")?;
         let n = usize::try_from(n)
             .ok()
             .filter(|&n| n <= data.len())
-            .ok_or_else(|| crate::Error::InvalidInput(format!("cell list: bad shell count {n}")))?;
+            .ok_or_else(|| {
+                crate::Error::data("cell list", "integer", 0, format!("bad shell count {n}"))
+            })?;
         let mut shells: Vec<Shell> = Vec::with_capacity(n);
         for i in 0..n {
-            let bad =
-                |what: String| crate::Error::InvalidInput(format!("cell list shell {i}: {what}"));
+            let bad = |what: String| crate::Error::data("cell list", "shell", i, what);
             let parent = r.next("parent")?;
             let parent = match parent {
                 0 => None,
@@ -222,10 +226,12 @@ impl Polyhedron {
             });
         }
         if r.pos != data.len() {
-            return Err(crate::Error::InvalidInput(format!(
-                "cell list has {} integers after its last shell",
-                data.len() - r.pos
-            )));
+            return Err(crate::Error::data(
+                "cell list",
+                "integer",
+                r.pos,
+                format!("{} integers follow the last shell", data.len() - r.pos),
+            ));
         }
         Ok(Polyhedron {
             shells,
@@ -249,28 +255,42 @@ impl Polyhedron {
 
     /// Parses `.cells` bytes; `name` labels errors.
     ///
-    /// Errors: [`crate::Error::InvalidInput`] for a wrong magic or version, a
+    /// Errors: [`crate::Error::Format`] for a wrong magic or version or a
     /// length that does not match the count, and everything
-    /// [`Polyhedron::decode`] refuses.
+    /// [`Polyhedron::decode`] refuses (in the context of `name`).
     pub fn from_bytes(bytes: &[u8], name: &str, frame: Frame) -> crate::Result<Polyhedron> {
-        let bad = |what: String| crate::Error::InvalidInput(format!("{name}: {what}"));
+        use crate::Position;
         if bytes.len() < HEADER || &bytes[..8] != MAGIC {
-            return Err(bad(
-                "not a chisel cell list (expected the magic CHISELPH)".into()
+            return Err(crate::Error::format(
+                name,
+                Position::Byte(0),
+                "the magic CHISELPH of a chisel cell list",
+                format!("{} other bytes", bytes.len().min(8)),
             ));
         }
         let version = u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
         if version != VERSION {
-            return Err(bad(format!("version {version}, expected {VERSION}")));
+            return Err(crate::Error::format(
+                name,
+                Position::Byte(8),
+                format!("version {VERSION}"),
+                format!("version {version}"),
+            ));
         }
         let mut count = [0u8; 8];
         count.copy_from_slice(&bytes[12..20]);
         let n = u64::from_le_bytes(count);
         let body = (bytes.len() - HEADER) as u64;
         if n.checked_mul(8) != Some(body) {
-            return Err(bad(format!(
-                "header announces {n} integers, the file holds {body} bytes after the header"
-            )));
+            return Err(crate::Error::format(
+                name,
+                Position::Byte(12),
+                format!(
+                    "{n} integers ({} bytes) as the header announces",
+                    n.saturating_mul(8)
+                ),
+                format!("{body} bytes after the header"),
+            ));
         }
         let data: Vec<i64> = bytes[HEADER..]
             .chunks_exact(8)
@@ -280,7 +300,7 @@ impl Polyhedron {
                 i64::from_le_bytes(b)
             })
             .collect();
-        Polyhedron::decode(&data, frame).map_err(|e| bad(e.to_string()))
+        Polyhedron::decode(&data, frame).map_err(|e| e.within(name))
     }
 
     /// Writes the `.cells` file atomically.

@@ -129,10 +129,11 @@ impl MergedSurface {
         if box_ok && vertices_ok {
             Ok(())
         } else {
-            Err(crate::Error::InvalidInput(format!(
-                "ray parity: coordinates beyond ±{MAX_COORD} (box origin {:?}, {:?} voxels)",
-                bbox.origin, bbox.dims
-            )))
+            Err(crate::Error::param(
+                "ray parity: box",
+                format!("origin {:?}, {:?} voxels", bbox.origin, bbox.dims),
+                format!("box and shell coordinates must lie within ±{MAX_COORD}"),
+            ))
         }
     }
 
@@ -187,16 +188,20 @@ impl MergedSurface {
     /// Errors: `axis > 2`; coordinates beyond ±[`MAX_COORD`].
     pub fn side_of(&self, c: [i64; 3], axis: usize) -> crate::Result<Side> {
         if axis > 2 {
-            return Err(crate::Error::InvalidInput(format!(
-                "ray parity: axis {axis} is not 0, 1 or 2"
-            )));
+            return Err(crate::Error::param(
+                "ray parity: axis",
+                axis,
+                "must be 0, 1 or 2",
+            ));
         }
         if c.iter().any(|x| x.abs() > MAX_COORD)
             || self.vertices.iter().flatten().any(|x| x.abs() > MAX_COORD)
         {
-            return Err(crate::Error::InvalidInput(format!(
-                "ray parity: coordinates beyond ±{MAX_COORD} (point {c:?})"
-            )));
+            return Err(crate::Error::param(
+                "ray parity: point",
+                format!("{c:?}"),
+                format!("point and shell coordinates must lie within ±{MAX_COORD}"),
+            ));
         }
         let cc = to_axis(c, axis);
         let mut hits = 0usize;
@@ -457,9 +462,12 @@ impl ShellTree {
             match s.parent {
                 Some(q) if (q as usize) < i => parent.push(Some(q as usize)),
                 Some(q) => {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "shell {i} has parent {q}, which does not come before it"
-                    )));
+                    return Err(crate::Error::data(
+                        "polyhedron",
+                        "shell",
+                        i,
+                        format!("parent {q} does not come before it"),
+                    ));
                 }
                 None => parent.push(None),
             }

@@ -56,13 +56,11 @@ pub struct Zkh {
 /// The ZKHs of `object` inside `hull` (a hull of the object's voxels), in
 /// order of their first voxel (x fastest within the hull's bounding box).
 ///
-/// Errors: [`crate::Error::InvalidInput`] when the hull is flat (no inside)
-/// or the bounding box is too large to label.
+/// Errors: [`crate::Refusal::Flat`] when the hull is flat (no inside),
+/// [`crate::Error::Limit`] when the bounding box is too large to label.
 pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate::Result<Vec<Zkh>> {
     if hull.is_planar() {
-        return Err(crate::Error::InvalidInput(
-            "a flat hull has no inside".into(),
-        ));
+        return Err(crate::Refusal::Flat { what: "the hull" }.into());
     }
     let hs = hull.half_spaces();
     let (lo, hi) = hull.voxel_bbox();

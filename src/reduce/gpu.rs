@@ -51,15 +51,11 @@ impl<T: Pod> ReduceBuffers<T> {
     /// allocates the passes; outputs are kernel outputs ([`GpuArray::output`]).
     fn upload(gpu: &Gpu, kernel: Kernel, input: &[T], sentinel: T) -> Result<Self> {
         let name = kernel.name();
+        if input.is_empty() {
+            return Err(Error::empty(format!("{name}: items")));
+        }
         let n = u32::try_from(input.len())
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "{name}: {} items (need 1 to 2^32 − 1 per binding)",
-                    input.len()
-                ))
-            })?;
+            .map_err(|_| Error::limit(format!("{name}: items"), input.len(), u32::MAX))?;
         let input = GpuArray::from_slice(gpu, &format!("{name}.input"), input)?;
         let mut passes = Vec::new();
         let mut n_items = n;

@@ -10,7 +10,7 @@
 //!
 //! NaN policy: inputs must not contain NaN. totalOrder puts a NaN beyond
 //! ±inf, so a NaN anywhere in the input shows up in the result, and the
-//! entries here return [`Error::InvalidInput`] for it (no extra pass over
+//! entries here return [`Error::InvalidParameter`] for it (no extra pass over
 //! the data). Infinities are ordinary values. Empty input gives `Ok(None)`.
 
 pub mod cpu;
@@ -50,8 +50,10 @@ pub fn bounds_reduce(positions: &[[f32; 4]], backend: Backend<'_>) -> Result<Opt
             max: Vec3::new(hi[0], hi[1], hi[2]),
         };
         if bounds.min.is_nan() || bounds.max.is_nan() {
-            return Err(Error::InvalidInput(
-                "bounds_reduce: positions contain NaN".into(),
+            return Err(Error::param(
+                "bounds_reduce: positions",
+                "NaN",
+                "must not contain NaN",
             ));
         }
         Ok(bounds)
@@ -80,8 +82,10 @@ pub fn range_reduce(samples: &[f32], backend: Backend<'_>) -> Result<Option<Samp
     };
     pair.map(|(min, max)| {
         if min.is_nan() || max.is_nan() {
-            return Err(Error::InvalidInput(
-                "range_reduce: samples contain NaN".into(),
+            return Err(Error::param(
+                "range_reduce: samples",
+                "NaN",
+                "must not contain NaN",
             ));
         }
         Ok(SampleRange { min, max })

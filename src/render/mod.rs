@@ -135,9 +135,14 @@ impl FromStr for View {
             .copied()
             .find(|v| v.name() == s)
             .ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "unknown view `{s}`; expected one of front, back, left, right, side, top, bottom, iso"
-                ))
+                Error::unknown(
+                    "view",
+                    s,
+                    View::ALL
+                        .iter()
+                        .map(|v| v.name())
+                        .chain(std::iter::once("side")),
+                )
             })
     }
 }
@@ -217,7 +222,7 @@ impl Image {
     /// Encodes the image as PNG (8-bit RGBA).
     pub fn to_png(&self) -> Result<Vec<u8>> {
         let mut out = Vec::new();
-        let wrap = |e: png::EncodingError| Error::InvalidInput(format!("PNG encoding: {e}"));
+        let wrap = |e: png::EncodingError| Error::Internal(format!("PNG encoding: {e}"));
         {
             let mut enc = png::Encoder::new(&mut out, self.width, self.height);
             enc.set_color(png::ColorType::Rgba);
@@ -290,28 +295,31 @@ pub fn render_png(gpu: &Gpu, mesh: &TriMesh, opts: &RenderOptions, path: &Path) 
 /// before/after pictures compare honestly. A single panel lays its views out
 /// as a ⌈√n⌉-column grid instead.
 ///
-/// Errors ([`Error::InvalidInput`]): no panels or views, a zero size, a mesh
-/// without triangles or with bad indices, an unknown scalar field (the
-/// message lists the available ones), an empty or non-finite range, a grid
-/// larger than the adapter's texture limit. GPU failures come back as the
+/// Errors: no panels or views or a mesh without triangles
+/// ([`Error::Mismatch`]), a zero size or an empty or non-finite range
+/// ([`Error::InvalidParameter`]), bad indices ([`Error::InvalidData`]), an
+/// unknown scalar field ([`Error::Unknown`], listing the available ones), a
+/// grid larger than the adapter's texture limit ([`Error::Limit`]). GPU failures come back as the
 /// GPU error variants.
 pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> Result<Image> {
-    if panels.is_empty() || opts.views.is_empty() {
-        return Err(Error::InvalidInput(
-            "render: need at least one mesh and one view".into(),
-        ));
+    if panels.is_empty() {
+        return Err(Error::empty("render: meshes"));
+    }
+    if opts.views.is_empty() {
+        return Err(Error::empty("render: views"));
     }
     if opts.width == 0 || opts.height == 0 {
-        return Err(Error::InvalidInput(format!(
-            "render: view size {}×{} must be at least 1×1",
-            opts.width, opts.height
-        )));
+        return Err(Error::param(
+            "render: view size",
+            format!("{}×{}", opts.width, opts.height),
+            "must be at least 1×1",
+        ));
     }
     for p in panels {
         p.mesh.validate()?;
         if p.mesh.triangles.is_empty() {
-            return Err(Error::InvalidInput(format!(
-                "render: mesh{} has no triangles to draw",
+            return Err(Error::empty(format!(
+                "render: triangles of mesh{}",
                 caption_suffix(&p.caption)
             )));
         }
@@ -335,8 +343,8 @@ pub fn render_panels(gpu: &Gpu, panels: &[Panel<'_>], opts: &RenderOptions) -> R
 
     let meshes: Vec<&TriMesh> = panels.iter().map(|p| p.mesh).collect();
     let frame = Frame::for_meshes(&meshes, opts.facing);
-    let sphere = bounding_sphere(&meshes)
-        .ok_or_else(|| Error::InvalidInput("render: no triangles to frame".into()))?;
+    let sphere =
+        bounding_sphere(&meshes).ok_or_else(|| Error::empty("render: triangles to frame"))?;
     let (cols, rows) = if panels.len() == 1 {
         let n = opts.views.len();
         let cols = n.isqrt() + usize::from(n.isqrt().pow(2) < n);
@@ -441,7 +449,13 @@ fn dim(n: usize, px: u32) -> Result<u32> {
     u32::try_from(n)
         .ok()
         .and_then(|n| n.checked_mul(px))
-        .ok_or_else(|| Error::InvalidInput(format!("render: {n} × {px} pixels overflow")))
+        .ok_or_else(|| {
+            Error::limit(
+                format!("render: pixels of {n} views of {px}"),
+                u64::MAX,
+                u32::MAX,
+            )
+        })
 }
 
 fn caption_suffix(caption: &str) -> String {
@@ -465,11 +479,8 @@ fn scalar_values<'a>(
         Some(f) => Ok(Some((name, &f.values))),
         None => {
             let available: Vec<&str> = p.mesh.scalars.iter().map(|s| s.name.as_str()).collect();
-            Err(Error::InvalidInput(format!(
-                "render: mesh{} has no scalar field `{name}`; available: [{}]",
-                caption_suffix(&p.caption),
-                available.join(", ")
-            )))
+            Err(Error::unknown("scalar field", name, available)
+                .within(format!("render: mesh{}", caption_suffix(&p.caption))))
         }
     }
 }
@@ -493,9 +504,11 @@ fn colour_legend(
     let (lo, hi) = match user {
         Some((lo, hi)) => {
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return Err(Error::InvalidInput(format!(
-                    "render: scalar range ({lo}, {hi}) must be finite with lo < hi"
-                )));
+                return Err(Error::param(
+                    "render: scalar range",
+                    format!("({lo}, {hi})"),
+                    "must be finite with lo < hi",
+                ));
             }
             (lo, hi)
         }

@@ -80,7 +80,7 @@ fn index_buffer(gpu: &Gpu, label: &str, indices: &[u32]) -> wgpu::Buffer {
 }
 
 fn count_u32(n: usize, what: &str) -> Result<u32> {
-    u32::try_from(n).map_err(|_| Error::InvalidInput(format!("render: {n} {what} exceed 2^32")))
+    u32::try_from(n).map_err(|_| Error::limit(format!("render: {what}"), n, u32::MAX))
 }
 
 impl PanelBuffers {
@@ -259,10 +259,14 @@ pub(crate) fn render_grid(
 ) -> Result<Image> {
     let max_dim = gpu.device.limits().max_texture_dimension_2d;
     if grid_w > max_dim || grid_h > max_dim {
-        return Err(Error::InvalidInput(format!(
-            "render: a {grid_w}×{grid_h} view grid exceeds this adapter's \
-             {max_dim}-pixel texture limit; use fewer views or smaller views"
-        )));
+        return Err(Error::limit(
+            format!(
+                "render: pixels across the {grid_w}×{grid_h} view grid (this adapter's \
+                 texture limit; use fewer views or smaller views)"
+            ),
+            grid_w.max(grid_h),
+            max_dim,
+        ));
     }
     let padded_row = (4 * grid_w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let readback = gpu.scoped("chisel.render", || -> Result<wgpu::Buffer> {

@@ -35,7 +35,7 @@ impl<'a> Field<'a> {
         let level = match iso {
             IsoSpec::Level(l) if l.is_finite() => l,
             IsoSpec::Level(l) => {
-                return Err(Error::InvalidInput(format!("iso level {l} is not finite")));
+                return Err(Error::param("level", l, "must be finite"));
             }
             IsoSpec::Label(_) => 0.5,
         };
@@ -47,32 +47,45 @@ impl<'a> Field<'a> {
             };
             if let Some(i) = bad {
                 let (nx, ny) = (volume.dims[0], volume.dims[1]);
-                return Err(Error::InvalidInput(format!(
-                    "sample ({}, {}, {}) is not finite; marching cubes needs finite samples",
-                    i % nx,
-                    (i / nx) % ny,
-                    i / (nx * ny)
-                )));
+                return Err(Error::data(
+                    "volume",
+                    "sample",
+                    i,
+                    format!(
+                        "at ({}, {}, {}) is not finite; marching cubes needs finite samples",
+                        i % nx,
+                        (i / nx) % ny,
+                        i / (nx * ny)
+                    ),
+                ));
             }
         }
         let pad = usize::from(close_border);
         let dims = volume.dims.map(|d| d + 2 * pad);
         if dims.iter().any(|&d| d > MAX_AXIS_SAMPLES) {
-            return Err(Error::InvalidInput(format!(
-                "volume {:?}: marching cubes takes at most {MAX_AXIS_SAMPLES} samples per axis \
-                 (border padding included), so that f32 grid positions keep vertices apart",
-                volume.dims
-            )));
+            return Err(Error::limit(
+                format!(
+                    "marching cubes: samples per axis of volume {:?} (border padding included; \
+                     f32 grid positions must keep vertices apart)",
+                    volume.dims
+                ),
+                dims.into_iter().max().unwrap_or(0),
+                MAX_AXIS_SAMPLES,
+            ));
         }
         let n_points = dims.iter().product::<usize>();
         if n_points
             .checked_mul(3)
             .is_none_or(|n| n > u32::MAX as usize * 3)
         {
-            return Err(Error::InvalidInput(format!(
-                "volume {:?} is too large for 32-bit vertex numbering",
-                volume.dims
-            )));
+            return Err(Error::limit(
+                format!(
+                    "marching cubes: grid points of volume {:?} (32-bit vertex numbering)",
+                    volume.dims
+                ),
+                n_points,
+                u32::MAX,
+            ));
         }
         Ok(Field {
             volume,

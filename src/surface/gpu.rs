@@ -123,10 +123,14 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         return Ok(GpuRaw::default());
     }
     if (field.n_points() as u64) * 3 > u64::from(u32::MAX) {
-        return Err(Error::InvalidInput(format!(
-            "GPU marching cubes numbers grid edges in u32; grid {:?} is too large",
-            field.dims
-        )));
+        return Err(Error::limit(
+            format!(
+                "GPU marching cubes: grid edges of grid {:?} (u32 numbering)",
+                field.dims
+            ),
+            field.n_points().saturating_mul(3),
+            u32::MAX,
+        ));
     }
     let layer = nx * ny;
     // Blocks per layer: one workgroup of all three kernels a block.
@@ -294,7 +298,7 @@ pub(super) fn scan_with_total(values: impl Iterator<Item = u32>) -> Result<Vec<u
     for v in values {
         out.push(sum);
         sum = sum.checked_add(v).ok_or_else(|| {
-            Error::InvalidInput("marching cubes: more than 2^32 vertices or triangles".into())
+            Error::limit("marching cubes: vertices or triangles", u64::MAX, u32::MAX)
         })?;
     }
     out.push(sum);

@@ -205,7 +205,7 @@ pub fn export_network(dir: &std::path::Path, net: &SpringNetwork, bone: &[[f32; 
         },
     });
     let text = serde_json::to_string_pretty(&header)
-        .map_err(|e| crate::Error::InvalidInput(e.to_string()))?;
+        .map_err(|e| crate::Error::Internal(format!("network.json: {e}")))?;
     write_atomic(&dir.join("network.json"), text.as_bytes())
 }
 

@@ -27,7 +27,7 @@ use serde::Serialize;
 use crate::mesh::{Topology, collapse_short_edges};
 use crate::parity::Backend;
 use crate::surface::{IsoSpec, McOptions, Surface, marching_cubes};
-use crate::{Error, Result, TriMesh, Volume};
+use crate::{Error, Refusal, Result, TriMesh, Volume};
 
 /// Where the subcutis lies between a CT's skin and bone: q_i = p_i +
 /// d·(b_i − p_i) with d = 0.5 (see [`super::NetworkParams::subcutis_depth`]).
@@ -75,15 +75,18 @@ impl CtParams {
     fn check(&self) -> Result<()> {
         let (s, b) = (self.skin_level, self.bone_level);
         if !(s.is_finite() && b.is_finite() && s < b) {
-            return Err(Error::InvalidInput(format!(
-                "CT levels need skin < bone, both finite; got skin {s}, bone {b}"
-            )));
+            return Err(Error::param(
+                "skin and bone levels",
+                format!("{s}, {b}"),
+                "need skin < bone, both finite",
+            ));
         }
         if !(self.skin_min_edge.is_finite() && self.skin_min_edge >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "the shortest skin edge must be finite and ≥ 0, got {}",
-                self.skin_min_edge
-            )));
+            return Err(Error::param(
+                "skin_min_edge",
+                self.skin_min_edge,
+                "must be finite and ≥ 0",
+            ));
         }
         Ok(())
     }
@@ -163,15 +166,16 @@ impl CtLayers {
     ) -> Result<CtLayers> {
         params.check()?;
         let (skin_level, bone_level) = (params.skin_level, params.bone_level);
-        let group = largest_group(skin_surface).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "the CT has no surface at the skin level {skin_level} (no sample on both sides)"
-            ))
+        let group = largest_group(skin_surface).ok_or(Refusal::NoSurface {
+            layer: "skin",
+            level: skin_level as f64,
         })?;
         if bone_surface.mesh.triangles.is_empty() {
-            return Err(Error::InvalidInput(format!(
-                "the CT has no surface at the bone level {bone_level} (no sample on both sides)"
-            )));
+            return Err(Refusal::NoSurface {
+                layer: "bone",
+                level: bone_level as f64,
+            }
+            .into());
         }
         let skin_triangles_dropped = skin_surface.mesh.n_triangles() - group.n_triangles();
         let collapsed = collapse_short_edges(&group, params.skin_min_edge);

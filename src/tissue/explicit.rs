@@ -8,7 +8,7 @@
 //! gives the limit below (a sufficient condition, so slightly conservative).
 
 use super::network::SpringNetwork;
-use crate::{Error, Result};
+use crate::{Error, Refusal, Result};
 
 /// Fraction of the stability limit used when the caller gives no Δt.
 pub const DEFAULT_FRACTION: f32 = 0.9;
@@ -44,22 +44,24 @@ pub fn choose_dt(network: &SpringNetwork, requested: Option<f32>, force: bool) -
             if limit.is_finite() {
                 Ok(DEFAULT_FRACTION * limit)
             } else {
-                Err(Error::InvalidInput(
-                    "the network has neither springs on free nodes nor damping: no stable Δt exists; give --dt".into(),
-                ))
+                Err(Refusal::NoStableStep.into())
             }
         }
-        Some(dt) if !(dt.is_finite() && dt > 0.0) => Err(Error::InvalidInput(format!(
-            "Δt must be finite and > 0, got {dt}"
-        ))),
-        Some(dt) if dt >= limit && !force => Err(Error::InvalidInput(format!(
-            "Δt = {dt} is at or above the explicit stability limit {limit:.6} \
-             (Δt²Λ + 2Δtγ/m < 4 with Λ = 2·max Σc/m from the stiffest node, m = {}, γ = {}); \
-             the integration would blow up. Use Δt < {limit:.6} (default {:.6}) or force it",
-            network.params.mass,
-            network.params.damping,
-            DEFAULT_FRACTION * limit
-        ))),
+        Some(dt) if !(dt.is_finite() && dt > 0.0) => {
+            Err(Error::param("dt", dt, "must be finite and > 0"))
+        }
+        Some(dt) if dt >= limit && !force => Err(Error::param(
+            "dt",
+            dt,
+            format!(
+                "at or above the explicit stability limit {limit:.6} \
+                 (Δt²Λ + 2Δtγ/m < 4 with Λ = 2·max Σc/m from the stiffest node, m = {}, γ = {}); \
+                 the integration would blow up. Use Δt < {limit:.6} (default {:.6}) or force it",
+                network.params.mass,
+                network.params.damping,
+                DEFAULT_FRACTION * limit
+            ),
+        )),
         Some(dt) => Ok(dt),
     }
 }

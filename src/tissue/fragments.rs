@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use super::selector::{Selector, point_text};
 use crate::cut::{CutOptions, CutStats, Knife, Side, cut_mesh};
 use crate::mesh::{ScalarField, TriMesh};
-use crate::{Error, Result};
+use crate::{Error, Refusal, Result};
 
 /// Bone vertex ids of named fragments (e.g. the jaw cut off by `cut`),
 /// resolved by [`Selector::Fragment`].
@@ -206,21 +206,20 @@ impl BoneCut {
     /// `what` names the cut in errors.
     pub fn validate(&self, what: &str) -> Result<()> {
         if self.name.trim().is_empty() {
-            return Err(Error::InvalidInput(format!("{what}: `name` is empty")));
+            return Err(Error::param("name", "\"\"", "must not be empty").within(what));
         }
         if let Some(problem) = self.knife.problem() {
-            return Err(Error::InvalidInput(format!(
-                "{what}: {problem} (knife: {})",
-                self.knife
-            )));
+            return Err(Error::param("knife", &self.knife, problem).within(what));
         }
         if let Some(w) = &self.within {
             w.validate(&format!("{what} `within`"))?;
             if w.contains(Vec3::ZERO).is_none() {
-                return Err(Error::InvalidInput(format!(
-                    "{what}: `within` takes a sphere, box or half_space, got {}",
-                    w.describe()
-                )));
+                return Err(Error::param(
+                    "within",
+                    w.describe(),
+                    "takes a sphere, box or half_space",
+                )
+                .within(what));
             }
         }
         Ok(())
@@ -286,9 +285,7 @@ pub fn validate_cuts(cuts: &[BoneCut], source: Option<&str>) -> Result<()> {
         let what = cut_label(source, i, &c.name);
         c.validate(&what)?;
         if cuts[..i].iter().any(|d| d.name == c.name) {
-            return Err(Error::InvalidInput(format!(
-                "{what}: the name is used by an earlier cut"
-            )));
+            return Err(Error::param("name", &c.name, "is used by an earlier cut").within(what));
         }
     }
     Ok(())
@@ -334,18 +331,19 @@ pub fn cut_bone(bone: &TriMesh, cuts: &[BoneCut], source: Option<&str>) -> Resul
         }
         if taken == 0 {
             let what = cut_label(source, ci, &c.name);
-            return Err(Error::InvalidInput(match &c.within {
+            let detail = match &c.within {
                 None => format!(
-                    "{what}: no bone piece lies on the {} side of the {}",
+                    "no bone piece lies on the {} side of the {}",
                     c.side, c.knife
                 ),
                 Some(w) => format!(
-                    "{what}: no bone piece on the {} side of the {} has its centroid in the {}",
+                    "no bone piece on the {} side of the {} has its centroid in the {}",
                     c.side,
                     c.knife,
                     w.describe()
                 ),
-            }));
+            };
+            return Err(Refusal::EmptySelection { what, detail }.into());
         }
         stats.push(total);
         pieces = next;

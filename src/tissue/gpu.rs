@@ -189,21 +189,24 @@ impl<'g> GpuStepper<'g> {
         let kernel = kernel_of(step);
         let n_free = step.n_free();
         let nf = n_free as usize;
-        if csr.offsets.len() != nf + 1
-            || velocities.len() != nf
-            || forces.len() != nf
-            || rest.len() != positions.len()
-            || positions.len() < nf
-        {
-            return Err(Error::InvalidInput(format!(
-                "tissue GPU state: {} offsets, {} velocities, {} forces, {} rest and {} \
-                 state positions for {nf} free nodes",
-                csr.offsets.len(),
-                velocities.len(),
-                forces.len(),
+        for (what, expected, found) in [
+            ("tissue GPU state: CSR offsets", nf + 1, csr.offsets.len()),
+            ("tissue GPU state: velocities", nf, velocities.len()),
+            ("tissue GPU state: forces", nf, forces.len()),
+            (
+                "tissue GPU state: rest positions",
+                positions.len(),
                 rest.len(),
-                positions.len()
-            )));
+            ),
+            (
+                "tissue GPU state: positions",
+                nf.max(positions.len()),
+                positions.len(),
+            ),
+        ] {
+            if expected != found {
+                return Err(Error::mismatch(what, expected, found));
+            }
         }
         // Buffer labels name the kernel: `spring_step.rest`, `spring_chebyshev.rest`.
         let label = |buffer: &str| format!("{}.{buffer}", kernel.name());
@@ -363,10 +366,11 @@ impl Stepper for GpuStepper<'_> {
         let offset = self.n_free as u64 * 16;
         for p in &self.pos {
             if offset + data.len() as u64 * 16 > p.byte_len() {
-                return Err(Error::InvalidInput(format!(
-                    "{} bone positions do not fit the GPU state",
-                    data.len()
-                )));
+                return Err(Error::mismatch(
+                    "bone positions (one per bone node of the GPU state)",
+                    ((p.byte_len() - offset) / 16) as usize,
+                    data.len(),
+                ));
             }
             self.gpu
                 .queue
@@ -472,13 +476,20 @@ pub fn tissue_reduce_max(
 ) -> Result<[u32; 2]> {
     let n = vel.len();
     if pos.len() != n || snapshot.len() != n {
-        return Err(Error::InvalidInput(
-            "tissue_reduce_max: vel, pos and snapshot differ in length".into(),
+        let found = if pos.len() != n {
+            pos.len()
+        } else {
+            snapshot.len()
+        };
+        return Err(Error::mismatch(
+            "tissue_reduce_max: pos and snapshot (one per velocity)",
+            n,
+            found,
         ));
     }
     let step = StepKernel::SpringStep(cpu::SpringStepParams {
         n_free: u32::try_from(n)
-            .map_err(|_| Error::InvalidInput("tissue_reduce_max: too many nodes".into()))?,
+            .map_err(|_| Error::limit("tissue_reduce_max: nodes", n, u32::MAX))?,
         use_forces: false,
         dt: 0.0,
         damping: 0.0,

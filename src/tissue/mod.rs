@@ -53,7 +53,7 @@ pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
     default_origin,
 };
-pub use plan::{Iterations, Plan, ResolvedPlan, Rotation, Step};
+pub use plan::{Dynamics, Iterations, Plan, ResolvedPlan, Rotation, Step};
 pub use relax::{
     IncrementReport, RelaxReport, Simulation, Status, StepProbe, StepReport, iterate, relax,
 };

@@ -133,9 +133,7 @@ fn bump(d: Vec3, at: Vec3, width: f32, height: f32) -> f32 {
 /// (0.8) and the 0.7 shell of the skin so every layer nests.
 pub fn head_phantom(resolution: usize) -> Result<HeadPhantom> {
     if resolution < 8 {
-        return Err(Error::InvalidInput(format!(
-            "head phantom resolution must be ≥ 8, got {resolution}"
-        )));
+        return Err(Error::param("resolution", resolution, "must be ≥ 8"));
     }
     let n_lat = resolution;
     let n_lon = resolution * 4 / 3;
@@ -173,17 +171,24 @@ pub fn head_phantom(resolution: usize) -> Result<HeadPhantom> {
 /// first cell. `fran_cut` with f = 1, 8, 13 gives 6.6k, 408k and 1.07M
 /// network nodes (the benchmark sizes).
 pub fn refine_grid(mesh: &TriMesh, cols: usize, rows: usize, factor: usize) -> Result<TriMesh> {
-    if cols < 2 || rows < 2 || factor == 0 || mesh.n_vertices() != cols * rows {
-        return Err(Error::InvalidInput(format!(
-            "refine_grid: a {cols} × {rows} grid (factor {factor} ≥ 1) needs {} vertices, the mesh has {}",
+    if cols < 2 || rows < 2 || factor == 0 {
+        return Err(Error::param(
+            "refine_grid: cols, rows, factor",
+            format!("{cols}, {rows}, {factor}"),
+            "need cols, rows ≥ 2 and factor ≥ 1",
+        ));
+    }
+    if mesh.n_vertices() != cols * rows {
+        return Err(Error::mismatch(
+            format!("refine_grid: vertices of a {cols} × {rows} grid mesh"),
             cols * rows,
-            mesh.n_vertices()
-        )));
+            mesh.n_vertices(),
+        ));
     }
     let first = mesh
         .triangles
         .first()
-        .ok_or_else(|| Error::InvalidInput("refine_grid: mesh has no triangles".into()))?;
+        .ok_or_else(|| Error::empty("refine_grid: mesh triangles"))?;
     let cell = |i: u32| ((i as usize / rows) as i64, (i as usize % rows) as i64);
     let [a, b, c] = first.map(cell);
     let orient = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
@@ -323,9 +328,7 @@ fn sd_bone(p: Vec3) -> f32 {
 /// samples of air around it, `i16` samples.
 pub fn ct_head_phantom(voxel: f32) -> Result<Volume> {
     if !(voxel.is_finite() && (1.0..=8.0).contains(&voxel)) {
-        return Err(Error::InvalidInput(format!(
-            "CT phantom voxel size must be in [1, 8] mm, got {voxel}"
-        )));
+        return Err(Error::param("voxel", voxel, "must be in [1, 8] mm"));
     }
     let lo = Vec3::new(-75.0, -150.0, -97.0) - 2.0 * voxel;
     let hi = Vec3::new(75.0, 112.0, 102.0) + 2.0 * voxel;
@@ -413,6 +416,9 @@ mod tests {
         // Same winding as the input: +z normals.
         let [a, b, c] = r.triangles[0].map(|i| r.positions[i as usize]);
         assert!((b - a).cross(c - a).z > 0.0);
-        assert!(refine_grid(&m, 4, 4, 2).is_err());
+        assert!(matches!(
+            refine_grid(&m, 4, 4, 2),
+            Err(Error::Mismatch { expected: 16, .. })
+        ));
     }
 }

@@ -131,6 +131,70 @@ pub struct Step {
     pub reset_velocities: bool,
 }
 
+/// The relaxation's dynamics as a plan may set them (`[dynamics]` in TOML,
+/// `"dynamics"` in JSON); every field is optional, the command line
+/// overrides the plan, and what is left takes the defaults of
+/// [`NetworkParams`](super::NetworkParams) and
+/// [`RelaxOptions`](super::RelaxOptions). The report prints the values used.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dynamics {
+    /// Node mass m (default 1).
+    pub mass: Option<f32>,
+    /// Damping γ (default 0.5).
+    pub damping: Option<f32>,
+    /// Time step Δt (default 0.9 × the stability limit).
+    pub dt: Option<f32>,
+    /// ε: converged when max |v| < ε (default 1e-5 × the bounding-box diagonal).
+    pub epsilon: Option<f32>,
+    /// δ: stalled when the nodes moved less than δ over the window
+    /// (default 10 · ε · Δt).
+    pub delta: Option<f32>,
+    /// Stall window in iterations (default 100).
+    pub window: Option<u32>,
+    /// Iterations between convergence checks (default 25).
+    pub check_every: Option<u32>,
+    /// Iteration cap of a `converge` increment (default 100 000).
+    pub max_iterations: Option<u32>,
+}
+
+impl Dynamics {
+    /// `self` with every field that `over` sets replaced by `over`'s.
+    pub fn overridden_by(&self, over: &Dynamics) -> Dynamics {
+        Dynamics {
+            mass: over.mass.or(self.mass),
+            damping: over.damping.or(self.damping),
+            dt: over.dt.or(self.dt),
+            epsilon: over.epsilon.or(self.epsilon),
+            delta: over.delta.or(self.delta),
+            window: over.window.or(self.window),
+            check_every: over.check_every.or(self.check_every),
+            max_iterations: over.max_iterations.or(self.max_iterations),
+        }
+    }
+
+    /// Sets the network's mass and damping that this names.
+    pub fn apply_to_network(&self, params: &mut super::NetworkParams) {
+        if let Some(m) = self.mass {
+            params.mass = m;
+        }
+        if let Some(d) = self.damping {
+            params.damping = d;
+        }
+    }
+
+    /// Sets the relaxation's Δt, ε, δ, window, check interval and cap that
+    /// this names.
+    pub fn apply_to_options(&self, opts: &mut super::RelaxOptions) {
+        opts.dt = self.dt.or(opts.dt);
+        opts.epsilon = self.epsilon.or(opts.epsilon);
+        opts.delta = self.delta.or(opts.delta);
+        opts.window = self.window.unwrap_or(opts.window);
+        opts.check_every = self.check_every.unwrap_or(opts.check_every);
+        opts.max_iterations = self.max_iterations.unwrap_or(opts.max_iterations);
+    }
+}
+
 /// A surgery plan: steps applied in order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -138,6 +202,10 @@ pub struct Plan {
     /// Label for reports.
     #[serde(default)]
     pub name: Option<String>,
+    /// The relaxation's dynamics (mass, damping, Δt, ε, δ, window, check
+    /// interval, iteration cap); unset fields take the defaults.
+    #[serde(default)]
+    pub dynamics: Dynamics,
     /// Scalpel cuts of the bone mesh that free named fragments, run
     /// before the network is built (`[[cut]]` in TOML, `"cuts"` or `"cut"`
     /// in JSON; see [`super::fragments`]).
@@ -270,31 +338,39 @@ impl Plan {
     /// k ≥ 1, fixed counts ≥ 1, finite vectors, valid selectors and axes.
     pub fn validate(&self) -> Result<()> {
         if self.steps.is_empty() {
-            let src = self
-                .source
-                .as_deref()
-                .map_or(String::new(), |s| format!("{s}: "));
-            return Err(Error::InvalidInput(format!("{src}plan has no steps")));
+            let e = Error::empty("plan steps");
+            return Err(match self.source.as_deref() {
+                Some(src) => e.within(src),
+                None => e,
+            });
         }
         super::fragments::validate_cuts(&self.cuts, self.source.as_deref())?;
         for (i, s) in self.steps.iter().enumerate() {
             let what = self.step_label(i);
-            let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
+            let bad = |name: &str, value: String, rule: String| {
+                Err(Error::param(name, value, rule).within(&what))
+            };
             s.select.validate(&what)?;
             if !(1..=MAX_INCREMENTS).contains(&s.increments) {
-                return bad(format!(
-                    "increments (k) must be between 1 and {MAX_INCREMENTS}, got k = {}",
-                    s.increments
-                ));
+                return bad(
+                    "increments",
+                    s.increments.to_string(),
+                    format!("k must be between 1 and {MAX_INCREMENTS}"),
+                );
             }
             if s.iterations == Iterations::Fixed(0) {
-                return bad("iterations must be ≥ 1 or \"converge\", got 0".into());
+                return bad(
+                    "iterations",
+                    "0".into(),
+                    "must be ≥ 1 or \"converge\"".into(),
+                );
             }
             if !finite3(&s.translate) {
-                return bad(format!(
-                    "translate is not finite: {}",
-                    point_text(&s.translate)
-                ));
+                return bad(
+                    "translate",
+                    point_text(&s.translate),
+                    "must be finite".into(),
+                );
             }
             if let Some(r) = &s.rotate
                 && (!finite3(&r.axis)
@@ -302,12 +378,16 @@ impl Plan {
                     || !r.degrees.is_finite()
                     || Vec3::from_array(r.axis).length() == 0.0)
             {
-                return bad(format!(
-                    "rotate needs a finite non-zero axis, finite centre and angle, got axis {}, degrees {}, center {}",
-                    point_text(&r.axis),
-                    r.degrees,
-                    point_text(&r.center)
-                ));
+                return bad(
+                    "rotate",
+                    format!(
+                        "axis {}, degrees {}, center {}",
+                        point_text(&r.axis),
+                        r.degrees,
+                        point_text(&r.center)
+                    ),
+                    "needs a finite non-zero axis, finite centre and angle".into(),
+                );
             }
         }
         Ok(())
@@ -329,11 +409,7 @@ impl Plan {
                     .map(|c| c.name.as_str())
                     .chain(supplied.keys().map(String::as_str))
                     .collect();
-                return Err(Error::InvalidInput(format!(
-                    "{}: unknown fragment `{name}` (known: [{}])",
-                    self.step_label(i),
-                    known.join(", ")
-                )));
+                return Err(Error::unknown("fragment", name, known).within(self.step_label(i)));
             }
         }
         Ok(())
@@ -347,9 +423,7 @@ impl Plan {
         self.validate()?;
         let n_bone = network.n_bone();
         if n_bone == 0 {
-            return Err(Error::InvalidInput(
-                "the network has no bone layer to move".into(),
-            ));
+            return Err(Error::empty("bone nodes of the network"));
         }
         let mut bone: Vec<DVec3> = network
             .bone_rest()

@@ -110,12 +110,17 @@ pub struct RelaxReport {
     pub nodes: usize,
     pub free_nodes: usize,
     pub springs: usize,
+    /// The dynamics used (SPEC §1.3): node mass m, damping γ, Δt and its
+    /// stability limit, ε, δ, check interval K, stall window, iteration cap.
+    pub mass: f32,
+    pub damping: f32,
     pub dt: f32,
     pub dt_limit: f32,
     pub epsilon: f32,
     pub delta: f32,
     pub check_every: u32,
     pub window: u32,
+    pub max_iterations: u32,
     pub chebyshev: Option<ChebyshevCoefficients>,
     /// Overall: diverged if any increment diverged, else the last step's.
     pub status: Status,
@@ -399,12 +404,15 @@ pub fn relax(
         nodes: network.n_nodes(),
         free_nodes: network.n_free,
         springs: network.springs.len(),
+        mass: network.params.mass,
+        damping: network.params.damping,
         dt: setup.dt,
         dt_limit: setup.dt_limit,
         epsilon: setup.epsilon,
         delta: setup.delta,
         check_every: opts.check_every,
         window: opts.window,
+        max_iterations: opts.max_iterations,
         chebyshev: setup.chebyshev,
         status,
         iterations: total,
@@ -433,11 +441,11 @@ pub fn iterate(
     backend: Backend<'_>,
 ) -> Result<Vec<[f32; 4]>> {
     if bone.len() != network.n_bone() {
-        return Err(Error::InvalidInput(format!(
-            "{} bone positions for {} bone nodes",
+        return Err(Error::mismatch(
+            "bone positions (one per bone node)",
+            network.n_bone(),
             bone.len(),
-            network.n_bone()
-        )));
+        ));
     }
     let setup = Setup::new(network, opts)?;
     let mut stepper: Box<dyn Stepper + '_> = match backend {

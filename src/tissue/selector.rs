@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::{Error, Result};
+use crate::{Error, Refusal, Result};
 
 /// Which points a step (or a stiffness region) applies to.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -39,43 +39,46 @@ impl Selector {
     /// Checks the parameters (finite vectors, positive radius, ordered box,
     /// non-zero normal, non-empty id list); `what` names the owner in errors.
     pub fn validate(&self, what: &str) -> Result<()> {
-        let bad = |msg: String| Err(Error::InvalidInput(format!("{what}: {msg}")));
+        let bad = |name: &str, value: String, rule: &str| {
+            Err(Error::param(name, value, rule).within(what))
+        };
         match self {
             Selector::Sphere { center, radius } => {
                 if !finite3(center) || !radius.is_finite() || *radius <= 0.0 {
-                    return bad(format!(
-                        "sphere needs a finite centre and a radius > 0, got centre {}, radius {radius}",
-                        point_text(center)
-                    ));
+                    return bad(
+                        "sphere",
+                        format!("centre {}, radius {radius}", point_text(center)),
+                        "needs a finite centre and a radius > 0",
+                    );
                 }
             }
             Selector::Box { min, max } => {
                 if !finite3(min) || !finite3(max) || (0..3).any(|a| min[a] > max[a]) {
-                    return bad(format!(
-                        "box needs finite corners with min ≤ max, got min {}, max {}",
-                        point_text(min),
-                        point_text(max)
-                    ));
+                    return bad(
+                        "box",
+                        format!("min {}, max {}", point_text(min), point_text(max)),
+                        "needs finite corners with min ≤ max",
+                    );
                 }
             }
             Selector::HalfSpace { point, normal } => {
                 if !finite3(point) || !finite3(normal) || Vec3::from_array(*normal).length() == 0.0
                 {
-                    return bad(format!(
-                        "half_space needs a finite point and a non-zero finite normal, got point {}, normal {}",
-                        point_text(point),
-                        point_text(normal)
-                    ));
+                    return bad(
+                        "half_space",
+                        format!("point {}, normal {}", point_text(point), point_text(normal)),
+                        "needs a finite point and a non-zero finite normal",
+                    );
                 }
             }
             Selector::Vertices(ids) => {
                 if ids.is_empty() {
-                    return bad("empty selection: `vertices` lists no id".into());
+                    return bad("vertices", "[]".into(), "lists no id: an empty selection");
                 }
             }
             Selector::Fragment(name) => {
                 if name.is_empty() {
-                    return bad("fragment name is empty".into());
+                    return bad("fragment", "\"\"".into(), "the name is empty");
                 }
             }
         }
@@ -134,10 +137,15 @@ pub(crate) fn select(
     let n = bone.len();
     let checked = |ids: &[u32]| -> Result<Vec<u32>> {
         if let Some(&bad) = ids.iter().find(|&&k| k as usize >= n) {
-            return Err(Error::InvalidInput(format!(
-                "{what}: vertex id {bad} is outside the bone layer ({n} bone vertices, ids 0..{})",
-                n - 1
-            )));
+            return Err(Error::param(
+                "vertex id",
+                bad,
+                format!(
+                    "outside the bone layer ({n} bone vertices, ids 0..{})",
+                    n - 1
+                ),
+            )
+            .within(what));
         }
         let mut v = ids.to_vec();
         v.sort_unstable();
@@ -146,12 +154,11 @@ pub(crate) fn select(
     };
     let ids: Vec<u32> = match sel {
         Selector::Vertices(ids) => checked(ids)?,
-        Selector::Fragment(name) => checked(fragments.get(name).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "{what}: unknown fragment `{name}` (known: [{}])",
-                fragments.keys().cloned().collect::<Vec<_>>().join(", ")
-            ))
-        })?)?,
+        Selector::Fragment(name) => checked(
+            fragments
+                .get(name)
+                .ok_or_else(|| Error::unknown("fragment", name, fragments.keys()).within(what))?,
+        )?,
         _ => (0..n as u32)
             .filter(|&k| sel.contains(bone[k as usize].as_vec3()) == Some(true))
             .collect(),
@@ -161,12 +168,16 @@ pub(crate) fn select(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
-        return Err(Error::InvalidInput(format!(
-            "{what}: empty selection: the {} selects no bone vertex (the bone layer spans {} to {})",
-            sel.describe(),
-            point_text(&lo.as_vec3().to_array()),
-            point_text(&hi.as_vec3().to_array())
-        )));
+        return Err(Refusal::EmptySelection {
+            what: what.to_string(),
+            detail: format!(
+                "the {} selects no bone vertex (the bone layer spans {} to {})",
+                sel.describe(),
+                point_text(&lo.as_vec3().to_array()),
+                point_text(&hi.as_vec3().to_array())
+            ),
+        }
+        .into());
     }
     Ok(ids)
 }

@@ -40,9 +40,7 @@ impl std::str::FromStr for Solver {
         match s {
             "explicit" => Ok(Solver::Explicit),
             "chebyshev" => Ok(Solver::Chebyshev),
-            _ => Err(Error::InvalidInput(format!(
-                "unknown solver `{s}` (expected `explicit` or `chebyshev`)"
-            ))),
+            _ => Err(Error::unknown("solver", s, ["explicit", "chebyshev"])),
         }
     }
 }
@@ -166,39 +164,48 @@ pub(crate) struct Setup {
 
 impl Setup {
     pub fn new(net: &SpringNetwork, opts: &RelaxOptions) -> Result<Setup> {
-        if opts.check_every == 0 || opts.window == 0 || opts.max_iterations == 0 {
-            return Err(Error::InvalidInput(
-                "check_every, window and max_iterations must be ≥ 1".into(),
-            ));
+        for (name, v) in [
+            ("check_every", opts.check_every),
+            ("window", opts.window),
+            ("max_iterations", opts.max_iterations),
+        ] {
+            if v == 0 {
+                return Err(Error::param(name, v, "must be ≥ 1"));
+            }
         }
         let dt_limit = explicit::stability_limit(net);
         let dt = explicit::choose_dt(net, opts.dt, opts.force_dt)?;
         let diag = net.diagonal().max(f32::MIN_POSITIVE);
         let epsilon = opts.epsilon.unwrap_or(1e-5 * diag);
         if !(epsilon.is_finite() && epsilon > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "ε must be finite and > 0, got {epsilon}"
-            )));
+            return Err(Error::param("epsilon", epsilon, "must be finite and > 0"));
         }
         let delta = opts.delta.unwrap_or(10.0 * epsilon * dt);
         if !(delta.is_finite() && delta >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "δ must be finite and ≥ 0, got {delta}"
-            )));
+            return Err(Error::param("delta", delta, "must be finite and ≥ 0"));
         }
         let n_free = u32::try_from(net.n_free)
-            .map_err(|_| Error::InvalidInput("more than 2^32 free nodes".into()))?;
+            .map_err(|_| Error::limit("free nodes", net.n_free, u32::MAX))?;
         let forces: Vec<[f32; 4]> = match &opts.external_forces {
             None => vec![[0.0; 4]; net.n_free],
             Some(f) if f.len() == net.n_free && f.iter().all(|v| v.is_finite()) => {
                 f.iter().map(|v| [v.x, v.y, v.z, 0.0]).collect()
             }
-            Some(f) => {
-                return Err(Error::InvalidInput(format!(
-                    "external forces: need {} finite vectors (one per free node), got {}",
+            Some(f) if f.len() != net.n_free => {
+                return Err(Error::mismatch(
+                    "external forces (one per free node)",
                     net.n_free,
-                    f.len()
-                )));
+                    f.len(),
+                ));
+            }
+            Some(f) => {
+                let i = f.iter().position(|v| !v.is_finite()).unwrap_or(0);
+                return Err(Error::data(
+                    "external forces",
+                    "free node",
+                    i,
+                    format!("force {} is not finite", f[i]),
+                ));
             }
         };
         let materials = net.material_table();
@@ -263,11 +270,11 @@ pub(crate) fn bone_displacements(
     bone: &[[f32; 4]],
 ) -> Result<Vec<[f32; 4]>> {
     if bone.len() != bone_rest.len() {
-        return Err(Error::InvalidInput(format!(
-            "{} bone positions for {} bone nodes",
+        return Err(Error::mismatch(
+            "bone positions (one per bone node)",
+            bone_rest.len(),
             bone.len(),
-            bone_rest.len()
-        )));
+        ));
     }
     Ok(bone
         .iter()

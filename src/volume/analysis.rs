@@ -336,19 +336,26 @@ impl Labelling {
 /// `x + nx·(y + ny·z)`) where `inside(i)` holds, for a grid of `dims`.
 /// Linear time; `inside` is called at most twice per voxel.
 ///
-/// Errors: [`Error::InvalidInput`] when `nx·ny·nz` overflows or there are
-/// `u32::MAX` components or more.
+/// Errors: [`Error::InvalidParameter`] when `nx·ny·nz` overflows,
+/// [`Error::Limit`] at `u32::MAX` components or more.
 pub fn label_6_connected(dims: [usize; 3], inside: impl Fn(usize) -> bool) -> Result<Labelling> {
     let n = dims
         .iter()
         .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-        .ok_or_else(|| Error::InvalidInput(format!("dims {dims:?} overflow")))?;
+        .ok_or_else(|| {
+            Error::param(
+                "dims",
+                format!("{dims:?}"),
+                "the sample count overflows usize",
+            )
+        })?;
     let found = RunComponents::of(dims, inside);
     if found.sizes.len() >= u32::MAX as usize {
-        return Err(Error::InvalidInput(format!(
-            "{} components do not fit 32-bit labels",
-            found.sizes.len()
-        )));
+        return Err(Error::limit(
+            "6-connected components (32-bit labels)",
+            found.sizes.len(),
+            u32::MAX - 1,
+        ));
     }
     let mut labels = vec![0u32; n];
     let nx = dims[0];

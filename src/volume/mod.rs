@@ -157,22 +157,33 @@ impl Volume {
         let n = dims
             .iter()
             .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-            .ok_or_else(|| crate::Error::InvalidInput(format!("dims {dims:?} overflow")))?;
+            .ok_or_else(|| {
+                crate::Error::param(
+                    "dims",
+                    format!("{dims:?}"),
+                    "the sample count overflows usize",
+                )
+            })?;
         if n != data.len() {
-            return Err(crate::Error::InvalidInput(format!(
-                "dims {dims:?} need {n} samples but {} were given",
-                data.len()
-            )));
+            return Err(crate::Error::mismatch(
+                format!("samples of a {dims:?} volume"),
+                n,
+                data.len(),
+            ));
         }
         if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return Err(crate::Error::InvalidInput(format!(
-                "spacing {spacing:?} must be positive and finite"
-            )));
+            return Err(crate::Error::param(
+                "spacing",
+                format!("{spacing:?}"),
+                "must be positive and finite",
+            ));
         }
         if origin.iter().any(|o| !o.is_finite()) {
-            return Err(crate::Error::InvalidInput(format!(
-                "origin {origin:?} must be finite"
-            )));
+            return Err(crate::Error::param(
+                "origin",
+                format!("{origin:?}"),
+                "must be finite",
+            ));
         }
         Ok(Volume {
             dims,
@@ -200,13 +211,14 @@ impl Volume {
     /// Slice `z` as a volume of one sample in z (same type, spacing; origin
     /// moved to the slice), for the 2-D analogue of the voxel algorithms.
     ///
-    /// Errors: [`crate::Error::InvalidInput`] when `z` is out of range.
+    /// Errors: [`crate::Error::InvalidParameter`] when `z` is out of range.
     pub fn slice_z(&self, z: usize) -> crate::Result<Volume> {
         if z >= self.dims[2] {
-            return Err(crate::Error::InvalidInput(format!(
-                "slice {z} does not exist: the volume has {} slices",
-                self.dims[2]
-            )));
+            return Err(crate::Error::param(
+                "slice",
+                z,
+                format!("does not exist: the volume has {} slices", self.dims[2]),
+            ));
         }
         let n = self.dims[0] * self.dims[1];
         let r = n * z..n * (z + 1);

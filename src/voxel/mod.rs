@@ -104,8 +104,8 @@ impl DigitalObject {
     /// Selects the object from `volume`: samples passing `selection`, then the
     /// 6-connected `component`(s).
     ///
-    /// Errors: [`crate::Error::InvalidInput`] when nothing is selected or
-    /// component `N` does not exist.
+    /// Errors: [`crate::Refusal::EmptySelection`] when nothing is selected,
+    /// [`crate::Error::InvalidParameter`] when component `N` does not exist.
     pub fn from_volume(
         volume: &Volume,
         selection: Selection,
@@ -123,10 +123,14 @@ impl DigitalObject {
                 let want = match component {
                     Component::Index(n) if n >= 1 && n <= lab.n_components() => n as u32,
                     Component::Index(n) => {
-                        return Err(crate::Error::InvalidInput(format!(
-                            "component {n} does not exist: the selection has {} 6-connected components",
-                            lab.n_components()
-                        )));
+                        return Err(crate::Error::param(
+                            "component",
+                            n,
+                            format!(
+                                "does not exist: the selection has {} 6-connected components",
+                                lab.n_components()
+                            ),
+                        ));
                     }
                     _ => {
                         let mut best = 0usize;
@@ -146,8 +150,8 @@ impl DigitalObject {
 
     /// The object of the `true` voxels of a `dims` mask (x fastest).
     ///
-    /// Errors: [`crate::Error::InvalidInput`] when the mask length does not
-    /// match `dims` or no voxel is set.
+    /// Errors: [`crate::Error::Mismatch`] when the mask length does not
+    /// match `dims`, [`crate::Refusal::EmptySelection`] when no voxel is set.
     pub fn from_mask(
         dims: [usize; 3],
         mask: &[bool],
@@ -155,10 +159,11 @@ impl DigitalObject {
     ) -> crate::Result<DigitalObject> {
         let n = dims.iter().product::<usize>();
         if n != mask.len() {
-            return Err(crate::Error::InvalidInput(format!(
-                "mask of {} voxels does not match dims {dims:?}",
-                mask.len()
-            )));
+            return Err(crate::Error::mismatch(
+                format!("mask voxels (dims {dims:?})"),
+                n,
+                mask.len(),
+            ));
         }
         let mut lo = [usize::MAX; 3];
         let mut hi = [0usize; 3];
@@ -178,9 +183,11 @@ impl DigitalObject {
             }
         }
         if n_voxels == 0 {
-            return Err(crate::Error::InvalidInput(
-                "the selection contains no voxel".into(),
-            ));
+            return Err(crate::Refusal::EmptySelection {
+                what: "voxel selection".into(),
+                detail: "no voxel is selected".into(),
+            }
+            .into());
         }
         let low = lo.map(|c| c as i64 - 1);
         let odims: [usize; 3] = std::array::from_fn(|a| hi[a] - lo[a] + 3);

@@ -20,6 +20,7 @@ fn convert_round_trips_a_real_mesh_and_volume() {
         &[
             "convert",
             path_str(&dir.join("fran_cut.vtk")),
+            "-o",
             path_str(&ply),
         ],
         preview,
@@ -35,6 +36,7 @@ fn convert_round_trips_a_real_mesh_and_volume() {
     ok(&[
         "convert",
         path_str(&dir.join("headsq/quarter.nhdr")),
+        "-o",
         path_str(&nrrd),
     ]);
     let a = chisel::io::read_volume(&dir.join("headsq/quarter.nhdr")).unwrap();
@@ -44,6 +46,7 @@ fn convert_round_trips_a_real_mesh_and_volume() {
     let out = chisel(&[
         "convert",
         path_str(&dir.join("fran_cut.vtk")),
+        "-o",
         path_str(&nrrd),
     ]);
     assert_eq!(out.status.code(), Some(1), "mesh → volume must be refused");

@@ -40,7 +40,7 @@ fn previews_must_be_png_names_checked_first() {
     let (out, pieces, plan) = (p("o.ply"), p("pieces"), plan_file("fran_chin_advance.toml"));
     let runs: [Vec<&str>; 7] = [
         vec!["render", &mesh, "-o", &jpg],
-        vec!["convert", &mesh, &out, "--preview", &jpg],
+        vec!["convert", &mesh, "-o", &out, "--preview", &jpg],
         vec!["mc", &volume, "--level", "1", "-o", &out, "--preview", &jpg],
         vec![
             "cut",
@@ -62,15 +62,8 @@ fn previews_must_be_png_names_checked_first() {
             "--preview",
             &jpg,
         ],
-        vec!["hull", &volume, "--threshold", "1", "--preview", &jpg],
-        vec![
-            "polyhedrize",
-            &volume,
-            "--threshold",
-            "1",
-            "--preview",
-            &jpg,
-        ],
+        vec!["hull", &volume, "--level", "1", "--preview", &jpg],
+        vec!["polyhedrize", &volume, "--level", "1", "--preview", &jpg],
     ];
     for args in runs {
         let run = chisel(&args);
@@ -95,20 +88,33 @@ fn volume_commands_check_their_options_first() {
     let ball = p("ball.nrrd");
     let v = ok_json(&["phantom", "ball", "--r", "4", "-o", &ball, "--json"]);
     assert_eq!(v["kind"], serde_json::json!({ "shape": "ball", "r": 4 }));
+    // Every report names its schema and version first.
+    assert_eq!(v["schema"], "chisel.phantom/1");
+    let out = chisel(&["stats", &ball, "--json", "--backend", "cpu"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("{\n  \"schema\": \"chisel.stats/1\",\n  \"file\""),
+        "{text}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(
+        (&v["kind"], &v["backend"]),
+        (&"volume".into(), &"cpu".into())
+    );
     // Reports name the selection, and say when the ZKHs were not looked for.
-    let v = ok_json(&["hull", &ball, "--threshold", "1", "--no-zkh", "--json"]);
-    assert_eq!(v["selection"]["threshold"], 1.0);
+    let v = ok_json(&["hull", &ball, "--level", "1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["level"], 1.0);
     assert_eq!(v["selection"]["component"], "largest");
     assert!(v["zkh"].is_null(), "{v}");
     assert_eq!(v["zkh_skipped"], "--no-zkh");
     assert_eq!(v["candidates"]["kind"], "local26");
-    let v = ok_json(&["hull", &ball, "--threshold", "1", "--json"]);
+    let v = ok_json(&["hull", &ball, "--level", "1", "--json"]);
     assert_eq!(v["zkh"], serde_json::json!([]));
     assert!(v["zkh_skipped"].is_null());
     // A threshold below every sample selects them all (CT data in HU).
-    let v = ok_json(&["stats", &ball, "--threshold", "-5", "--json"]);
-    assert_eq!(v["threshold"]["voxels"], 216, "{v}");
-    assert_eq!(v["threshold"]["selection"], "value >= -5");
+    let v = ok_json(&["stats", &ball, "--level", "-5", "--json"]);
+    assert_eq!(v["level"]["voxels"], 216, "{v}");
+    assert_eq!(v["level"]["selection"], "value >= -5");
     let fails = |args: &[&str], says: &str| {
         let run = chisel(args);
         let stderr = String::from_utf8_lossy(&run.stderr);
@@ -120,7 +126,7 @@ fn volume_commands_check_their_options_first() {
         &[
             "hull",
             &ball,
-            "--threshold",
+            "--level",
             "1",
             "-o",
             &mesh,
@@ -135,21 +141,14 @@ fn volume_commands_check_their_options_first() {
     );
     assert!(!Path::new(&mesh).exists(), "no output before the check");
     fails(
-        &[
-            "polyhedrize",
-            &ball,
-            "--threshold",
-            "1",
-            "-o",
-            &p("cells.ply"),
-        ],
+        &["polyhedrize", &ball, "--level", "1", "-o", &p("cells.ply")],
         "-o takes the binary cell list",
     );
     fails(
         &[
             "polyhedrize",
             &ball,
-            "--threshold",
+            "--level",
             "1",
             "--cells-json",
             &p("cells.txt"),
@@ -157,7 +156,7 @@ fn volume_commands_check_their_options_first() {
         "name the file .json",
     );
     // A slice has no surface: --mesh is a usage error (exit 2).
-    let slice = ["polyhedrize", &ball, "--threshold", "1", "--slice", "3"];
+    let slice = ["polyhedrize", &ball, "--level", "1", "--slice", "3"];
     let run = chisel(&[&slice[..], &["--mesh", &mesh]].concat());
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2), "{stderr}");
@@ -173,7 +172,7 @@ fn volume_commands_check_their_options_first() {
     )
     .unwrap();
     chisel::io::write_volume(Path::new(&plate), &v).unwrap();
-    let v = ok_json(&["hull", &plate, "--threshold", "1", "--json"]);
+    let v = ok_json(&["hull", &plate, "--level", "1", "--json"]);
     assert_eq!(v["zkh_skipped"], "flat hull: no inside", "{v}");
     assert!(v["zkh"].is_null(), "{v}");
     let cells = p("plate.cells");
@@ -181,7 +180,7 @@ fn volume_commands_check_their_options_first() {
         &[
             "polyhedrize",
             &plate,
-            "--threshold",
+            "--level",
             "1",
             "-o",
             &cells,
@@ -192,13 +191,13 @@ fn volume_commands_check_their_options_first() {
     );
     assert!(!Path::new(&cells).exists());
     // Thresholds and vectors may start with a minus sign.
-    let v = ok_json(&["hull", &ball, "--threshold", "-1", "--no-zkh", "--json"]);
-    assert_eq!(v["selection"]["threshold"], -1.0);
+    let v = ok_json(&["hull", &ball, "--level", "-1", "--no-zkh", "--json"]);
+    assert_eq!(v["selection"]["level"], -1.0);
     fails(
         &[
             "hull",
             &ball,
-            "--threshold",
+            "--level",
             "1",
             "--preview",
             &png,
@@ -218,7 +217,7 @@ fn volume_commands_check_their_options_first() {
             &[
                 command,
                 &ball,
-                "--threshold",
+                "--level",
                 "1",
                 "--report",
                 &p("nodir/r.json"),
@@ -226,9 +225,12 @@ fn volume_commands_check_their_options_first() {
             "folder",
         );
     }
-    fails(&["convert", &ball, &p("x.raw")], "volume extension `.raw`");
     fails(
-        &["convert", &ball, &p("x")],
+        &["convert", &ball, "-o", &p("x.raw")],
+        "volume extension `.raw`",
+    );
+    fails(
+        &["convert", &ball, "-o", &p("x")],
         "volume file name without extension",
     );
 }
@@ -245,6 +247,7 @@ fn outputs_are_world_readable_files() {
     let out = chisel(&[
         "convert",
         path_str(&dir.join("fran_cut.vtk")),
+        "-o",
         path_str(&ply),
     ]);
     assert!(out.status.success());
@@ -254,4 +257,35 @@ fn outputs_are_world_readable_files() {
         0o044,
         "mode {mode:o}: group/other cannot read the output"
     );
+}
+
+/// `--backend auto` (the default everywhere) keeps a software adapter's
+/// work on the CPU paths and says so; `--backend gpu` runs on it anyway.
+#[test]
+fn the_backend_choice_is_the_same_everywhere_and_printed() {
+    let Some(_gpu) = common::gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.nrrd");
+    let ball = path_str(&ball);
+    ok_json(&["phantom", "ball", "--r", "4", "-o", ball, "--json"]);
+    for (backend, says, report) in [
+        (None, "backend: cpu (auto: the adapter", "cpu"),
+        (Some("cpu"), "backend: cpu\n", "cpu"),
+        (Some("gpu"), "backend: gpu on", "gpu"),
+    ] {
+        let mut args = vec!["stats", ball, "--json", "--adapter", "cpu"];
+        args.extend(backend.map(|b| ["--backend", b]).iter().flatten());
+        // Without --quiet: the choice is a note on stderr.
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_chisel"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success() && stderr.contains(says),
+            "{args:?}: {stderr}"
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["backend"], report, "{args:?}");
+    }
 }

@@ -10,7 +10,7 @@ fn demo_runs_and_writes_its_outputs() {
     let Some(_gpu) = common::gpu() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let out_dir = tmp.path().join("demo");
-    ok(&["demo", "--out", path_str(&out_dir)]);
+    ok(&["demo", "--output", path_str(&out_dir)]);
     let report: Value =
         serde_json::from_slice(&std::fs::read(out_dir.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["relax_gpu"]["status"], "converged");

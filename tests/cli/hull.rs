@@ -10,7 +10,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     let tmp = tempfile::tempdir().unwrap();
     let ball = tmp.path().join("ball24.nrrd");
     ok(&["phantom", "ball", "--r", "24", "-o", path_str(&ball)]);
-    let merged = ok_json(&["hull", path_str(&ball), "--threshold", "1", "--json"]);
+    let merged = ok_json(&["hull", path_str(&ball), "--level", "1", "--json"]);
     assert_eq!(merged["hull"]["faces"], 290);
     assert_eq!(merged["object"]["voxels"], 7208);
     assert_eq!(
@@ -21,7 +21,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     let tris = ok_json(&[
         "hull",
         path_str(&ball),
-        "--threshold",
+        "--level",
         "1",
         "--coplanar",
         "visible",
@@ -31,7 +31,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     let corners = ok_json(&[
         "hull",
         path_str(&ball),
-        "--threshold",
+        "--level",
         "1",
         "--vertices",
         "corners",
@@ -54,7 +54,7 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     let v = ok_json(&[
         "hull",
         path_str(&cyl),
-        "--threshold",
+        "--level",
         "1",
         "-o",
         path_str(&hull_ply),
@@ -73,17 +73,10 @@ fn phantom_and_hull_reproduce_the_seed_figures() {
     );
 
     // Bad selections are clear errors.
-    assert_clean_error(&["hull", path_str(&cyl), "--threshold", "5"], "cyl.mha");
+    assert_clean_error(&["hull", path_str(&cyl), "--level", "5"], "cyl.mha");
     assert_clean_error(
-        &[
-            "hull",
-            path_str(&cyl),
-            "--threshold",
-            "1",
-            "--component",
-            "7",
-        ],
-        "component 7",
+        &["hull", path_str(&cyl), "--level", "1", "--component", "7"],
+        "component = 7: does not exist",
     );
     let run = chisel(&[
         "phantom", "torus", "--major", "4", "--minor", "9", "-o", "t.nrrd",

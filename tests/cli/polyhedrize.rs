@@ -25,7 +25,7 @@ fn polyhedrize_writes_verified_cells() {
     let v = ok_json(&[
         "polyhedrize",
         path_str(&cyl),
-        "--threshold",
+        "--level",
         "1",
         "-o",
         path_str(&cells),
@@ -66,7 +66,7 @@ fn polyhedrize_writes_verified_cells() {
     let v = ok_json(&[
         "polyhedrize",
         path_str(&cyl),
-        "--threshold",
+        "--level",
         "1",
         "--press-in",
         "--verify",
@@ -81,7 +81,7 @@ fn polyhedrize_writes_verified_cells() {
         &[
             "polyhedrize",
             path_str(&cyl),
-            "--threshold",
+            "--level",
             "1",
             "--vertices",
             "corners",

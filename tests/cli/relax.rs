@@ -31,6 +31,11 @@ fn relax_fran_chin_advance_agrees_between_backends() {
             path_str(&out),
             "--report",
             path_str(&report),
+            // The defaults, given: the flags parse and the report prints them.
+            "--mass",
+            "1",
+            "--check-every",
+            "25",
         ];
         let preview = tmp.path().join("fran.png");
         if backend == "gpu" {
@@ -54,6 +59,16 @@ fn relax_fran_chin_advance_agrees_between_backends() {
             "{backend}"
         );
         assert_eq!(v["relax"]["status"], "converged", "{backend}");
+        let r = &v["relax"];
+        assert_eq!(
+            (r["mass"].as_f64(), r["damping"].as_f64()),
+            (Some(1.0), Some(0.5))
+        );
+        assert_eq!(
+            (r["check_every"].as_u64(), r["window"].as_u64()),
+            (Some(25), Some(100))
+        );
+        assert_eq!(r["max_iterations"], 100_000);
         // Without bend springs the chin skin outruns the 4 mm bone move by
         // about 24 % (README known limits), and the run says so.
         let overshoot = &v["skin_overshoot"];
@@ -104,9 +119,9 @@ fn relax_rejects_a_bad_plan_clearly() {
         "relax",
         "--ct",
         "no_such_ct.nhdr",
-        "--skin",
+        "--skin-level",
         "500",
-        "--bone",
+        "--bone-level",
         "1150",
         "--plan",
         path_str(&typo),
@@ -117,7 +132,7 @@ fn relax_rejects_a_bad_plan_clearly() {
     assert!(
         !run.status.success()
             && stderr.contains(
-                "typo.toml: plan step 1 `advance`: unknown fragment `chn` (known: [chin])"
+                "typo.toml: plan step 1 `advance`: unknown fragment `chn`; known: [chin]"
             )
             && !stderr.contains("no_such_ct"),
         "{stderr}"
@@ -169,9 +184,9 @@ fn relax_ct_headsq_chin_advance_end_to_end() {
         "relax",
         "--ct",
         path_str(&ct),
-        "--skin",
+        "--skin-level",
         "500",
-        "--bone",
+        "--bone-level",
         "1150",
         "--plan",
         plan,
@@ -257,22 +272,29 @@ fn relax_ct_arguments_are_checked() {
         assert!(stderr.contains(says), "{args:?}: {stderr}");
     };
     let ct_args = |skin: &'static str, bone: &'static str| {
-        vec!["--ct", path_str(&ct), "--skin", skin, "--bone", bone]
+        vec![
+            "--ct",
+            path_str(&ct),
+            "--skin-level",
+            skin,
+            "--bone-level",
+            bone,
+        ]
     };
-    fails(
-        &ct_args("500", "skull.ply"),
-        1,
-        "--bone is the bone iso-level",
-    );
+    // The bone level is a number, the bone mesh another flag.
+    fails(&ct_args("500", "skull.ply"), 2, "--bone-level");
+    let mut ct_and_mesh = ct_args("500", "1150");
+    ct_and_mesh.extend(["--bone-mesh", "skull.ply"]);
+    fails(&ct_and_mesh, 2, "cannot be used with");
     fails(&ct_args("1150", "500"), 1, "skin < bone");
     let mut negative = ct_args("500", "1150");
     negative.extend(["--skin-min-edge", "-1"]);
-    fails(&negative, 1, "shortest skin edge");
+    fails(&negative, 1, "skin_min_edge = -1");
     fails(&[path_str(&fran), "--skin-min-edge", "1"], 2, "--ct");
     // A plan that cuts the bone needs one.
     fails(&[path_str(&fran)], 1, "needs a bone mesh");
-    // Usage errors: --skin without --ct, a mesh and --ct together.
-    fails(&[path_str(&fran), "--skin", "500"], 2, "--ct");
+    // Usage errors: --skin-level without --ct, a mesh and --ct together.
+    fails(&[path_str(&fran), "--skin-level", "500"], 2, "--ct");
     let mut both = ct_args("500", "1150");
     both.insert(0, path_str(&fran));
     fails(&both, 2, "cannot be used with");

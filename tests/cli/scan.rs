@@ -134,7 +134,7 @@ fn comparable(mut v: Value) -> Value {
 fn seed_objects_get_one_row_each() {
     let tmp = tempfile::tempdir().unwrap();
     let vol = seed_objects(tmp.path());
-    let v = scan_json(&[path_str(&vol), "--threshold", "1"]);
+    let v = scan_json(&[path_str(&vol), "--level", "1"]);
     assert_eq!(v["structures"], 6);
     assert_eq!(v["scanned"], 6);
     assert_eq!(v["degenerate"], 1);
@@ -180,7 +180,7 @@ fn seed_objects_get_one_row_each() {
     assert_eq!(v["zkh"]["tunnels"]["voxels"], 1200);
 
     // --min-voxels skips and counts.
-    let v = scan_json(&[path_str(&vol), "--threshold", "1", "--min-voxels", "100"]);
+    let v = scan_json(&[path_str(&vol), "--level", "1", "--min-voxels", "100"]);
     assert_eq!(v["structures"], 6);
     assert_eq!(v["scanned"], 3);
     assert_eq!(v["skipped"]["count"], 3);
@@ -230,7 +230,7 @@ fn cpu_and_gpu_reports_agree() {
     let Some(_gpu) = common::gpu() else { return };
     let tmp = tempfile::tempdir().unwrap();
     let vol = seed_objects(tmp.path());
-    for selection in [&["--threshold", "1"][..], &["--labels"][..]] {
+    for selection in [&["--level", "1"][..], &["--labels"][..]] {
         let mut args = vec![path_str(&vol)];
         args.extend_from_slice(selection);
         let cpu = scan_json(&args);
@@ -244,7 +244,7 @@ fn cpu_and_gpu_reports_agree() {
     let Some(head) = common::data("headsq/quarter.nhdr") else {
         return;
     };
-    let args = [path_str(&head), "--threshold", "1150"];
+    let args = [path_str(&head), "--level", "1150"];
     let cpu = scan_json(&args);
     let gpu = scan_json(&[&args[..], &["--backend", "gpu"]].concat());
     assert_eq!(comparable(cpu), comparable(gpu));
@@ -258,7 +258,7 @@ fn ct_head_bone_components() {
     let Some(head) = common::data("headsq/quarter.nhdr") else {
         return;
     };
-    let v = scan_json(&[path_str(&head), "--threshold", "1150"]);
+    let v = scan_json(&[path_str(&head), "--level", "1150"]);
     assert_eq!(v["structures"], 64);
     assert_eq!(v["scanned"], 64);
     check_row_invariants(&v);
@@ -278,7 +278,7 @@ fn ct_head_bone_components() {
     assert_eq!(z["tunnels"]["count"], 0);
     assert_eq!(z["branched_tunnels"]["count"], 0);
 
-    let big = scan_json(&[path_str(&head), "--threshold", "1150", "--min-voxels", "24"]);
+    let big = scan_json(&[path_str(&head), "--level", "1150", "--min-voxels", "24"]);
     assert_eq!(
         big["scanned"].as_u64().unwrap() + big["skipped"]["count"].as_u64().unwrap(),
         64
@@ -328,8 +328,8 @@ fn bad_input_is_a_clear_error() {
     // No selection, or both: usage errors (exit 2).
     let out = chisel(&["scan", path_str(&vol)]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--threshold"));
-    let out = chisel(&["scan", path_str(&vol), "--threshold", "1", "--labels"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--level"));
+    let out = chisel(&["scan", path_str(&vol), "--level", "1", "--labels"]);
     assert_eq!(out.status.code(), Some(2));
     // Missing, unreadable, empty selection: exit 1 naming the file.
     for (args, names) in [
@@ -337,10 +337,7 @@ fn bad_input_is_a_clear_error() {
             vec![path_str(&tmp.path().join("missing.nrrd")), "--labels"],
             "missing.nrrd",
         ),
-        (
-            vec![path_str(&vol), "--threshold", "9"],
-            "seed_objects.nrrd",
-        ),
+        (vec![path_str(&vol), "--level", "9"], "seed_objects.nrrd"),
     ] {
         let out = chisel(&[&["scan"][..], &args].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);

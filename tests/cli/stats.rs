@@ -60,7 +60,7 @@ fn stats_volumes_match_the_data_readme() {
         "stats",
         path_str(&dir.join("headsq/quarter.nhdr")),
         "--json",
-        "--threshold",
+        "--level",
         "1150",
     ]);
     let s = &head["stats"];
@@ -69,8 +69,8 @@ fn stats_volumes_match_the_data_readme() {
     assert_eq!(s["min"], 0.0);
     assert_eq!(s["max"], 3926.0);
     assert!((s["mean"].as_f64().unwrap() - 507.69).abs() < 0.01);
-    assert!(head["threshold"]["voxels"].as_u64().unwrap() > 0);
-    assert!(head["threshold"]["components"].as_u64().unwrap() >= 1);
+    assert!(head["level"]["voxels"].as_u64().unwrap() > 0);
+    assert!(head["level"]["components"].as_u64().unwrap() >= 1);
 
     let frog = ok_json(&[
         "stats",

@@ -237,7 +237,12 @@ fn triangulated_knife_contacts_and_bad_knives_are_errors() {
         vec![[0, 1, 2], [0, 3, 2]],
     )
     .unwrap();
-    assert!(cut_mesh(&cube, &Knife::Mesh(twisted), &CAP).is_err());
+    assert!(matches!(
+        cut_mesh(&cube, &Knife::Mesh(twisted), &CAP),
+        Err(chisel::Error::Refused(
+            chisel::Refusal::KnifeNotManifold { .. }
+        ))
+    ));
     // The same sheet, consistently oriented, halves the cube (control).
     let good = TriMesh::new(
         vec![

@@ -31,7 +31,7 @@ fn failed_writes_leave_no_partial_output_or_temp_file() {
         w.write_all(&[7u8; 100_000])?;
         Err(std::io::Error::other("disk on fire"))
     });
-    assert!(r.is_err());
+    assert!(matches!(r, Err(chisel::Error::Io { .. })));
     assert!(listing(dir.path()).is_empty(), "{:?}", listing(dir.path()));
     // An existing output survives a failed overwrite untouched.
     std::fs::write(&out, b"old").unwrap();
@@ -39,7 +39,7 @@ fn failed_writes_leave_no_partial_output_or_temp_file() {
         w.write_all(b"new partial")?;
         Err(std::io::Error::other("interrupted"))
     });
-    assert!(r.is_err());
+    assert!(matches!(r, Err(chisel::Error::Io { .. })));
     assert_eq!(std::fs::read(&out).unwrap(), b"old");
     assert_eq!(listing(dir.path()), ["out.ply"]);
     // An invalid mesh is refused before anything is written.
@@ -48,7 +48,10 @@ fn failed_writes_leave_no_partial_output_or_temp_file() {
         triangles: vec![[0, 1, 3]],
         scalars: Vec::new(),
     };
-    assert!(write_mesh(&dir.path().join("bad.stl"), &bad).is_err());
+    assert!(matches!(
+        write_mesh(&dir.path().join("bad.stl"), &bad),
+        Err(chisel::Error::InvalidData { .. })
+    ));
     assert_eq!(listing(dir.path()), ["out.ply"]);
     // A volume NIfTI cannot hold is refused without leaving anything.
     let wide = Volume::new(
@@ -58,7 +61,14 @@ fn failed_writes_leave_no_partial_output_or_temp_file() {
         VolumeData::U8(vec![0; 40_000]),
     )
     .unwrap();
-    assert!(write_volume(&dir.path().join("wide.nii"), &wide).is_err());
+    assert!(matches!(
+        write_volume(&dir.path().join("wide.nii"), &wide),
+        Err(chisel::Error::Limit {
+            asked: 40_000,
+            allowed: 32767,
+            ..
+        })
+    ));
     assert_eq!(listing(dir.path()), ["out.ply"]);
     // A successful write leaves exactly the output.
     write_mesh(&out, &common::tetra()).unwrap();

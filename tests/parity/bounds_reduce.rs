@@ -157,12 +157,12 @@ fn nan_and_empty() {
         p[500][1] = f32::NAN;
         assert!(matches!(
             reduce::bounds_reduce(&p, backend),
-            Err(Error::InvalidInput(_))
+            Err(Error::InvalidParameter { ref value, .. }) if value == "NaN"
         ));
         p[500][1] = -f32::NAN;
         assert!(matches!(
             reduce::bounds_reduce(&p, backend),
-            Err(Error::InvalidInput(_))
+            Err(Error::InvalidParameter { ref value, .. }) if value == "NaN"
         ));
     }
 }

@@ -176,7 +176,7 @@ fn nan_and_empty() {
             s[999] = nan;
             assert!(matches!(
                 reduce::range_reduce(&s, backend),
-                Err(Error::InvalidInput(_))
+                Err(Error::InvalidParameter { ref value, .. }) if value == "NaN"
             ));
         }
     }

@@ -161,8 +161,20 @@ fn labels_and_non_finite_samples() {
     )
     .unwrap();
     let err = marching_cubes(&bad, IsoSpec::Level(0.5), &CLOSE, Backend::Cpu).unwrap_err();
-    assert!(err.to_string().contains("not finite"), "{err}");
-    assert!(marching_cubes(&vol, IsoSpec::Level(f32::NAN), &CLOSE, Backend::Cpu).is_err());
+    assert!(
+        matches!(
+            err,
+            chisel::Error::InvalidData {
+                at: chisel::Position::Item { kind: "sample", .. },
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(matches!(
+        marching_cubes(&vol, IsoSpec::Level(f32::NAN), &CLOSE, Backend::Cpu),
+        Err(chisel::Error::InvalidParameter { ref name, .. }) if name == "level"
+    ));
 }
 
 #[test]

@@ -126,13 +126,19 @@ fn unused_vertices_keep_dermis_and_muscle_links() {
 #[test]
 fn bad_networks_are_refused() {
     let empty = TriMesh::default();
-    assert!(SpringNetwork::build(&empty, None, &NetworkParams::default()).is_err());
+    assert!(matches!(
+        SpringNetwork::build(&empty, None, &NetworkParams::default()),
+        Err(chisel::Error::Empty { .. })
+    ));
     let m = grid(3, 3);
     let bad_scale = NetworkParams {
         subcutis_scale: f32::NAN,
         ..NetworkParams::default()
     };
-    assert!(SpringNetwork::build(&m, None, &bad_scale).is_err());
+    assert!(matches!(
+        SpringNetwork::build(&m, None, &bad_scale),
+        Err(chisel::Error::InvalidParameter { ref name, .. }) if name == "subcutis_scale"
+    ));
     let bad_origin = NetworkParams {
         origin: Some([0.0, f32::INFINITY, 0.0]),
         ..NetworkParams::default()

@@ -11,6 +11,7 @@ fn one_step_plan(
 ) -> chisel::tissue::ResolvedPlan {
     Plan {
         name: None,
+        dynamics: Default::default(),
         cuts: Vec::new(),
         steps: vec![Step {
             name: Some("move".into()),

@@ -185,13 +185,7 @@ pub(super) fn make_caps(
                         .filter(|pts| nests_as_cap(pts, &index_loops))
                         .map(|pts| (proj, pts))
                 })
-                .ok_or_else(|| {
-                    Error::InvalidInput(
-                        "cap: found no projection pole of the sphere outside the cap regions; \
-                         move the sphere slightly"
-                            .into(),
-                    )
-                })?
+                .ok_or_else(|| Error::from(crate::Refusal::NoCapPole))?
         }
         Kind::Mesh { .. } => return Ok(Vec::new()),
     };

@@ -35,8 +35,12 @@ pub(super) struct ToSplit<'a> {
 }
 
 impl ToSplit<'_> {
-    fn err(&self, why: &str) -> Error {
-        Error::InvalidInput(format!("triangulated knife: {} {why}", self.what))
+    fn err(&self, why: &'static str) -> Error {
+        crate::Refusal::CutCurve {
+            triangle: self.what.to_string(),
+            problem: why,
+        }
+        .into()
     }
 
     fn ends_inside(&self) -> Error {

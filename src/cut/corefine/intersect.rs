@@ -138,11 +138,10 @@ impl Pair<'_> {
     }
 
     fn contact(&self, st: u32, kt: u32) -> Error {
-        Error::InvalidInput(format!(
-            "triangulated knife: knife triangle {kt} touches surface triangle {st} without \
-             crossing it cleanly (a vertex on the other surface, an edge through an edge, or \
-             coplanar triangles); move or tilt the knife slightly"
-        ))
+        Error::from(crate::Refusal::KnifeContact {
+            knife_triangle: kt,
+            surface_triangle: st,
+        })
     }
 
     /// The segment where surface triangle `st` meets knife triangle `kt`.

@@ -71,8 +71,8 @@ fn scan_mesh_knife(mesh: &TriMesh, k: &PreparedKnife<'_>, stats: CutStats) -> Re
         forest,
     } = &k.kind
     else {
-        return Err(Error::InvalidInput(
-            "internal: analytic knife on the mesh-knife path".into(),
+        return Err(Error::Internal(
+            "analytic knife on the mesh-knife path".into(),
         ));
     };
     let pair = corefine::Pair {

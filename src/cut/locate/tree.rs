@@ -17,14 +17,19 @@ pub(crate) fn locate_prepared(
     forest: &Forest,
     k: &PreparedKnife<'_>,
 ) -> Result<Located> {
-    if forest.triangles.len() != mesh.triangles.len() || forest.n_vertices != mesh.positions.len() {
-        return Err(Error::InvalidInput(format!(
-            "cut: the forest was built for a mesh of {} vertices and {} triangles, not {} and {}",
-            forest.n_vertices,
+    if forest.triangles.len() != mesh.triangles.len() {
+        return Err(Error::mismatch(
+            "cut: mesh triangles (the forest's)",
             forest.triangles.len(),
+            mesh.triangles.len(),
+        ));
+    }
+    if forest.n_vertices != mesh.positions.len() {
+        return Err(Error::mismatch(
+            "cut: mesh vertices (the forest's)",
+            forest.n_vertices,
             mesh.positions.len(),
-            mesh.triangles.len()
-        )));
+        ));
     }
     let stats = CutStats {
         nodes_total: forest.n_nodes(),
@@ -112,8 +117,8 @@ fn locate_mesh_knife(
         forest: knife_forest,
     } = &k.kind
     else {
-        return Err(Error::InvalidInput(
-            "internal: analytic knife on the mesh-knife path".into(),
+        return Err(Error::Internal(
+            "analytic knife on the mesh-knife path".into(),
         ));
     };
     let mut tested: Vec<u32> = Vec::new();

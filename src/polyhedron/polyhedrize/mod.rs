@@ -150,7 +150,7 @@ impl ShellGeometry {
         pts.sort_unstable();
         pts.dedup();
         let (Some(&a), Some(&b)) = (pts.first(), pts.last()) else {
-            return Err(crate::Error::InvalidInput("a shell needs a voxel".into()));
+            return Err(crate::Error::empty("voxels of a shell"));
         };
         if a == b {
             return Ok(ShellGeometry::Point(a));

@@ -20,7 +20,7 @@ use super::{
 /// Polyhedrizes `object` ([module docs](super)). `progress` is called with the
 /// number of shells made so far.
 ///
-/// Errors: [`crate::Error::InvalidInput`] for corner candidates, a flat
+/// Errors: [`crate::Error::InvalidParameter`] for corner candidates, a flat
 /// object (no inside) and hull-scan range limits.
 pub fn polyhedrize(
     object: &DigitalObject,
@@ -29,9 +29,10 @@ pub fn polyhedrize(
     progress: &dyn Fn(usize),
 ) -> crate::Result<(Polyhedron, Vec<ZkhReport>)> {
     if options.candidates.at_corners() {
-        return Err(crate::Error::InvalidInput(
-            "polyhedrize puts shell vertices at voxel centres; corner candidates are for hulls only"
-                .into(),
+        return Err(crate::Error::param(
+            "vertices",
+            "corners",
+            "polyhedrize puts shell vertices at voxel centres; corner candidates are for hulls only",
         ));
     }
     let root = ShellGeometry::of_points(&object.candidates(options.candidates), options.hull)?;

@@ -36,9 +36,12 @@ impl Polyhedron {
                     regions[p] = Some(subtract(parent, &region));
                 }
                 Some(p) => {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "shell {i} has parent {p}, which does not come before it"
-                    )));
+                    return Err(crate::Error::data(
+                        "polyhedron",
+                        "shell",
+                        i,
+                        format!("parent {p} does not come before it"),
+                    ));
                 }
                 None => paint(&mut out, bbox, &region),
             }

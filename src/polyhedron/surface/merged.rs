@@ -20,18 +20,14 @@ use super::{MergedFace, MergedSurface};
 impl Polyhedron {
     /// The seed's single merged surface ([module docs](super)).
     ///
-    /// Errors: [`crate::Error::InvalidInput`] when sibling shells are not
-    /// proven separated (disjoint interiors, no common face area), and — for a
-    /// malformed tree only — when the face chain is not the boundary of a
+    /// Errors: [`crate::Refusal::SiblingsNotSeparated`] when sibling shells
+    /// are not proven separated (disjoint interiors, no common face area),
+    /// and [`crate::Refusal::NotARegion`] — for a malformed tree only — when the face chain is not the boundary of a
     /// region (a multiplicity outside −1..=1, an open or crossing loop, a
     /// face that cannot be triangulated).
     pub fn merged_surface(&self) -> crate::Result<MergedSurface> {
         if !self.siblings_separated() {
-            return Err(invalid(
-                "the merged surface needs sibling shells with disjoint interiors \
-                 and no common face area"
-                    .into(),
-            ));
+            return Err(crate::Refusal::SiblingsNotSeparated.into());
         }
         // Effective faces by canonical plane: (sign relative to it, cycle),
         // and the depth of the shell each comes from.
@@ -107,7 +103,7 @@ impl Polyhedron {
 }
 
 fn invalid(msg: String) -> crate::Error {
-    crate::Error::InvalidInput(msg)
+    crate::Refusal::NotARegion(msg).into()
 }
 
 /// The smallest of `depths` whose convex cycle in `polys` (on the plane of

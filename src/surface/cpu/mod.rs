@@ -161,9 +161,11 @@ fn exclusive_sum(counts: impl Iterator<Item = u64>, what: &str) -> Result<Vec<u6
         out.push(sum);
     }
     if sum >= u64::from(u32::MAX) {
-        return Err(Error::InvalidInput(format!(
-            "marching cubes: {sum} {what} exceed 32-bit numbering"
-        )));
+        return Err(Error::limit(
+            format!("marching cubes: {what}"),
+            sum,
+            u32::MAX - 1,
+        ));
     }
     Ok(out)
 }

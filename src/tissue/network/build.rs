@@ -34,9 +34,7 @@ impl SpringNetwork {
         epidermis.validate()?;
         let n = epidermis.n_vertices();
         if n == 0 || epidermis.n_triangles() == 0 {
-            return Err(Error::InvalidInput(
-                "epidermis mesh needs at least one triangle".into(),
-            ));
+            return Err(Error::empty("epidermis mesh triangles"));
         }
         for (name, v) in [
             ("subcutis_scale", params.subcutis_scale),
@@ -44,23 +42,20 @@ impl SpringNetwork {
             ("mass", params.mass),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::InvalidInput(format!(
-                    "network parameter {name} must be finite and > 0, got {v}"
-                )));
+                return Err(Error::param(name, v, "must be finite and > 0"));
             }
         }
         if !(params.damping.is_finite() && params.damping >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "damping must be finite and ≥ 0, got {}",
-                params.damping
-            )));
+            return Err(Error::param(
+                "damping",
+                params.damping,
+                "must be finite and ≥ 0",
+            ));
         }
         let origin = match params.origin {
             Some(o) if o.iter().all(|c| c.is_finite()) => Vec3::from_array(o),
             Some(o) => {
-                return Err(Error::InvalidInput(format!(
-                    "origin must be finite, got {o:?}"
-                )));
+                return Err(Error::param("origin", format!("{o:?}"), "must be finite"));
             }
             None => default_origin(epidermis)?,
         };
@@ -73,7 +68,7 @@ impl SpringNetwork {
             Some(b) => {
                 b.validate()?;
                 if b.n_vertices() == 0 {
-                    return Err(Error::InvalidInput("bone mesh has no vertices".into()));
+                    return Err(Error::empty("bone mesh vertices"));
                 }
                 (
                     b.positions.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect(),
@@ -92,9 +87,7 @@ impl SpringNetwork {
         let n_bone = bone_pos.len();
         let n_nodes = 2 * n + n_bone;
         if n_nodes > MAX_NODES {
-            return Err(Error::InvalidInput(format!(
-                "network would have {n_nodes} nodes; at most {MAX_NODES} are supported"
-            )));
+            return Err(Error::limit("spring network nodes", n_nodes, MAX_NODES));
         }
         let tree = KdTree::new(bone_pos.iter().map(|&p| dvec(p)).collect());
         let mut rest: Vec<[f32; 4]> = Vec::with_capacity(n_nodes);
@@ -108,14 +101,15 @@ impl SpringNetwork {
             ),
             Some(d) => {
                 if bone.is_none() || !(d.is_finite() && d > 0.0 && d < 1.0) {
-                    return Err(Error::InvalidInput(format!(
-                        "subcutis_depth needs a bone mesh and a value in (0, 1), got {d}{}",
+                    return Err(Error::param(
+                        "subcutis_depth",
+                        d,
                         if bone.is_none() {
-                            " without a bone mesh"
+                            "needs a bone mesh (none was given)"
                         } else {
-                            ""
-                        }
-                    )));
+                            "must lie in (0, 1)"
+                        },
+                    ));
                 }
                 let normals =
                     crate::normals::vertex_normals(epidermis, crate::parity::Backend::Cpu)?;
@@ -150,9 +144,11 @@ impl SpringNetwork {
                 .unwrap_or(params.bone_scale / params.subcutis_scale) as f64,
         };
         if !(s.is_finite() && s > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "projection_scale must be finite and > 0, got {s}"
-            )));
+            return Err(Error::param(
+                "projection_scale",
+                s,
+                "must be finite and > 0",
+            ));
         }
         let nearest: Vec<u32> = (0..n)
             .into_par_iter()
@@ -216,15 +212,15 @@ impl SpringNetwork {
             let what = format!("stiffness region {}", r + 1);
             reg.region.validate(&what)?;
             if reg.region.contains(Vec3::ZERO).is_none() {
-                return Err(Error::InvalidInput(format!(
-                    "{what}: regions take a sphere, box or half_space"
-                )));
+                return Err(Error::param(
+                    "region",
+                    reg.region.describe(),
+                    "stiffness regions take a sphere, box or half_space",
+                )
+                .within(what));
             }
             if !(reg.scale.is_finite() && reg.scale > 0.0) {
-                return Err(Error::InvalidInput(format!(
-                    "{what}: scale must be finite and > 0, got {}",
-                    reg.scale
-                )));
+                return Err(Error::param("scale", reg.scale, "must be finite and > 0").within(what));
             }
         }
         let mut springs = Vec::with_capacity(pairs.len());
@@ -241,9 +237,11 @@ impl SpringNetwork {
                     Some(m) => m,
                     None => {
                         if materials.len() == MAX_MATERIALS {
-                            return Err(Error::InvalidInput(format!(
-                                "stiffness regions need more than {MAX_MATERIALS} distinct spring materials"
-                            )));
+                            return Err(Error::limit(
+                                "distinct spring materials of the stiffness regions",
+                                MAX_MATERIALS + 1,
+                                MAX_MATERIALS,
+                            ));
                         }
                         materials.push(params.stiffness.of(class).scaled(reg.scale));
                         let m = (materials.len() - 1) as u8;
@@ -289,36 +287,52 @@ impl SpringNetwork {
         damping: f32,
     ) -> Result<SpringNetwork> {
         if n_free > positions.len() || positions.len() > MAX_NODES {
-            return Err(Error::InvalidInput(format!(
-                "{n_free} free nodes of {} (at most {MAX_NODES} nodes)",
-                positions.len()
-            )));
+            return Err(if positions.len() > MAX_NODES {
+                Error::limit("spring network nodes", positions.len(), MAX_NODES)
+            } else {
+                Error::param(
+                    "n_free",
+                    n_free,
+                    format!("must be at most the {} nodes", positions.len()),
+                )
+            });
         }
         if materials.is_empty() || materials.len() > MAX_MATERIALS {
-            return Err(Error::InvalidInput(format!(
-                "need 1..={MAX_MATERIALS} materials, got {}",
-                materials.len()
-            )));
+            return Err(Error::param(
+                "materials",
+                materials.len(),
+                format!("need 1..={MAX_MATERIALS} materials"),
+            ));
         }
         for m in materials {
             check_material(m, "material")?;
         }
-        if positions.iter().any(|p| !p.is_finite()) {
-            return Err(Error::InvalidInput("non-finite node position".into()));
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::data(
+                "spring network",
+                "node",
+                i,
+                format!("position {} is not finite", positions[i]),
+            ));
         }
         let rest: Vec<[f32; 4]> = positions.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
         let mut list = Vec::with_capacity(springs.len());
-        for &(a, b, m) in springs {
+        for (i, &(a, b, m)) in springs.iter().enumerate() {
             if a == b || a as usize >= rest.len() || b as usize >= rest.len() {
-                return Err(Error::InvalidInput(format!(
-                    "spring ({a}, {b}) is a loop or names a missing node"
-                )));
+                return Err(Error::data(
+                    "spring network",
+                    "spring",
+                    i,
+                    format!("({a}, {b}) is a loop or names a missing node"),
+                ));
             }
             if m as usize >= materials.len() {
-                return Err(Error::InvalidInput(format!(
-                    "spring ({a}, {b}) uses material {m} of {}",
-                    materials.len()
-                )));
+                return Err(Error::data(
+                    "spring network",
+                    "spring",
+                    i,
+                    format!("({a}, {b}) uses material {m} of {}", materials.len()),
+                ));
             }
             let (a, b) = (a.min(b), a.max(b));
             let class = if a as usize >= n_free {
@@ -342,9 +356,11 @@ impl SpringNetwork {
             ..NetworkParams::default()
         };
         if !(mass.is_finite() && mass > 0.0 && damping.is_finite() && damping >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "mass must be > 0 and damping ≥ 0, got {mass}, {damping}"
-            )));
+            return Err(if mass.is_finite() && mass > 0.0 {
+                Error::param("damping", damping, "must be finite and ≥ 0")
+            } else {
+                Error::param("mass", mass, "must be finite and > 0")
+            });
         }
         let mut net = SpringNetwork {
             params,
@@ -366,9 +382,12 @@ impl SpringNetwork {
 fn check_material(m: &Material, what: &str) -> Result<()> {
     let ok = |v: f32| v.is_finite() && v >= 0.0;
     if !(ok(m.c1) && ok(m.c2) && ok(m.knee)) || m.c_max() == 0.0 {
-        return Err(Error::InvalidInput(format!(
-            "{what}: c1, c2, knee must be finite and ≥ 0 with c1 or c2 > 0, got {m:?}"
-        )));
+        return Err(Error::param(
+            "c1, c2, knee",
+            format!("{}, {}, {}", m.c1, m.c2, m.knee),
+            "must be finite and ≥ 0 with c1 or c2 > 0",
+        )
+        .within(what));
     }
     Ok(())
 }

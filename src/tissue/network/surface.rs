@@ -18,7 +18,7 @@ use crate::{Error, Result};
 pub fn default_origin(mesh: &TriMesh) -> Result<Vec3> {
     let (lo, hi) = mesh
         .bounds()
-        .ok_or_else(|| Error::InvalidInput("epidermis mesh has no vertices".into()))?;
+        .ok_or_else(|| Error::empty("epidermis mesh vertices"))?;
     let centre = (lo + hi) * 0.5;
     let edges = unique_edges(&mesh.triangles);
     let closed = !edges.is_empty() && edge_use_all_even(&mesh.triangles, &edges);

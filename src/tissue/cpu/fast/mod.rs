@@ -117,10 +117,11 @@ impl<'a> SpringGather<'a> {
     /// a time; an error where this CPU lacks that width.
     pub fn new(csr: &'a SpringCsr, n_free: usize, lanes: Lanes) -> Result<Self, crate::Error> {
         if !lanes.is_available() {
-            return Err(crate::Error::InvalidInput(format!(
-                "this CPU cannot gather {}",
-                lanes.name()
-            )));
+            return Err(crate::Error::param(
+                "lanes",
+                lanes.name(),
+                "this CPU lacks the instructions to gather that many lanes",
+            ));
         }
         Ok(Self::arrange(csr, n_free, lanes))
     }

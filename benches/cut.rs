@@ -7,8 +7,8 @@
 use std::time::{Duration, Instant};
 
 use chisel::Backend;
-use chisel::cut::{CutOptions, Knife, cut, cut_full_scan, locate, locate_full_scan};
-use chisel::surface::{IsoSpec, McOptions, marching_cubes};
+use chisel::cut::{CutOptions, Knife, cut, cut_brute_force, locate, locate_brute_force};
+use chisel::mc::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 use glam::DVec3;
@@ -110,7 +110,10 @@ fn main() {
     let mut pairs: Vec<(f64, f64)> = (0..9)
         .map(|_| {
             let tree = sweep(&|k| std::mem::drop(locate(mesh, &surf.forest, k)));
-            (tree, sweep(&|k| std::mem::drop(locate_full_scan(mesh, k))))
+            (
+                tree,
+                sweep(&|k| std::mem::drop(locate_brute_force(mesh, k))),
+            )
         })
         .collect();
     let median = |mut v: Vec<f64>| {
@@ -129,7 +132,7 @@ fn main() {
             pool.install(|| {
                 time(&|| {
                     for k in &knives {
-                        let _ = locate_full_scan(mesh, k);
+                        let _ = locate_brute_force(mesh, k);
                     }
                 })
             })
@@ -148,7 +151,7 @@ fn main() {
     });
     let scan_cut = time(&|| {
         for k in &knives {
-            let _ = cut_full_scan(mesh, k, &cap);
+            let _ = cut_brute_force(mesh, k, &cap);
         }
     });
     let mut visited = (0, 0, 0, 0);
@@ -185,10 +188,10 @@ fn main() {
             }
         })
     });
-    group.bench_function("locate_scan", |b| {
+    group.bench_function("locate_brute_force", |b| {
         b.iter(|| {
             for k in &knives {
-                std::hint::black_box(locate_full_scan(mesh, k).ok());
+                std::hint::black_box(locate_brute_force(mesh, k).ok());
             }
         })
     });
@@ -199,10 +202,10 @@ fn main() {
             }
         })
     });
-    group.bench_function("capped_scan", |b| {
+    group.bench_function("capped_brute_force", |b| {
         b.iter(|| {
             for k in &knives {
-                std::hint::black_box(cut_full_scan(mesh, k, &cap).ok());
+                std::hint::black_box(cut_brute_force(mesh, k, &cap).ok());
             }
         })
     });

@@ -15,7 +15,7 @@ mod common;
 use std::time::Duration;
 
 use chisel::gpu::Gpu;
-use chisel::normals::{self, NormalsInput};
+use chisel::vertex_normals::{self, NormalsInput};
 use chisel::{exclusive_scan, reduce};
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
 
@@ -85,13 +85,13 @@ fn bench_vertex_normals(c: &mut Criterion, gpu: Option<&Gpu>) {
             bytes: 36 * nv + 24 * nf,
         });
         g.bench_with_input(BenchmarkId::new("cpu", nv), &input, |b, i| {
-            b.iter(|| normals::cpu::vertex_normals(i))
+            b.iter(|| vertex_normals::cpu::vertex_normals(i))
         });
         if let Some(gpu) = gpu {
             g.bench_with_input(BenchmarkId::new("gpu_end_to_end", nv), &input, |b, i| {
-                b.iter(|| normals::gpu::vertex_normals(gpu, i).expect("gpu"))
+                b.iter(|| vertex_normals::gpu::vertex_normals(gpu, i).expect("gpu"))
             });
-            let buffers = normals::gpu::NormalsBuffers::upload(gpu, &input).expect("upload");
+            let buffers = vertex_normals::gpu::NormalsBuffers::upload(gpu, &input).expect("upload");
             g.bench_function(BenchmarkId::new("gpu_resident", nv), |b| {
                 b.iter(|| {
                     run_resident(gpu, "vertex_normals", |e| {

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 use chisel::Backend;
 use chisel::foundation::{Forest, vertex_components};
 use chisel::gpu::Gpu;
-use chisel::surface::{Field, IsoSpec, LEAF_BLOCK, McOptions, Surface, gpu, marching_cubes};
+use chisel::mc::{Field, IsoSpec, LEAF_BLOCK, McOptions, Surface, gpu, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         normals reduce exclusive_scan surface hull_scan hull polyhedron cut tissue
+//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue
 //!  ③ GPU, parity   gpu (context, kernel specs, pass builder, buffers), parity (Backend, Tolerance)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -26,6 +26,7 @@
 //! Every kernel is reachable through [`Backend::Cpu`] and [`Backend::Gpu`];
 //! `tests/parity/` proves they agree.
 
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod cut;
 pub mod error;
@@ -35,15 +36,15 @@ pub mod gpu;
 pub mod hull;
 pub mod hull_scan;
 pub mod io;
+pub mod mc;
 pub mod mesh;
-pub mod normals;
 pub mod parity;
 pub mod phantom;
 pub mod polyhedron;
 pub mod reduce;
 pub mod render;
-pub mod surface;
 pub mod tissue;
+pub mod vertex_normals;
 pub mod volume;
 pub mod voxel;
 

@@ -5,8 +5,8 @@
 
 mod common;
 
+use chisel::mc::{IsoSpec, McOptions, marching_cubes};
 use chisel::mesh::{Collapsed, Topology, collapse_short_edges, self_intersections};
-use chisel::surface::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use chisel::{Backend, TriMesh};
 use glam::Vec3;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::{Error, exclusive_scan, hull_scan, normals, reduce, surface};
+use chisel::{Error, exclusive_scan, hull_scan, mc, reduce, vertex_normals};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn root() -> PathBuf {
@@ -138,7 +138,7 @@ fn encase_bytes<T: encase::ShaderType + encase::internal::WriteInto>(v: &T) -> V
 fn params_sample(kernel: Kernel) -> Sample {
     match kernel {
         Kernel::VertexNormals => (
-            encase_bytes(&normals::gpu::Params { n_vertices: 0xA1 }),
+            encase_bytes(&vertex_normals::gpu::Params { n_vertices: 0xA1 }),
             vec![("n_vertices", 0xA1)],
         ),
         Kernel::BoundsReduce | Kernel::RangeReduce => (
@@ -153,7 +153,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             vec![("n", 0xC1)],
         ),
         Kernel::McClassify => (
-            encase_bytes(&surface::gpu::ClassifyParams {
+            encase_bytes(&mc::gpu::ClassifyParams {
                 nx: 0xD1,
                 ny: 0xD2,
                 nz: 0xD3,
@@ -175,7 +175,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             ],
         ),
         Kernel::McVertices => (
-            encase_bytes(&surface::gpu::VerticesParams {
+            encase_bytes(&mc::gpu::VerticesParams {
                 nx: 0xE1,
                 ny: 0xE2,
                 nz: 0xE3,
@@ -201,7 +201,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             ],
         ),
         Kernel::McTriangles => (
-            encase_bytes(&surface::gpu::TrianglesParams {
+            encase_bytes(&mc::gpu::TrianglesParams {
                 nx: 0xF1,
                 ny: 0xF2,
                 nz: 0xF3,
@@ -302,7 +302,7 @@ fn mirrors_use_their_kernels_constants() {
         assert_eq!(spec(k).wg_size as usize, exclusive_scan::cpu::WG_SIZE);
     }
     for k in [Kernel::McClassify, Kernel::McVertices, Kernel::McTriangles] {
-        assert_eq!(spec(k).wg_size, surface::mirror::WG_SIZE);
+        assert_eq!(spec(k).wg_size, mc::mirror::WG_SIZE);
     }
 }
 

@@ -22,9 +22,9 @@ use super::relax::{
 };
 use super::report::{Report, Show};
 use crate::gpu::GpuFeatures;
+use crate::mc::McOptions;
 use crate::parity::Backend;
 use crate::render::{Facing, View};
-use crate::surface::McOptions;
 use crate::tissue::RelaxReport;
 use crate::tissue::ct::CtFigures;
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
@@ -139,8 +139,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 
     let t = Instant::now();
     let mc = |level: f32, backend| {
-        let iso = crate::surface::IsoSpec::Level(level);
-        crate::surface::marching_cubes(&volume, iso, &McOptions::default(), backend)
+        let iso = crate::mc::IsoSpec::Level(level);
+        crate::mc::marching_cubes(&volume, iso, &McOptions::default(), backend)
     };
     let (skin_gpu, bone_gpu) = (
         mc(SKIN_LEVEL, Backend::Gpu(&gpu))?,

@@ -8,9 +8,9 @@ use serde::Serialize;
 
 use super::report::{Report, Show};
 use super::{BackendChoice, Global, ViewAxes};
+use crate::mc::{Group, IsoSpec, McOptions, marching_cubes};
 use crate::parity::Backend;
 use crate::render::{RenderOptions, View};
-use crate::surface::{Group, IsoSpec, McOptions, marching_cubes};
 
 /// The report of `chisel mc`.
 #[derive(Debug, Serialize)]

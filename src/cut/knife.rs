@@ -3,7 +3,7 @@
 //!
 //! Every decision is a pure function of the edge's two endpoint positions,
 //! taken in canonical order (lower vertex id first), evaluated in f64. The
-//! tree query and the full scan call the same functions, so they agree
+//! tree query and the brute-force locate call the same functions, so they agree
 //! exactly; box tests are conservative (a margin of 1e-9 of the scene
 //! scale), so a box declared clear never holds a crossed edge.
 

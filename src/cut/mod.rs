@@ -2,7 +2,7 @@
 //!
 //! ```text
 //!  mesh + Forest ──locate (tree: expand only nodes the knife may touch)──┐
-//!  mesh ───────────locate_full_scan (every triangle)─────────────────────┤
+//!  mesh ───────────locate_brute_force (every triangle)───────────────────┤
 //!                                                                        ▼
 //!        Located: crossed triangles, cut points (identical either way)
 //!                                                                        ▼
@@ -13,11 +13,11 @@
 //! Files by phase:
 //!
 //! ```text
-//!  mod.rs            API: options, stats, results; cut, cut_mesh, cut_full_scan,
-//!                    cut_sequence, locate, locate_full_scan; polyhedral fallback
+//!  mod.rs            API: options, stats, results; cut, cut_mesh, cut_brute_force,
+//!                    cut_sequence, locate, locate_brute_force; polyhedral fallback
 //!  knife.rs          knife geometry: sides, crossings, box tests
 //!  locate/tree.rs    the tree walk (node classes) ─┐
-//!  locate/scan.rs    the full scan ────────────────┴─▶ locate/finish.rs: Located
+//!  locate/brute_force.rs  every triangle ─────────┴─▶ locate/finish.rs: Located
 //!  split.rs          assemble; split by an analytic knife (sub-triangles, caps)
 //!  corefine/         triangulated knives: exact intersection (intersect.rs),
 //!                    triangle splitting (face.rs), split and caps (mod.rs)
@@ -59,7 +59,7 @@ pub use knife::{Crossing, Knife, SPHERE_CHORD_ERROR, Side};
 
 use crate::foundation::Forest;
 use crate::{Error, Refusal, Result, TriMesh};
-use locate::{locate_prepared, locate_scan_prepared};
+use locate::{locate_brute_force_prepared, locate_prepared};
 use split::assemble;
 
 /// Options of [`cut`].
@@ -85,7 +85,7 @@ pub struct NodeClasses {
 /// What a cut did.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct CutStats {
-    /// Tree nodes whose box was classified (0 for a full scan).
+    /// Tree nodes whose box was classified (0 for a brute-force locate).
     pub nodes_visited: usize,
     /// Tree nodes in the forest.
     pub nodes_total: usize,
@@ -231,13 +231,13 @@ pub fn cut_mesh(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutR
 
 /// The same cut by a plain scan of every triangle (the comparison the
 /// tree is measured against); gives identical pieces.
-pub fn cut_full_scan(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
+pub fn cut_brute_force(mesh: &TriMesh, knife: &Knife, opts: &CutOptions) -> Result<CutResult> {
     let t0 = Instant::now();
     let prepared = knife.prepare(scene_scale(mesh))?;
-    let mut located = locate_scan_prepared(mesh, &prepared)?;
+    let mut located = locate_brute_force_prepared(mesh, &prepared)?;
     located.stats.locate_seconds = t0.elapsed().as_secs_f64();
     let analytic = assemble(mesh, located, &prepared, opts, None)?;
-    polyhedral_if_crossed(knife, opts, analytic, |k| cut_full_scan(mesh, k, opts))
+    polyhedral_if_crossed(knife, opts, analytic, |k| cut_brute_force(mesh, k, opts))
 }
 
 /// Several knives in sequence: each cuts every piece of the previous one.
@@ -324,7 +324,7 @@ pub fn locate(mesh: &TriMesh, forest: &Forest, knife: &Knife) -> Result<Located>
 }
 
 /// Locates the cut by scanning every triangle (public for benchmarks and tests).
-pub fn locate_full_scan(mesh: &TriMesh, knife: &Knife) -> Result<Located> {
+pub fn locate_brute_force(mesh: &TriMesh, knife: &Knife) -> Result<Located> {
     let prepared = knife.prepare(scene_scale(mesh))?;
-    locate_scan_prepared(mesh, &prepared)
+    locate_brute_force_prepared(mesh, &prepared)
 }

@@ -14,8 +14,8 @@ use super::camera::ViewCamera;
 use super::colormap::linear_stops;
 use crate::gpu::{Gpu, GpuArray, Shader, UniformBuffer, preprocess};
 use crate::mesh::TriMesh;
-use crate::normals::NormalsInput;
-use crate::normals::gpu::NormalsBuffers;
+use crate::vertex_normals::NormalsInput;
+use crate::vertex_normals::gpu::NormalsBuffers;
 use crate::{Error, Result};
 
 /// Colour target: 8-bit sRGB (shaders work in linear light, hardware encodes).

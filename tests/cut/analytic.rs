@@ -13,7 +13,7 @@ fn plane_cut_of_a_ball_gives_two_closed_halves() {
     assert_eq!(r.stats.loops_capped, 1);
     assert_eq!(r.stats.curves_open, 0);
     assert_conserved(&s.mesh, &r, 1e-6, "ball/plane");
-    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
     // Sub-linear: the tree visits fewer nodes and tests fewer triangles.
     assert!(
         r.stats.triangles_tested * 4 < r.stats.triangles_total,
@@ -55,7 +55,7 @@ fn knives_through_mesh_vertices_reuse_them() {
             assert_clean(p, &format!("knife {i} piece {j}"));
         }
         assert_conserved(&s.mesh, &r, 1e-9, &format!("knife {i}"));
-        same_result(&r, &cut_full_scan(&s.mesh, k, &CAP).unwrap());
+        same_result(&r, &cut_brute_force(&s.mesh, k, &CAP).unwrap());
     }
     // A mesh knife after such a cut finds no degenerate triangle to refuse.
     let mut ball = common::icosphere(3);
@@ -129,7 +129,7 @@ fn hollow_shell_cut_gets_annular_caps() {
     );
     assert_eq!(r.stats.loops_capped, 2);
     assert_conserved(&s.mesh, &r, 1e-6, "shell/plane");
-    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
 }
 
 /// Regrouping runs in parallel chunks of 65,536 input triangles: on a
@@ -186,7 +186,7 @@ fn sphere_cut_takes_a_bite() {
     assert_eq!(r.pieces.len(), 2);
     assert!(r.sides.contains(&Side::Negative) && r.sides.contains(&Side::Positive));
     assert_conserved(&s.mesh, &r, 1e-6, "ball/sphere");
-    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
     assert!(
         r.stats.triangles_tested * 2 < r.stats.triangles_total,
         "{:?}",
@@ -243,5 +243,5 @@ fn rectangle_that_cuts_through_equals_the_plane_and_partial_one_keeps_one_piece(
         }
     }
     assert!(open > 0);
-    same_result(&r, &cut_full_scan(&s.mesh, &small, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &small, &CAP).unwrap());
 }

@@ -1,4 +1,4 @@
-//! Knife location: the tree equals the full scan, leaf tables, and a forest
+//! Knife location: the tree equals the brute-force locate, leaf tables, and a forest
 //! of another mesh is refused.
 
 use super::*;
@@ -40,7 +40,7 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
         ..s.forest.clone()
     };
     for k in &knives {
-        let scan = locate_full_scan(&s.mesh, k).unwrap();
+        let scan = locate_brute_force(&s.mesh, k).unwrap();
         assert!(!scan.triangles.is_empty(), "{k:?} misses the shell");
         let tree = locate(&s.mesh, &s.forest, k).unwrap();
         same_located(&tree, &scan, "marching-cubes forest");

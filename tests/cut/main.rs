@@ -1,4 +1,4 @@
-//! Scalpel cuts: closed pieces, conserved volume, tree = full scan, the
+//! Scalpel cuts: closed pieces, conserved volume, tree = brute force, the
 //! tree visits fewer nodes and triangles than exist (counts, never time).
 
 mod analytic;
@@ -11,11 +11,11 @@ mod triangulated;
 use std::collections::HashMap;
 
 use chisel::cut::{
-    CutOptions, CutResult, Knife, Located, SPHERE_CHORD_ERROR, Side, cut, cut_full_scan, cut_mesh,
-    cut_sequence, locate, locate_full_scan,
+    CutOptions, CutResult, Knife, Located, SPHERE_CHORD_ERROR, Side, cut, cut_brute_force,
+    cut_mesh, cut_sequence, locate, locate_brute_force,
 };
 use chisel::foundation::Forest;
-use chisel::surface::{IsoSpec, McOptions, Surface, marching_cubes};
+use chisel::mc::{IsoSpec, McOptions, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 use chisel::{Backend, TriMesh};
 use glam::DVec3;
@@ -67,7 +67,7 @@ fn assert_conserved(orig: &TriMesh, r: &CutResult, rel: f64, what: &str) {
 }
 
 fn same_result(a: &CutResult, b: &CutResult) {
-    assert_eq!(a.pieces, b.pieces, "tree and full scan differ");
+    assert_eq!(a.pieces, b.pieces, "tree and brute force differ");
     assert_eq!(a.sides, b.sides);
     assert_eq!(a.stats.triangles_split, b.stats.triangles_split);
     assert_eq!(a.stats.cut_vertices, b.stats.cut_vertices);

@@ -33,7 +33,7 @@ fn sphere_caps_follow_the_sphere() {
     let r = cut(&s.mesh, &s.forest, &k, &CAP).unwrap();
     assert_eq!(r.pieces.len(), 2);
     assert_conserved(&s.mesh, &r, 1e-6, "box/sphere");
-    same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
     let inside = &r.pieces[r.sides.iter().position(|s| *s == Side::Negative).unwrap()];
     // Off the face, every vertex of the bite is on the sphere (f32).
     let mut off_face = 0;
@@ -71,7 +71,7 @@ fn grazing_sphere_caps_do_not_cross_the_surface() {
         let what = format!("box/grazing sphere {depth}");
         assert_eq!(r.pieces.len(), 2, "{what}");
         assert_conserved(&s.mesh, &r, 1e-6, &what);
-        same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+        same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
         for (i, piece) in r.pieces.iter().enumerate() {
             let x = chisel::mesh::self_intersections(piece);
             assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);
@@ -207,7 +207,7 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     let r = cut(&s.mesh, &s.forest, &p, &CAP).unwrap();
     assert!(r.pieces.len() >= 2);
     assert_conserved(&s.mesh, &r, 1e-6, "headsq/plane");
-    same_result(&r, &cut_full_scan(&s.mesh, &p, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &p, &CAP).unwrap());
     assert!(
         r.stats.triangles_tested * 3 < r.stats.triangles_total,
         "{:?}",
@@ -225,7 +225,7 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     let r = cut(&s.mesh, &s.forest, &sph, &CAP).unwrap();
     assert!(r.pieces.len() >= 2);
     assert_conserved(&s.mesh, &r, 1e-6, "headsq/sphere");
-    same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &sph, &CAP).unwrap());
     eprintln!("headsq sphere cut: {:?}", r.stats);
     // This sphere crosses two edges of a sliver (ends 0.0015 apart) near
     // their shared corner; both crossings round to one f32 point, which is
@@ -236,7 +236,7 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     };
     let r = cut(&s.mesh, &s.forest, &sph, &CAP).unwrap();
     assert_conserved(&s.mesh, &r, 1e-6, "headsq/sphere 35");
-    same_result(&r, &cut_full_scan(&s.mesh, &sph, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &sph, &CAP).unwrap());
     for (i, piece) in r.pieces.iter().enumerate() {
         assert_clean(piece, &format!("headsq/sphere 35 piece {i}"));
         let x = chisel::mesh::self_intersections(piece);
@@ -280,7 +280,7 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
         assert!(r.stats.cap_crossings > 0, "{what}: {:?}", r.stats);
         assert!(r.pieces.len() >= 2, "{what}");
         assert_conserved(&s.mesh, &r, 1e-6, &what);
-        same_result(&r, &cut_full_scan(&s.mesh, &k, &CAP).unwrap());
+        same_result(&r, &cut_brute_force(&s.mesh, &k, &CAP).unwrap());
         for (i, piece) in r.pieces.iter().enumerate() {
             let x = chisel::mesh::self_intersections(piece);
             assert!(x.pairs.is_empty(), "{what} piece {i}: {:?}", x.pairs);

@@ -16,7 +16,7 @@ fn triangulated_knife_cuts_like_the_plane_it_samples() {
         assert_eq!(r.pieces.len(), 2);
         assert_eq!(r.sides, p.sides);
         assert_eq!(r.stats.curves_open, 0);
-        same_result(&r, &cut_full_scan(&s.mesh, &knife, &opts).unwrap());
+        same_result(&r, &cut_brute_force(&s.mesh, &knife, &opts).unwrap());
         // The knife's diagonal adds cut points inside surface triangles, so
         // the triangles differ from the plane's; the halves do not.
         let (a, b) = (side_volumes(&r, c), side_volumes(&p, c));
@@ -118,7 +118,7 @@ fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open(
     assert_eq!(balls, 2);
     same_result(
         &r,
-        &cut_full_scan(&s.mesh, &Knife::Mesh(sheet(z)), &CAP).unwrap(),
+        &cut_brute_force(&s.mesh, &Knife::Mesh(sheet(z)), &CAP).unwrap(),
     );
 }
 
@@ -186,7 +186,7 @@ fn closed_triangulated_knife_bites_a_marching_cubes_ball_like_the_sphere() {
     let r = cut(&s.mesh, &s.forest, &knife, &CAP).unwrap();
     assert_eq!(r.pieces.len(), 2);
     assert_conserved(&s.mesh, &r, 1e-6, "ball/icosphere");
-    same_result(&r, &cut_full_scan(&s.mesh, &knife, &CAP).unwrap());
+    same_result(&r, &cut_brute_force(&s.mesh, &knife, &CAP).unwrap());
     assert!(r.stats.triangles_tested * 2 < r.stats.triangles_total);
     let sph = cut(
         &s.mesh,

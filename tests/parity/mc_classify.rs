@@ -1,9 +1,9 @@
-//! Parity of `mc_classify` against `surface::mirror::mc_classify`: the
+//! Parity of `mc_classify` against `mc::mirror::mc_classify`: the
 //! block counts are integers and compare exactly, on every fixture of
 //! [`super::mc_kernels`].
 
+use chisel::mc::gpu;
 use chisel::parity::{compare_exact, find_sentinel};
-use chisel::surface::gpu;
 
 use super::mc_kernels::fixtures;
 use crate::common;

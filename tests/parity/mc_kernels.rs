@@ -1,15 +1,15 @@
 //! The inputs of the three marching-cubes kernels, made by their mirrors in
-//! sequence (`surface::mirror`), for the per-kernel parity modules
+//! sequence (`mc::mirror`), for the per-kernel parity modules
 //! `mc_classify`, `mc_vertices` and `mc_triangles`: each GPU kernel runs on
 //! exactly the inputs its mirror gets, so a divergence names its kernel.
 //! A stage set covers the whole grid, or one emission slab `[a, b)` of
 //! point layers with the offsets and sample window the production path
-//! gives it (`surface::gpu`).
+//! gives it (`mc::gpu`).
 
+use chisel::mc::gpu::{ClassifyParams, TrianglesParams, VerticesParams};
+use chisel::mc::mirror::{self, WG_SIZE};
+use chisel::mc::{Field, IsoSpec, tables};
 use chisel::parity::Mismatch;
-use chisel::surface::gpu::{ClassifyParams, TrianglesParams, VerticesParams};
-use chisel::surface::mirror::{self, WG_SIZE};
-use chisel::surface::{Field, IsoSpec, tables};
 use chisel::volume::{Volume, VolumeData};
 
 use crate::common;
@@ -229,7 +229,7 @@ pub fn compare_positions(
 /// fixture volume and on the real CT.
 #[test]
 fn mc_fast_cpu_path_equals_the_chained_mirrors() {
-    use chisel::surface::{cpu, gpu};
+    use chisel::mc::{cpu, gpu};
     let mut cases = vec![
         (random_volume(1, [23, 17, 11]), IsoSpec::Level(1000.0)),
         (random_volume(5, [40, 30, 24]), IsoSpec::Level(1000.5)),

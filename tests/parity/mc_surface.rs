@@ -1,5 +1,5 @@
 //! Parity of marching cubes (`mc_classify`, `mc_vertices`, `mc_triangles`)
-//! against the CPU mirror `surface::cpu`.
+//! against the CPU mirror `mc::cpu`.
 //!
 //! Both sides compute `t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN)`
 //! and `u[axis] = f32(p[axis]) + t` with the same f32 operations (one
@@ -17,8 +17,8 @@ use std::collections::BTreeMap;
 
 use chisel::Backend;
 use chisel::gpu::{Gpu, GpuOptions};
+use chisel::mc::{self, Field, IsoSpec, McOptions, Surface};
 use chisel::parity::{Mismatch, Tolerance, compare_exact, compare_vec, find_sentinel};
-use chisel::surface::{self, Field, IsoSpec, McOptions, Surface};
 use chisel::volume::{Volume, VolumeData};
 
 use super::mc_kernels::random_volume;
@@ -101,8 +101,8 @@ fn check(gpu: &Gpu, what: &str, vol: &Volume, iso: IsoSpec, close: bool) {
     let opts = McOptions {
         close_border: close,
     };
-    let c = surface::marching_cubes(vol, iso, &opts, Backend::Cpu).unwrap();
-    let g = surface::marching_cubes(vol, iso, &opts, Backend::Gpu(gpu)).unwrap();
+    let c = mc::marching_cubes(vol, iso, &opts, Backend::Cpu).unwrap();
+    let g = mc::marching_cubes(vol, iso, &opts, Backend::Gpu(gpu)).unwrap();
     assert!(
         !c.mesh.triangles.is_empty(),
         "{what}: empty surface proves nothing"
@@ -182,7 +182,7 @@ fn mc_sentinels_and_negative_control() {
     let vol = random_volume(3, [20, 18, 16]);
     let iso = IsoSpec::Level(1000.5);
     let field = Field::new(&vol, iso, true).unwrap();
-    let raw = surface::gpu::marching_cubes_raw(gpu, &field).unwrap();
+    let raw = mc::gpu::marching_cubes_raw(gpu, &field).unwrap();
     assert!(!raw.triangles.is_empty());
     // Kernel time on the GPU clock exactly when the device has timestamps.
     match raw.kernel_seconds {
@@ -198,9 +198,9 @@ fn mc_sentinels_and_negative_control() {
             .iter()
             .all(|p| p[..3].iter().all(|c| c.is_finite()))
     );
-    let cpu = surface::marching_cubes(&vol, iso, &McOptions { close_border: true }, Backend::Cpu)
-        .unwrap();
-    let ok = surface::finish(&field, surface::gpu::assemble(raw.clone()));
+    let cpu =
+        mc::marching_cubes(&vol, iso, &McOptions { close_border: true }, Backend::Cpu).unwrap();
+    let ok = mc::finish(&field, mc::gpu::assemble(raw.clone()));
     let tol = position_tolerance(&vol);
     compare("unchanged", &cpu, &ok, tolerance_on(gpu, &vol)).unwrap();
     // One grid coordinate off by twice the tolerance (in grid units, so the
@@ -208,7 +208,7 @@ fn mc_sentinels_and_negative_control() {
     let slack = (tol.abs + tol.rel * 64.0) / vol.spacing[1] as f32;
     let mut bad = raw.clone();
     bad.positions[7][1] += 2.0 * slack;
-    let s = surface::finish(&field, surface::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad));
     assert!(
         compare("off by twice the bound", &cpu, &s, tol).is_err(),
         "comparator missed a position twice the tolerance away"
@@ -216,7 +216,7 @@ fn mc_sentinels_and_negative_control() {
     // On a software adapter one ulp is already a mismatch.
     let mut bad = raw.clone();
     bad.positions[7][1] = f32::from_bits(bad.positions[7][1].to_bits() + 1);
-    let s = surface::finish(&field, surface::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad));
     assert!(
         compare("one ulp", &cpu, &s, Tolerance::EXACT).is_err(),
         "exact comparator missed a 1-ulp position"
@@ -225,7 +225,7 @@ fn mc_sentinels_and_negative_control() {
     let mut bad = raw;
     let t = bad.triangles.len() / 2;
     bad.triangles[t].swap(0, 1);
-    let s = surface::finish(&field, surface::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad));
     assert!(
         compare("flipped", &cpu, &s, tol).is_err(),
         "comparator missed a flipped triangle"

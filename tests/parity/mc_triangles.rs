@@ -1,9 +1,9 @@
-//! Parity of `mc_triangles` against `surface::mirror::mc_triangles` on the
+//! Parity of `mc_triangles` against `mc::mirror::mc_triangles` on the
 //! mirror's block offsets and `vert_base`: triangles (vertex ids and cell)
 //! compare exactly.
 
+use chisel::mc::gpu;
 use chisel::parity::{compare_exact, find_sentinel};
-use chisel::surface::gpu;
 
 use super::mc_kernels::{Stages, fixtures};
 use crate::common;

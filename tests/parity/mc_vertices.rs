@@ -1,12 +1,12 @@
-//! Parity of `mc_vertices` against `surface::mirror::mc_vertices` on the
+//! Parity of `mc_vertices` against `mc::mirror::mc_vertices` on the
 //! mirror's own block offsets: `vert_base` and the edge ids exactly, the
 //! positions bit for bit on a software adapter (correctly rounded division)
-//! and within `surface::mirror::TOL_POSITION_ULPS` elsewhere.
+//! and within `mc::mirror::TOL_POSITION_ULPS` elsewhere.
 
 use chisel::gpu::Gpu;
+use chisel::mc::gpu;
+use chisel::mc::mirror::TOL_POSITION_ULPS;
 use chisel::parity::compare_exact;
-use chisel::surface::gpu;
-use chisel::surface::mirror::TOL_POSITION_ULPS;
 
 use super::mc_kernels::{Stages, compare_positions, fixtures};
 use crate::common;

@@ -1,12 +1,12 @@
-//! Parity of `kernels/vertex_normals.wgsl` against `normals::cpu`, plus an
+//! Parity of `kernels/vertex_normals.wgsl` against `vertex_normals::cpu`, plus an
 //! independent f64 oracle (textbook area-weighted normals) checked against
 //! analytic cases and against the f32 results.
 
 use chisel::TriMesh;
 use chisel::gpu::Gpu;
-use chisel::normals::gpu::NormalsBuffers;
-use chisel::normals::{NormalsInput, cpu};
 use chisel::parity::{Tolerance, compare_vec, find_sentinel};
+use chisel::vertex_normals::gpu::NormalsBuffers;
+use chisel::vertex_normals::{NormalsInput, cpu};
 use glam::{DVec3, Vec3};
 
 use crate::common;

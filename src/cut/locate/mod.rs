@@ -1,17 +1,17 @@
 //! Locating a cut, the first phase of [`super::cut`]: takes a mesh, a
 //! prepared knife and (for the tree) the mesh's forest, and returns a
 //! [`Located`](super::Located): the crossed triangles ascending and their
-//! cut points, the same from the tree walk ([`tree`]) and the full scan
-//! ([`scan`]), both finished by [`finish`].
+//! cut points, the same from the tree walk ([`tree`]) and the brute-force locate
+//! ([`brute_force`]), both finished by [`finish`].
 
+mod brute_force;
 mod finish;
-mod scan;
 mod tree;
 
 use glam::Vec3;
 
 use super::knife::Analytic;
-pub(crate) use scan::locate_scan_prepared;
+pub(crate) use brute_force::locate_brute_force_prepared;
 pub(crate) use tree::locate_prepared;
 
 /// One end of a triangle edge: vertex id, position, side value.

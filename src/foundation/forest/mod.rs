@@ -9,7 +9,7 @@
 //!
 //! Marching-cubes surfaces use the real cell grid (each triangle remembers
 //! its cell, recorded in the same pass that makes it), grouped into leaf
-//! blocks of `surface::LEAF_BLOCK`³ cells; any other mesh (a file, a triangulated
+//! blocks of `mc::LEAF_BLOCK`³ cells; any other mesh (a file, a triangulated
 //! knife) gets a virtual grid over its bounding box.
 
 mod build;

@@ -1,4 +1,4 @@
-//! The full scan: takes a mesh and a prepared knife, tests every triangle,
+//! The brute-force locate: takes a mesh and a prepared knife, tests every triangle,
 //! and returns the same [`Located`] as the tree query (numbered by
 //! [`super::finish`]), without node counts.
 
@@ -11,7 +11,10 @@ use crate::cut::knife::{Analytic, AnalyticKnife, Kind, PreparedKnife};
 use crate::cut::{CutStats, Located};
 use crate::{Error, Result, TriMesh};
 
-pub(crate) fn locate_scan_prepared(mesh: &TriMesh, k: &PreparedKnife<'_>) -> Result<Located> {
+pub(crate) fn locate_brute_force_prepared(
+    mesh: &TriMesh,
+    k: &PreparedKnife<'_>,
+) -> Result<Located> {
     let stats = CutStats {
         triangles_total: mesh.triangles.len(),
         triangles_tested: mesh.triangles.len(),

@@ -13,7 +13,7 @@
 //!                            Surface
 //! ```
 //!
-//! Guarantees (tested in `tests/surface.rs`): the mesh is welded (one
+//! Guarantees (tested in `tests/mc.rs`): the mesh is welded (one
 //! vertex per crossed grid edge), every edge away from the volume border is
 //! used by exactly two triangles in opposite directions, normals point from
 //! inside (samples ≥ level, or equal to the label) to outside, and with

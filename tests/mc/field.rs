@@ -1,8 +1,8 @@
 //! The CPU's sample access (bit rows, native samples) against the `f32`
 //! layers the GPU uploads.
 
-use chisel::surface::IsoSpec;
-use chisel::surface::field::{NativeSamples, SampleVisitor, Scalar};
+use chisel::mc::IsoSpec;
+use chisel::mc::field::{NativeSamples, SampleVisitor, Scalar};
 use chisel::volume::{Volume, VolumeData};
 
 use crate::common;
@@ -73,7 +73,7 @@ fn field_rows_and_samples_match_layers() {
         let vol = Volume::new(dims, [1.0; 3], [0.0; 3], data).unwrap();
         for iso in isos {
             for close in [false, true] {
-                let field = chisel::surface::Field::new(&vol, iso, close).unwrap();
+                let field = chisel::mc::Field::new(&vol, iso, close).unwrap();
                 let [nx, ny, nz] = field.dims;
                 let native = field.visit_samples(AllSamples(field.dims));
                 let mut layer = vec![0f32; nx * ny];

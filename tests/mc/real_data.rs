@@ -2,7 +2,7 @@
 //! head, and the frog's tissue labels.
 
 use chisel::Backend;
-use chisel::surface::{IsoSpec, Surface, marching_cubes};
+use chisel::mc::{IsoSpec, Surface, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 
 use crate::oracle::{check_closed_oriented, check_topology};

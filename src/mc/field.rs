@@ -5,7 +5,7 @@
 //! at a time as bits straight from the volume's native type
 //! ([`Field::inside_row`]) and converts a sample to `f32` only where an edge
 //! crosses ([`Field::sample`]). Both give exactly `layer(z)[x + nx·y]` and
-//! `layer(z)[x + nx·y] >= level` (tested in `tests/surface.rs`), so the CPU
+//! `layer(z)[x + nx·y] >= level` (tested in `tests/mc.rs`), so the CPU
 //! mirror and the GPU kernels see bit-identical inputs.
 
 use super::IsoSpec;

@@ -13,7 +13,7 @@ mod oracle;
 mod real_data;
 mod synthetic;
 
-use chisel::surface::McOptions;
+use chisel::mc::McOptions;
 use chisel::volume::{Volume, VolumeData};
 
 // ---------------------------------------------------------------- fixtures

@@ -3,7 +3,7 @@
 //! thread-count independence.
 
 use chisel::Backend;
-use chisel::surface::{IsoSpec, McOptions, marching_cubes};
+use chisel::mc::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 
 use crate::oracle::check_topology;
@@ -209,7 +209,7 @@ fn forest_covers_every_triangle_once_with_true_boxes() {
                         assert_eq!(s.triangle_groups[t as usize], g as u32);
                         // Leaves are blocks of LEAF_BLOCK³ marching-cubes cells.
                         let key = s.triangle_cells[t as usize] as usize;
-                        let b = chisel::surface::LEAF_BLOCK;
+                        let b = chisel::mc::LEAF_BLOCK;
                         let g = s.grid.dims.map(|d| d - 1);
                         let key = {
                             let (x, y, z) = (key % g[0], (key / g[0]) % g[1], key / (g[0] * g[1]));

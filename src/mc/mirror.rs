@@ -4,7 +4,7 @@
 //! names, buffers and f32 expressions, one function per kernel. They read
 //! beside their WGSL; the production CPU path is the bit-row
 //! implementation in [`super::cpu`], tested equal to these mirrors chained
-//! (`tests/surface.rs`), and each GPU kernel is tested against its mirror
+//! (`tests/mc.rs`), and each GPU kernel is tested against its mirror
 //! on the same inputs (`tests/parity/mc_*.rs`), so a divergence names its
 //! kernel.
 //!

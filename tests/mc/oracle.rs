@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use chisel::surface::{IsoSpec, Surface};
+use chisel::mc::{IsoSpec, Surface};
 use chisel::volume::Volume;
 
 // ---------------------------------------------------------------- oracle

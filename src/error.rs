@@ -141,12 +141,13 @@ pub enum Error {
     /// The device was lost (driver reset, crash, timeout).
     #[error("GPU device lost: {0}")]
     DeviceLost(String),
-    /// A host allocation failed (the request is too large for this machine).
-    #[error("not enough memory: {0}")]
-    HostMemory(String),
-    /// An allocation on the device failed.
-    #[error("GPU out of memory while {0}")]
-    OutOfMemory(String),
+    /// A host allocation of `bytes` for `what` failed (too large for this machine).
+    #[error("not enough memory: {what} needs {bytes} bytes")]
+    HostMemory { what: String, bytes: u64 },
+    /// An allocation on the device failed: `label` names the buffer or
+    /// scope, `message` is the driver's.
+    #[error("GPU out of memory in `{label}`: {message}")]
+    OutOfMemory { label: String, message: String },
     /// A WGSL kernel or shader failed to parse, validate or build a pipeline.
     #[error("kernel `{name}`: {message}")]
     Kernel { name: String, message: String },

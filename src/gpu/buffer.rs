@@ -28,11 +28,13 @@ impl<T: Pod> GpuArray<T> {
     fn check_size(gpu: &Gpu, label: &str, len: usize) -> Result<u64> {
         let bytes = (len.max(1) as u64).saturating_mul(std::mem::size_of::<T>() as u64);
         if bytes > gpu.max_binding_bytes() {
-            return Err(Error::OutOfMemory(format!(
-                "allocating `{label}`: {bytes} bytes exceed one storage binding \
-                 ({} bytes); split the data with `chunk_ranges`",
-                gpu.max_binding_bytes()
-            )));
+            return Err(Error::limit(
+                format!(
+                    "bytes of `{label}` (one storage binding; split the data with `chunk_ranges`)"
+                ),
+                bytes,
+                gpu.max_binding_bytes(),
+            ));
         }
         Ok(bytes)
     }

@@ -128,7 +128,10 @@ impl Gpu {
         let uncaptured_cb = Arc::clone(&uncaptured);
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             let error = match &e {
-                wgpu::Error::OutOfMemory { .. } => Error::OutOfMemory(e.to_string()),
+                wgpu::Error::OutOfMemory { .. } => Error::OutOfMemory {
+                    label: "chisel".into(),
+                    message: e.to_string(),
+                },
                 _ => Error::Validation {
                     label: "chisel".into(),
                     message: e.to_string(),
@@ -283,7 +286,10 @@ impl Gpu {
         let o = pollster::block_on(oom.pop());
         self.check_errors()?;
         if let Some(e) = o {
-            return Err(Error::OutOfMemory(format!("{label}: {e}")));
+            return Err(Error::OutOfMemory {
+                label: label.into(),
+                message: e.to_string(),
+            });
         }
         if let Some(e) = v {
             return Err(Error::Validation {

@@ -140,10 +140,11 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     // A classify slab holds its layers plus one above.
     let classify_layers = (max / layer_bytes).saturating_sub(1) as usize;
     if classify_layers == 0 {
-        return Err(Error::OutOfMemory(format!(
-            "marching cubes: two sample layers ({} bytes) exceed one storage binding ({max} bytes)",
-            2 * layer_bytes
-        )));
+        return Err(Error::limit(
+            "marching cubes: bytes of two sample layers (one storage binding)",
+            2 * layer_bytes,
+            max,
+        ));
     }
     let table = GpuArray::from_slice(gpu, "mc.table", &tables::table().flat())?;
     let dims = [nx as u32, ny as u32, nz as u32];
@@ -204,9 +205,11 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     while a < nz {
         let mut b = a + 1;
         if !fits(a, b) {
-            return Err(Error::OutOfMemory(format!(
-                "marching cubes: layer {a} does not fit one storage binding ({max} bytes)"
-            )));
+            return Err(Error::limit(
+                format!("marching cubes: bytes of layer {a} (one storage binding)"),
+                u64::MAX,
+                max,
+            ));
         }
         while b < nz && fits(a, b + 1) {
             b += 1;

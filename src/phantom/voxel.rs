@@ -44,15 +44,11 @@ fn mask_volume(
     // Up to 8 GB at the largest sizes: a failed allocation is an error,
     // not an abort.
     let mut data = Vec::new();
-    data.try_reserve_exact(slice * dims[2]).map_err(|_| {
-        crate::Error::HostMemory(format!(
-            "a {}×{}×{} phantom needs {} bytes",
-            dims[0],
-            dims[1],
-            dims[2],
-            slice * dims[2]
-        ))
-    })?;
+    data.try_reserve_exact(slice * dims[2])
+        .map_err(|_| crate::Error::HostMemory {
+            what: format!("a {}×{}×{} phantom", dims[0], dims[1], dims[2]),
+            bytes: (slice * dims[2]) as u64,
+        })?;
     data.resize(slice * dims[2], 0u8);
     if slice > 0 {
         data.par_chunks_mut(slice).enumerate().for_each(|(z, out)| {

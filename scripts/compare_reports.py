@@ -24,6 +24,7 @@ import hashlib
 import json
 import os
 import re
+import struct
 import subprocess
 import sys
 import tempfile
@@ -142,7 +143,22 @@ def differences(old, new, at="$"):
         for i, (a, b) in enumerate(zip(old, new)):
             out += differences(a, b, f"{at}[{i}]")
         return out
-    return [] if old == new else [f"{at}: {json.dumps(old)} -> {json.dumps(new)}"]
+    if old == new or same_f32(old, new):
+        return []
+    return [f"{at}: {json.dumps(old)} -> {json.dumps(new)}"]
+
+
+def same_f32(a, b):
+    """Whether two JSON numbers are one f32 printed at two precisions (a
+    `serde_json::Value` widens an f32 to f64 digits; a typed report prints
+    the shortest f32 digits)."""
+    if not all(isinstance(x, float) for x in (a, b)):
+        return False
+    f32 = lambda x: struct.unpack("f", struct.pack("f", x))[0]
+    try:
+        return f32(a) == f32(b)
+    except OverflowError:
+        return False
 
 
 def digest(path):
@@ -196,9 +212,9 @@ def main():
             r_new, f_new = run(os.path.abspath(a.new), name, argv, outputs, new_root)
             if a.old_cli:
                 r_old, r_new = as_new(r_old), without_added(r_new, name)
-            same = r_old == r_new and f_old == f_new
-            differ += not same
             lines = differences(r_old, r_new) + differences(f_old, f_new, "files")
+            same = not lines
+            differ += not same
             detail = "".join(f"\n  {line[:300]}" for line in lines[:20])
             print(f"{'same' if same else 'DIFFERENT':9} {name}{detail}")
     print(f"{differ} of {len(commands(a.data, a.backend))} commands differ")

@@ -5,7 +5,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use crate::{Error, Position, Result};
+use crate::error::{Error, Position, Result};
 
 /// Refuses a directory where a file is expected (before the extension is
 /// looked at, so the message says what is wrong).

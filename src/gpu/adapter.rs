@@ -2,7 +2,7 @@
 
 use std::str::FromStr;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// How to install a software adapter when none is found.
 pub const LAVAPIPE_HINT: &str = "Install a Vulkan driver; without a GPU, Mesa's lavapipe \

@@ -9,7 +9,7 @@ use encase::{ShaderType, UniformBuffer as EncaseUniform, internal::WriteInto};
 use wgpu::util::DeviceExt;
 
 use super::Gpu;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A storage buffer of `len` elements of Pod type `T`.
 #[derive(Debug)]

@@ -27,7 +27,7 @@ use pass::Compiled;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Optional adapter features the device was opened with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

@@ -18,7 +18,7 @@ use encase::{ShaderType, internal::WriteInto};
 
 use super::spec::{BindKind, KernelSpec};
 use super::{Gpu, GpuArray, Kernel, PassTimer, UniformBuffer};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A kernel's compiled pipeline and the bind-group layout built from its spec.
 #[derive(Debug)]

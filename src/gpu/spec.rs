@@ -7,7 +7,7 @@
 use std::sync::OnceLock;
 
 use super::registry::{Kernel, preprocess};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// How a kernel reads a binding.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -17,8 +17,8 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+use chisel::Backend;
 use chisel::hull::{ConvexHull, HullOptions};
-use chisel::parity::Backend;
 use chisel::phantom::voxel::{blob, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
 use chisel::polyhedron::{PolyhedrizeOptions, polyhedrize};
 use chisel::volume::Volume;

@@ -8,7 +8,7 @@
 //   params:   n (elements at this level)
 //   offsets:  ceil(#N / WG_SIZE) u32, exclusive scan of the block totals
 //   scanned:  #N u32 in/out, scanned[i] += offsets[i / WG_SIZE] (wrapping)
-// Mirror: scan::cpu::add_offsets (whole scan: scan::cpu::exclusive_scan).
+// Mirror: exclusive_scan::cpu::add_offsets (whole scan: exclusive_scan::cpu::exclusive_scan).
 
 #import dispatch
 

@@ -14,10 +14,12 @@
 //                  (x fastest); must hold the layers z_begin ..= z_begin + n_layers
 //                  (the last one clipped at nz − 1)
 //   table:         257 case offsets, then 3 local edges per triangle
-//                  (surface::tables::CaseTable::flat)
+//                  (mc::tables::CaseTable::flat)
 //   block_counts:  per block (vertices, triangles), out
-// Inside: sample ≥ level. Mirror: surface::mirror::mc_classify; the host
+// Inside: sample ≥ level. Mirror: mc::mirror::mc_classify; the host
 // scans block_counts (exclusive) for mc_vertices/mc_triangles.
+
+#import dispatch
 
 struct Params {
     nx: u32,
@@ -49,7 +51,7 @@ fn inside(x: u32, y: u32, z: u32) -> u32 {
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
-    let w = wid.x + wid.y * n_groups.x;
+    let w = workgroup_index(wid, n_groups);
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
     let n_layer = params.nx * params.ny;

@@ -1,5 +1,5 @@
 // mc_triangles: marching-cubes triangles — each cell writes its case's
-// triangles (surface::tables, wound outward) at its scanned offset, so the
+// triangles (mc::tables, wound outward) at its scanned offset, so the
 // output is in cell order and, within a cell, in table order.
 //
 // Dispatch: one invocation per point of `n_layers` cell layers from global
@@ -19,9 +19,10 @@
 //                  x + (nx−1)·(y + (ny−1)·z); element = triangle id − t_start
 // Vertex of local edge e: owner point o (EDGE_OWNER[e] offset), axis e / 4,
 // id = vert_base[o] + number of crossing edges of o with a smaller axis.
-// Mirror: surface::mirror::mc_triangles.
+// Mirror: mc::mirror::mc_triangles.
 
 #import block_scan
+#import dispatch
 
 struct Params {
     nx: u32,
@@ -72,7 +73,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
     var edge_owner = array<u32, 12>(0u, 2u, 4u, 6u, 0u, 1u, 4u, 5u, 0u, 1u, 2u, 3u);
-    let w = wid.x + wid.y * n_groups.x;
+    let w = workgroup_index(wid, n_groups);
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
     // A block without a triangle writes nothing.

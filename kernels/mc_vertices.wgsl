@@ -19,10 +19,11 @@
 // Interpolation (same f32 expression as the mirror):
 //   t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN), a at p, b at
 //   p + e_axis; u[axis] = f32(p[axis]) + t. T_MIN = 2⁻¹⁰ keeps vertices
-//   inside their edges (no zero-area triangles; surface::cpu::T_MIN).
-// Mirror: surface::mirror::mc_vertices.
+//   inside their edges (no zero-area triangles; mc::cpu::T_MIN).
+// Mirror: mc::mirror::mc_vertices.
 
 #import block_scan
+#import dispatch
 
 struct Params {
     nx: u32,
@@ -57,7 +58,7 @@ fn sample(x: u32, y: u32, z: u32) -> f32 {
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         @builtin(workgroup_id) wid: vec3<u32>,
         @builtin(num_workgroups) n_groups: vec3<u32>) {
-    let w = wid.x + wid.y * n_groups.x;
+    let w = workgroup_index(wid, n_groups);
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
     // A block without a vertex writes nothing (no triangle refers to a

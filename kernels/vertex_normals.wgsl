@@ -13,7 +13,7 @@
 //               area is zero), w = 0
 // Normal of triangle (a, b, c) = cross(b − a, c − a) (twice its area, along
 // the right-hand-rule normal); summed in CSR order, then normalised.
-// Mirror: normals::cpu::vertex_normals.
+// Mirror: vertex_normals::cpu::vertex_normals.
 
 #import dispatch
 

@@ -5,7 +5,7 @@
 //! ```text
 //!  ⑤ application   cli, render
 //!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue
-//!  ③ GPU, parity   gpu (context, kernel specs, pass builder, buffers), parity (Backend, Tolerance)
+//!  ③ GPU, parity   gpu (context, Backend, kernel specs, pass builder, buffers), parity (Tolerance, comparators)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
 //! ```
@@ -49,7 +49,7 @@ pub mod volume;
 pub mod voxel;
 
 pub use error::{Error, Position, Refusal, Result};
+pub use gpu::Backend;
 pub use gpu::Gpu;
 pub use mesh::TriMesh;
-pub use parity::Backend;
 pub use volume::Volume;

@@ -1,33 +1,13 @@
-//! Backends and the parity harness (SPEC §0.4).
+//! The parity harness (SPEC §0.4).
 //!
-//! Every data-parallel operation runs on [`Backend::Cpu`] (the readable
-//! mirror) or [`Backend::Gpu`] (the WGSL kernel). The comparators here are
+//! Every data-parallel operation runs on [`Backend::Cpu`](crate::Backend)
+//! (the readable mirror) or [`Backend::Gpu`](crate::Backend) (the WGSL
+//! kernel). The comparators here are
 //! what `tests/parity/` uses: floats within a declared [`Tolerance`],
 //! integers exactly, and every mismatch reports the first bad index with both
 //! values.
 
 use std::fmt;
-
-use crate::gpu::Gpu;
-
-/// Where a data-parallel operation runs.
-#[derive(Debug, Clone, Copy)]
-pub enum Backend<'a> {
-    /// The CPU mirror (plain Rust, rayon where natural).
-    Cpu,
-    /// The WGSL kernel on this device.
-    Gpu(&'a Gpu),
-}
-
-impl Backend<'_> {
-    /// `cpu` or `gpu`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Backend::Cpu => "cpu",
-            Backend::Gpu(_) => "gpu",
-        }
-    }
-}
 
 /// A float tolerance: `|a − b| ≤ abs + rel · max(|a|, |b|)`.
 ///
@@ -97,44 +77,18 @@ fn length_mismatch(what: &str, a: usize, b: usize) -> Mismatch {
     }
 }
 
-/// Compares float arrays element-wise under `tol`.
-pub fn compare_f32(what: &str, cpu: &[f32], gpu: &[f32], tol: Tolerance) -> Result<(), Mismatch> {
-    if cpu.len() != gpu.len() {
-        return Err(length_mismatch(what, cpu.len(), gpu.len()));
-    }
-    let mut first = None;
-    let mut count = 0;
-    for (i, (&a, &b)) in cpu.iter().zip(gpu).enumerate() {
-        if !tol.accepts(a, b) {
-            count += 1;
-            first.get_or_insert(i);
-        }
-    }
-    match first {
-        None => Ok(()),
-        Some(i) => Err(Mismatch {
-            what: what.into(),
-            index: i,
-            expected: format!("{:e}", cpu[i]),
-            found: format!("{:e}", gpu[i]),
-            count,
-            total: cpu.len(),
-        }),
-    }
-}
-
-/// Compares arrays of anything that flattens to floats (e.g. `[f32; 4]`),
-/// reporting the element (not component) index.
-pub fn compare_vec<const N: usize>(
+/// The one comparison loop: `bad(cpu[i], gpu[i])` marks a mismatch; the
+/// first is reported with `show` of both values, and all are counted.
+pub fn compare_by<T>(
     what: &str,
-    cpu: &[[f32; N]],
-    gpu: &[[f32; N]],
-    tol: Tolerance,
+    cpu: &[T],
+    gpu: &[T],
+    bad: impl Fn(&T, &T) -> bool,
+    show: impl Fn(&T) -> String,
 ) -> Result<(), Mismatch> {
     if cpu.len() != gpu.len() {
         return Err(length_mismatch(what, cpu.len(), gpu.len()));
     }
-    let bad = |a: &[f32; N], b: &[f32; N]| a.iter().zip(b).any(|(&x, &y)| !tol.accepts(x, y));
     let mut first = None;
     let mut count = 0;
     for (i, (a, b)) in cpu.iter().zip(gpu).enumerate() {
@@ -148,12 +102,40 @@ pub fn compare_vec<const N: usize>(
         Some(i) => Err(Mismatch {
             what: what.into(),
             index: i,
-            expected: format!("{:?}", cpu[i]),
-            found: format!("{:?}", gpu[i]),
+            expected: show(&cpu[i]),
+            found: show(&gpu[i]),
             count,
             total: cpu.len(),
         }),
     }
+}
+
+/// Compares float arrays element-wise under `tol`.
+pub fn compare_f32(what: &str, cpu: &[f32], gpu: &[f32], tol: Tolerance) -> Result<(), Mismatch> {
+    compare_by(
+        what,
+        cpu,
+        gpu,
+        |&a, &b| !tol.accepts(a, b),
+        |x| format!("{x:e}"),
+    )
+}
+
+/// Compares arrays of anything that flattens to floats (e.g. `[f32; 4]`),
+/// reporting the element (not component) index.
+pub fn compare_vec<const N: usize>(
+    what: &str,
+    cpu: &[[f32; N]],
+    gpu: &[[f32; N]],
+    tol: Tolerance,
+) -> Result<(), Mismatch> {
+    compare_by(
+        what,
+        cpu,
+        gpu,
+        |a, b| a.iter().zip(b).any(|(&x, &y)| !tol.accepts(x, y)),
+        |x| format!("{x:?}"),
+    )
 }
 
 /// Compares integer (or any exactly comparable) arrays for equality.
@@ -162,28 +144,7 @@ pub fn compare_exact<T: PartialEq + fmt::Debug>(
     cpu: &[T],
     gpu: &[T],
 ) -> Result<(), Mismatch> {
-    if cpu.len() != gpu.len() {
-        return Err(length_mismatch(what, cpu.len(), gpu.len()));
-    }
-    let mut first = None;
-    let mut count = 0;
-    for (i, (a, b)) in cpu.iter().zip(gpu).enumerate() {
-        if a != b {
-            count += 1;
-            first.get_or_insert(i);
-        }
-    }
-    match first {
-        None => Ok(()),
-        Some(i) => Err(Mismatch {
-            what: what.into(),
-            index: i,
-            expected: format!("{:?}", cpu[i]),
-            found: format!("{:?}", gpu[i]),
-            count,
-            total: cpu.len(),
-        }),
-    }
+    compare_by(what, cpu, gpu, |a, b| a != b, |x| format!("{x:?}"))
 }
 
 /// Index of the first element still equal to the sentinel (compared by bits

@@ -7,7 +7,7 @@ mod common;
 
 use std::collections::HashMap;
 
-use chisel::parity::Backend;
+use chisel::Backend;
 use chisel::tissue::CtParams;
 use chisel::tissue::ct::CT_SUBCUTIS_DEPTH;
 use chisel::tissue::phantom::{self, HEADSQ_CHIN_ADVANCE_TOML, ct_demo_plan, ct_head_phantom};

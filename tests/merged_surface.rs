@@ -7,8 +7,8 @@ mod common;
 
 use std::collections::HashMap;
 
+use chisel::Backend;
 use chisel::hull_scan::{Side, VoxelBox};
-use chisel::parity::Backend;
 use chisel::phantom::voxel::{cylinder_tunnel, ellipsoid_dent, torus};
 use chisel::polyhedron::{MergedSurface, PolyhedrizeOptions, Polyhedron, polyhedrize, theorem_ke};
 use chisel::volume::Volume;

@@ -3,8 +3,8 @@
 
 mod common;
 
+use chisel::Backend;
 use chisel::hull_scan::VoxelBox;
-use chisel::parity::Backend;
 use chisel::phantom::voxel::{blob, cube, cylinder_tunnel, digital_ball, ellipsoid_dent, torus};
 use chisel::polyhedron::{PolyhedrizeOptions, Polyhedron, Role, ShellKind, ZkhClass, polyhedrize};
 use chisel::volume::Volume;

@@ -1,5 +1,6 @@
-// Shared workgroup scan of the marching-cubes emission kernels
-// (mc_vertices, mc_triangles), whose workgroups hold SCAN_WG invocations.
+// Shared workgroup scan of exclusive_scan_blocks and the marching-cubes
+// emission kernels (mc_vertices, mc_triangles), whose workgroups hold
+// SCAN_WG invocations.
 
 const SCAN_WG: u32 = 256u;
 

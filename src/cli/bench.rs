@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use super::report::{Report, Show};
 use super::{Global, vec3_arg};
-use crate::parity::Backend;
+use crate::gpu::Backend;
 use crate::tissue::bench::{
     Equilibrium, Machine, Rate, Settled, approach_equilibrium, export_network, increment_bone,
     iteration_rate, time_to_equilibrium,

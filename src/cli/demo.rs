@@ -21,9 +21,9 @@ use super::relax::{
     run_job, write_preview,
 };
 use super::report::{Report, Show};
+use crate::gpu::Backend;
 use crate::gpu::GpuFeatures;
 use crate::mc::McOptions;
-use crate::parity::Backend;
 use crate::render::{Facing, View};
 use crate::tissue::RelaxReport;
 use crate::tissue::ct::CtFigures;

@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::Global;
 use super::report::{Report, Show};
-use crate::gpu::{AdapterChoice, AdapterReport, Gpu, GpuFeatures, GpuOptions, adapter_reports};
+use crate::gpu::{AdapterReport, Gpu, GpuFeatures, GpuOptions, adapter_reports};
 
 /// The report of `chisel info`.
 #[derive(Debug, Serialize)]
@@ -54,7 +54,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     let instance = crate::gpu::instance();
     let adapters = adapter_reports(&instance);
-    let choice: AdapterChoice = global.adapter.parse()?;
+    let choice = global.adapter_choice()?;
     let chosen = Gpu::with_options(GpuOptions {
         adapter: Some(choice.clone()),
         ..Default::default()

@@ -8,8 +8,8 @@ use serde::Serialize;
 
 use super::report::{Report, Show};
 use super::{BackendChoice, Global, ViewAxes};
+use crate::gpu::Backend;
 use crate::mc::{Group, IsoSpec, McOptions, marching_cubes};
-use crate::parity::Backend;
 use crate::render::{RenderOptions, View};
 
 /// The report of `chisel mc`.

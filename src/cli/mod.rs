@@ -40,9 +40,11 @@ pub struct Cli {
 /// Options every command accepts.
 #[derive(Debug, Clone, clap::Args)]
 pub struct Global {
-    /// GPU adapter: auto, cpu (lavapipe), an index from `chisel info`, or a name substring.
-    #[arg(long, global = true, env = "CHISEL_ADAPTER", default_value = "auto")]
-    adapter: String,
+    /// GPU adapter: auto, cpu (lavapipe), an index from `chisel info`, or a
+    /// name substring [default: `CHISEL_ADAPTER`, else `WGPU_ADAPTER_NAME`,
+    /// else auto].
+    #[arg(long, global = true)]
+    adapter: Option<String>,
     /// Hide progress bars and informational messages.
     #[arg(long, short, global = true)]
     quiet: bool,
@@ -231,7 +233,7 @@ impl Global {
             BackendArg::Cpu => None,
             BackendArg::Gpu => Some(self.open_gpu()?),
             BackendArg::Auto => {
-                let adapter: AdapterChoice = self.adapter.parse()?;
+                let adapter = self.adapter_choice()?;
                 match crate::gpu::probe_adapter(&adapter) {
                     Ok((_, false)) => Some(self.open_gpu()?),
                     Ok((name, true)) => {
@@ -255,9 +257,18 @@ impl Global {
         Ok(gpu)
     }
 
+    /// The adapter `--adapter` names, else the library's rule
+    /// ([`AdapterChoice::from_env`]: `CHISEL_ADAPTER`, `WGPU_ADAPTER_NAME`, auto).
+    fn adapter_choice(&self) -> crate::Result<AdapterChoice> {
+        match &self.adapter {
+            Some(a) => a.parse(),
+            None => AdapterChoice::from_env(),
+        }
+    }
+
     /// Opens the GPU without printing it.
     fn open_gpu(&self) -> anyhow::Result<Gpu> {
-        let adapter: AdapterChoice = self.adapter.parse()?;
+        let adapter = self.adapter_choice()?;
         Ok(Gpu::with_options(GpuOptions {
             adapter: Some(adapter),
             ..Default::default()

@@ -18,7 +18,7 @@ use serde::Serialize;
 use super::hull::{HullArgs, ObjectFigures, SelectArgs, SelectionFigures};
 use super::report::{Report, Show};
 use super::{BackendChoice, Global, ViewAxes};
-use crate::parity::Backend;
+use crate::gpu::Backend;
 use crate::polyhedron::{
     PolyhedrizeOptions, Polyhedron, PolyhedronSummary, ZkhReport, polyhedrize,
 };

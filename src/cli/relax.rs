@@ -19,8 +19,8 @@ use crate::tissue::ct::CtFigures;
 use crate::tissue::fragments::PieceInfo;
 use glam::Vec3;
 
+use crate::gpu::Backend;
 use crate::mesh::{ScalarField, TriMesh};
-use crate::parity::Backend;
 use crate::render::{Facing, Panel, RenderOptions, View};
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, SpringClass, Stiffness};

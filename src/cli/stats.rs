@@ -8,10 +8,11 @@ use serde::Serialize;
 
 use super::report::{Report, Show};
 use super::{BackendChoice, Global};
+use crate::foundation::Aabb;
 use crate::foundation::vertex_components;
+use crate::gpu::Backend;
 use crate::mesh::{Topology, self_intersections};
-use crate::parity::Backend;
-use crate::reduce::{Bounds, SampleRange};
+use crate::reduce::SampleRange;
 use crate::volume::analysis::{
     ComponentCount, VolumeStats, label_components, threshold_components,
 };
@@ -58,7 +59,7 @@ struct CrossingFigures {
 #[derive(Debug, Serialize)]
 struct GpuBounds {
     adapter: String,
-    bounds: Option<Bounds>,
+    bounds: Option<Aabb>,
     matches_cpu: bool,
 }
 

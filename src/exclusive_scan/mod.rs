@@ -18,7 +18,7 @@ pub mod cpu;
 pub mod gpu;
 
 use crate::Result;
-use crate::parity::Backend;
+use crate::gpu::Backend;
 
 /// An exclusive scan and its total.
 #[derive(Debug, Clone, PartialEq, Eq)]

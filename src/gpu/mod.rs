@@ -9,6 +9,7 @@
 //! out-of-memory and validation failures come back as [`crate::Error`] values.
 
 mod adapter;
+mod backend;
 mod buffer;
 mod pass;
 mod registry;
@@ -16,6 +17,7 @@ mod spec;
 mod timing;
 
 pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
+pub use backend::Backend;
 pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges};
 pub use pass::{Binder, BoundKernel};
 pub use registry::{Kernel, Shader, preprocess};
@@ -167,6 +169,40 @@ impl Gpu {
             uncaptured,
             pipelines: Mutex::new(HashMap::new()),
         })
+    }
+
+    /// The same device seen with other options, without opening a second
+    /// one: bindings capped at `max_binding_bytes` (below this device's
+    /// cap), and with `portable` the optional features hidden, so kernels
+    /// take their portable variants. Tests of the chunked, slabbed and
+    /// fallback paths use it, keeping one device per process. Pipelines are
+    /// cached per view.
+    pub fn view(&self, max_binding_bytes: Option<u64>, portable: bool) -> Gpu {
+        Gpu {
+            instance: self.instance.clone(),
+            adapter: self.adapter.clone(),
+            device: self.device.clone(),
+            queue: self.queue.clone(),
+            info: self.info.clone(),
+            features: if portable {
+                GpuFeatures {
+                    int64: false,
+                    timestamps: false,
+                    subgroups: false,
+                }
+            } else {
+                self.features
+            },
+            max_binding_bytes: max_binding_bytes
+                .map_or(self.max_binding_bytes, |cap| {
+                    cap.min(self.max_binding_bytes)
+                })
+                .max(256),
+            sentinels: self.sentinels,
+            lost: Arc::clone(&self.lost),
+            uncaptured: Arc::clone(&self.uncaptured),
+            pipelines: Mutex::new(HashMap::new()),
+        }
     }
 
     /// Whether the adapter is a software rasteriser on the CPU (lavapipe):

@@ -35,7 +35,7 @@ impl ConvexHull {
     pub fn row_spans(
         &self,
         bbox: &crate::hull_scan::VoxelBox,
-        backend: crate::parity::Backend<'_>,
+        backend: crate::gpu::Backend<'_>,
     ) -> crate::Result<crate::hull_scan::RowSpans> {
         let spaces: Vec<crate::hull_scan::HalfSpace> =
             self.half_spaces().into_iter().map(Into::into).collect();

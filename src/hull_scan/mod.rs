@@ -49,7 +49,7 @@ pub mod zkh;
 
 use rayon::prelude::*;
 
-use crate::parity::Backend;
+use crate::gpu::Backend;
 use crate::{Error, Result};
 
 /// Largest allowed `|n_c|` of a normal component (fits `i32`).

@@ -44,7 +44,7 @@ use rayon::prelude::*;
 pub use field::Field;
 
 use crate::foundation::{Aabb, Forest};
-use crate::parity::Backend;
+use crate::gpu::Backend;
 use crate::{Result, TriMesh, Volume};
 
 /// Edge of a forest leaf block in marching-cubes cells. The seed's leaf is

@@ -17,7 +17,7 @@ pub use csr::Csr;
 pub use icosphere::{icosphere_sag, unit_icosphere};
 pub use intersect::{SelfIntersections, intersections_of_first, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
-pub use topology::{Bounds, Component, Orientation, Topology};
+pub use topology::{Component, Orientation, Topology};
 
 use glam::Vec3;
 

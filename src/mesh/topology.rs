@@ -21,7 +21,7 @@ use glam::DVec3;
 use rayon::slice::ParallelSliceMut;
 
 use super::TriMesh;
-use crate::foundation::UnionFind;
+use crate::foundation::{Aabb, UnionFind};
 
 /// Marks "no such half-edge / component" in the index tables below.
 pub(crate) const NONE: usize = usize::MAX;
@@ -55,13 +55,6 @@ pub enum Orientation {
     Mixed,
     /// Consistently wound but (near-)flat or empty: `|V| ≤ τ·A·D`.
     Undetermined,
-}
-
-/// Axis-aligned bounding box, in the mesh's units.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Bounds {
-    pub min: [f32; 3],
-    pub max: [f32; 3],
 }
 
 /// Figures of one connected component (triangles sharing vertices).
@@ -151,7 +144,7 @@ pub struct Topology {
     /// Sum of the components' signed volumes (units³).
     pub signed_volume: f64,
     /// Bounding box of all vertices (used or not); `None` without vertices.
-    pub bounds: Option<Bounds>,
+    pub bounds: Option<Aabb>,
 }
 
 /// Whether a triangle repeats a vertex index.
@@ -624,10 +617,7 @@ pub(crate) fn analyse(mesh: &TriMesh) -> Analysis {
         orientation: overall_orientation(&components),
         area: components.iter().map(|c| c.area).sum(),
         signed_volume: components.iter().map(|c| c.signed_volume).sum(),
-        bounds: mesh.bounds().map(|(lo, hi)| Bounds {
-            min: lo.to_array(),
-            max: hi.to_array(),
-        }),
+        bounds: mesh.bounds().map(|(min, max)| Aabb { min, max }),
         components,
     };
     Analysis {

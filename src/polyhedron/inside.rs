@@ -30,8 +30,8 @@
 //! (i128 for products), within ±2^24 ([`MAX_COORD`]).
 
 use crate::foundation::exact::{P2, cross_wide, orient2, sub};
+use crate::gpu::Backend;
 use crate::hull_scan::{RowSpans, Side, VoxelBox};
-use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 
 use super::polyhedrize::{differences, verify_box, voxel_at};

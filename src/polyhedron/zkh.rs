@@ -68,7 +68,7 @@ pub fn background_components(object: &DigitalObject, hull: &ConvexHull) -> crate
     let at = |x: usize, y: usize, z: usize| [lo[0] + x as i64, lo[1] + y as i64, lo[2] + z as i64];
     let bbox = crate::hull_scan::VoxelBox { origin: lo, dims };
     let sides = hull
-        .row_spans(&bbox, crate::parity::Backend::Cpu)?
+        .row_spans(&bbox, crate::gpu::Backend::Cpu)?
         .to_classification()?;
     let mut inside = Vec::with_capacity(dims.iter().product());
     for z in 0..dims[2] {

@@ -18,17 +18,9 @@ pub mod gpu;
 
 use glam::Vec3;
 
-use crate::parity::Backend;
+use crate::foundation::Aabb;
+use crate::gpu::Backend;
 use crate::{Error, Result, TriMesh, Volume};
-
-/// Axis-aligned bounding box (units of the positions).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Bounds {
-    /// Component-wise minimum.
-    pub min: Vec3,
-    /// Component-wise maximum.
-    pub max: Vec3,
-}
 
 /// Smallest and largest sample of a volume or array.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -39,13 +31,13 @@ pub struct SampleRange {
 
 /// Bounding box of `positions` (#N points as `[x, y, z, w]`, w ignored) on
 /// `backend`; `None` when empty. Exact (no rounding).
-pub fn bounds_reduce(positions: &[[f32; 4]], backend: Backend<'_>) -> Result<Option<Bounds>> {
+pub fn bounds_reduce(positions: &[[f32; 4]], backend: Backend<'_>) -> Result<Option<Aabb>> {
     let pair = match backend {
         Backend::Cpu => cpu::bounds_reduce(positions),
         Backend::Gpu(g) => gpu::bounds_reduce(g, positions)?,
     };
     pair.map(|(lo, hi)| {
-        let bounds = Bounds {
+        let bounds = Aabb {
             min: Vec3::new(lo[0], lo[1], lo[2]),
             max: Vec3::new(hi[0], hi[1], hi[2]),
         };
@@ -63,7 +55,7 @@ pub fn bounds_reduce(positions: &[[f32; 4]], backend: Backend<'_>) -> Result<Opt
 
 /// Bounding box of the vertices of `mesh` (unused vertices included, like
 /// [`TriMesh::bounds`]); `None` for a mesh without vertices.
-pub fn mesh_bounds(mesh: &TriMesh, backend: Backend<'_>) -> Result<Option<Bounds>> {
+pub fn mesh_bounds(mesh: &TriMesh, backend: Backend<'_>) -> Result<Option<Aabb>> {
     let positions: Vec<[f32; 4]> = mesh
         .positions
         .iter()

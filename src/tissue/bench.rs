@@ -14,7 +14,7 @@ use super::plan::ResolvedPlan;
 use super::relax::{Simulation, Status, relax};
 use super::stepper::{RelaxOptions, Solver, bone_displacements};
 use crate::Result;
-use crate::parity::Backend;
+use crate::gpu::Backend;
 
 /// CPU seconds (user + system, all threads) this process has used, from
 /// `/proc/self/stat` (clock ticks of 1/100 s); `None` off Linux. Next to a

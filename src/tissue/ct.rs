@@ -24,9 +24,9 @@
 
 use serde::Serialize;
 
+use crate::gpu::Backend;
 use crate::mc::{IsoSpec, McOptions, Surface, marching_cubes};
 use crate::mesh::{Topology, collapse_short_edges};
-use crate::parity::Backend;
 use crate::{Error, Refusal, Result, TriMesh, Volume};
 
 /// Where the subcutis lies between a CT's skin and bone: q_i = p_i +

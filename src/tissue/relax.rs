@@ -35,8 +35,8 @@ use super::gpu::GpuStepper;
 use super::network::SpringNetwork;
 use super::plan::{Iterations, ResolvedPlan};
 use super::stepper::{RelaxOptions, Setup, Solver, Stepper};
+use crate::gpu::Backend;
 use crate::mesh::{ScalarField, TriMesh};
-use crate::parity::Backend;
 use crate::{Error, Result};
 
 /// A window ends the relaxation as stalled only if max |v| stayed above

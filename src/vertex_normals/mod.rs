@@ -9,8 +9,8 @@ pub mod cpu;
 pub mod gpu;
 
 use crate::Result;
+use crate::gpu::Backend;
 use crate::mesh::{Csr, TriMesh};
-use crate::parity::Backend;
 
 /// Flat inputs of the kernel, built once on the host.
 #[derive(Debug, Clone)]

@@ -87,7 +87,9 @@ pub fn ct_bone() -> Option<chisel::voxel::DigitalObject> {
 
 /// The GPU for parity tests, one device per test process shared by all its
 /// tests (as an application shares one): `None` (skip, with a note) when no
-/// adapter exists on a developer machine; a panic under `CI=true`.
+/// adapter exists on a developer machine; a panic under `CI=true`. Tests of
+/// capped bindings or portable kernels take a [`Gpu::view`] of it, never a
+/// second device.
 pub fn gpu() -> Option<&'static Gpu> {
     static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
     GPU.get_or_init(|| chisel::gpu::gpu_for_tests().unwrap_or_else(|e| panic!("{e}")))

@@ -8,7 +8,7 @@
 //! and of the CT head's bone; sentinel-filled outputs; negative controls.
 
 use chisel::Backend;
-use chisel::gpu::{Gpu, GpuOptions};
+use chisel::gpu::Gpu;
 use chisel::hull::{ConvexHull, HullOptions};
 use chisel::hull_scan::gpu::{Arithmetic, HullScanInput, ROWS_SENTINEL};
 use chisel::hull_scan::{self, HalfSpace, RowSpans, Side, VoxelBox, brute, cpu, zkh};
@@ -21,20 +21,12 @@ use crate::common;
 mod hscan_fixtures;
 use hscan_fixtures::{Polytope, Rng, directions, random_half_spaces, supporting};
 
-/// The device as found (i64 kernels where the adapter has `SHADER_INT64`)
-/// and the same adapter opened portable (emulated kernels), optionally with
-/// capped bindings.
+/// The test device as found (i64 kernels where the adapter has
+/// `SHADER_INT64`) and seen portable (emulated kernels), optionally with
+/// capped bindings: views of the one device, not new devices.
 fn devices(cap: Option<u64>) -> Option<Vec<Gpu>> {
-    common::gpu()?;
-    let open = |portable| {
-        Gpu::with_options(GpuOptions {
-            max_binding_bytes: cap,
-            portable,
-            ..Default::default()
-        })
-        .unwrap()
-    };
-    let (native, portable) = (open(false), open(true));
+    let gpu = common::gpu()?;
+    let (native, portable) = (gpu.view(cap, false), gpu.view(cap, true));
     assert_eq!(Arithmetic::of(&portable), Arithmetic::I32x2);
     if Arithmetic::of(&native) != Arithmetic::Int64 {
         eprintln!("note: adapter lacks SHADER_INT64; only the fallback runs");

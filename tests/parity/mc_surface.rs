@@ -16,7 +16,7 @@
 use std::collections::BTreeMap;
 
 use chisel::Backend;
-use chisel::gpu::{Gpu, GpuOptions};
+use chisel::gpu::Gpu;
 use chisel::mc::{self, Field, IsoSpec, McOptions, Surface};
 use chisel::parity::{Mismatch, Tolerance, compare_exact, compare_vec, find_sentinel};
 use chisel::volume::{Volume, VolumeData};
@@ -141,13 +141,8 @@ fn mc_labels() {
 /// emission slabs (the triangles of one layer take most of a binding).
 #[test]
 fn mc_slabs_match_single_pass() {
-    let Some(small) = Gpu::with_options(GpuOptions {
-        max_binding_bytes: Some(64 << 10),
-        ..GpuOptions::default()
-    })
-    .ok() else {
-        return;
-    };
+    let Some(gpu) = common::gpu() else { return };
+    let small = gpu.view(Some(64 << 10), false);
     let vol = random_volume(5, [40, 30, 60]);
     let field = Field::new(&vol, IsoSpec::Level(1000.5), true).unwrap();
     let layer_bytes = (field.dims[0] * field.dims[1] * 4) as u64;

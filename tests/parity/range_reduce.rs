@@ -3,7 +3,7 @@
 //! larger than one storage binding; the real volumes' ranges are checked
 //! against the data README.
 
-use chisel::gpu::{Gpu, GpuOptions, chunk_ranges};
+use chisel::gpu::{Gpu, chunk_ranges};
 use chisel::parity::{compare_exact, find_sentinel};
 use chisel::reduce::gpu::RangeBuffers;
 use chisel::reduce::{self, SampleRange, cpu};
@@ -81,12 +81,9 @@ fn check(gpu: &Gpu, what: &str, samples: &[f32]) {
     );
 }
 
-fn capped_gpu(bytes: u64) -> Gpu {
-    Gpu::with_options(GpuOptions {
-        max_binding_bytes: Some(bytes),
-        ..Default::default()
-    })
-    .unwrap()
+/// The test device with bindings capped at `bytes` (no second device).
+fn capped_gpu(gpu: &Gpu, bytes: u64) -> Gpu {
+    gpu.view(Some(bytes), false)
 }
 
 #[test]
@@ -151,8 +148,8 @@ fn grid_2d() {
 fn chunked_over_binding_limit() {
     // 4 KiB bindings = 1024 samples per chunk: 300_000 samples span 293
     // chunks; the extremes sit in different chunks.
-    let Some(_) = common::gpu() else { return };
-    let gpu = capped_gpu(4096);
+    let Some(base) = common::gpu() else { return };
+    let gpu = capped_gpu(base, 4096);
     let mut s = random_samples(23, 300_000, 100.0);
     s[5] = -1000.0;
     s[299_999] = 1000.0;
@@ -209,7 +206,7 @@ fn real(rel: &str, min: f32, max: f32, chunk_bytes: u64) {
         .unwrap()
         .unwrap();
     assert_eq!((r.min, r.max), (min, max), "{rel} vs README");
-    let capped = capped_gpu(chunk_bytes);
+    let capped = capped_gpu(gpu, chunk_bytes);
     assert!(chunk_ranges(samples.len(), 4, capped.max_binding_bytes()).len() > 1);
     let c = reduce::volume_range(&v, Backend::Gpu(&capped))
         .unwrap()

@@ -21,7 +21,7 @@ fn platonic_and_sphere_shells_are_genus_zero_and_outward() {
     let c = assert_closed_shell(&cube(), 0, Orientation::Outward);
     assert!((c.signed_volume - 1.0).abs() < 1e-9);
     assert!((c.area - 6.0).abs() < 1e-9);
-    assert_eq!(c.bounds.unwrap().max, [1.0, 1.0, 1.0]);
+    assert_eq!(c.bounds.unwrap().max.to_array(), [1.0, 1.0, 1.0]);
     let s = assert_closed_shell(&icosphere(3), 0, Orientation::Outward);
     let ball = 4.0 / 3.0 * std::f64::consts::PI;
     assert!(s.signed_volume < ball && s.signed_volume > 0.97 * ball);

@@ -40,7 +40,7 @@ use sphere::{
     CAP_REPAIR_ROUNDS, SphereCapCheck, refine_on_sphere, repair_on_sphere, sphere_max_edge,
 };
 use triangulate::nests_as_cap;
-pub(super) use triangulate::triangulate;
+pub(super) use triangulate::{point_in_ring, triangulate};
 
 /// Maps points to the cap plane.
 #[derive(Debug, Clone, Copy)]

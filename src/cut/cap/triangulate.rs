@@ -15,16 +15,22 @@ fn area2(pts: &[DVec2], lp: &[usize]) -> f64 {
         .sum()
 }
 
-fn inside_polygon(pts: &[DVec2], lp: &[usize], q: DVec2) -> bool {
-    let n = lp.len();
+/// Whether `q` lies inside the ring of `n` points `at(0..n)` (crossing
+/// parity of a ray towards +x): the one `f64` point-in-polygon test of the
+/// cut, for cap loops and knife faces.
+pub(crate) fn point_in_ring(n: usize, at: impl Fn(usize) -> DVec2, q: DVec2) -> bool {
     let mut inside = false;
     for i in 0..n {
-        let (a, b) = (pts[lp[i]], pts[lp[(i + 1) % n]]);
+        let (a, b) = (at(i), at((i + 1) % n));
         if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
             inside = !inside;
         }
     }
     inside
+}
+
+fn inside_polygon(pts: &[DVec2], lp: &[usize], q: DVec2) -> bool {
+    point_in_ring(lp.len(), |i| pts[lp[i]], q)
 }
 
 /// Whether loops mapped to the plane nest as a cap needs: every loop

@@ -357,15 +357,7 @@ fn frame_2d(n: DVec3) -> impl Fn(DVec3) -> DVec2 {
 }
 
 fn point_in(cyc: &[DVec2], q: DVec2) -> bool {
-    let n = cyc.len();
-    let mut inside = false;
-    for i in 0..n {
-        let (a, b) = (cyc[i], cyc[(i + 1) % n]);
-        if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
-            inside = !inside;
-        }
-    }
-    inside
+    cap::point_in_ring(cyc.len(), |i| cyc[i], q)
 }
 
 /// Triangles of a face (ids of its cycles), oriented like its triangle.

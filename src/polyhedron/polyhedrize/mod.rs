@@ -81,9 +81,9 @@ pub use summary::PolyhedronSummary;
 pub(super) use voxelize::{differences, verify_box};
 
 use crate::foundation::exact::{cross_wide, gcd, sub};
+use crate::gpu::Backend;
 use crate::hull::{ConvexHull, HullOptions};
 use crate::hull_scan::VoxelBox;
-use crate::parity::Backend;
 use crate::voxel::{CandidateKind, Frame};
 
 use super::ZkhClass;

@@ -4,8 +4,8 @@
 
 use std::collections::VecDeque;
 
+use crate::gpu::Backend;
 use crate::hull_scan::VoxelBox;
-use crate::parity::Backend;
 use crate::polyhedron::balls::maximal_balls;
 use crate::polyhedron::{ZkhClass, background_components, faces_to_press};
 use crate::volume::analysis::label_6_connected;

@@ -3,8 +3,8 @@
 //! `impl Polyhedron`: `voxelize`, `mismatches`); the box and comparison
 //! helpers are shared with the ray-parity check of `polyhedron::inside`.
 
+use crate::gpu::Backend;
 use crate::hull_scan::VoxelBox;
-use crate::parity::Backend;
 use crate::voxel::DigitalObject;
 
 use super::{Polyhedron, try_local_index, voxel_at};

@@ -112,7 +112,7 @@ impl SpringNetwork {
                     ));
                 }
                 let normals =
-                    crate::vertex_normals::vertex_normals(epidermis, crate::parity::Backend::Cpu)?;
+                    crate::vertex_normals::vertex_normals(epidermis, crate::gpu::Backend::Cpu)?;
                 let placed: Vec<[f32; 4]> = epidermis
                     .positions
                     .par_iter()

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{Global, vec3_arg};
 use crate::gpu::Backend;
 use crate::tissue::bench::{
@@ -132,12 +132,8 @@ pub struct RelaxArgs {
     /// tools on the same network (`scripts/reference_spring_step.py`).
     #[arg(long, value_name = "DIR")]
     export: Option<PathBuf>,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout (the figures go to stderr as they come).
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
@@ -173,9 +169,7 @@ fn check(args: &RelaxArgs) -> anyhow::Result<Option<(usize, usize)>> {
     if grid.is_none() && args.refine.iter().any(|&f| f != 1) {
         anyhow::bail!("--refine above 1 subdivides a scan grid: give its --grid COLS,ROWS");
     }
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     Ok(grid)
 }
 
@@ -363,5 +357,5 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         adapter: gpu.as_ref().map(|g| g.describe()),
         networks,
     };
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::WithJson)
 }

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{Global, ViewAxes};
 use crate::cut::{CutOptions, CutStats, Knife, cut_sequence};
 use crate::mesh::{ScalarField, TriMesh};
-use crate::render::{RenderOptions, View};
+use crate::render::RenderOptions;
 
 /// The report of `chisel cut`.
 #[derive(Debug, Serialize)]
@@ -83,12 +83,8 @@ pub struct Args {
     explode: f32,
     #[command(flatten)]
     view: ViewAxes,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 fn v3(a: &[f64]) -> DVec3 {
@@ -170,9 +166,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.preview {
         crate::foundation::fs::check_png_output(path)?;
     }
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     let mesh = crate::io::read_mesh(&args.mesh)?;
     let knives = knives(args)?;
     let result = cut_sequence(&mesh, &knives, &CutOptions { cap: args.cap })?;
@@ -201,21 +195,19 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.preview {
         let gpu = global.gpu()?;
         let opts = RenderOptions {
-            views: vec![View::Front, View::Right, View::Top, View::Iso],
-            width: 384,
-            height: 384,
             scalars: Some("piece".into()),
-            title: Some(if args.explode == 0.0 {
-                format!("chisel cut: {} pieces", result.pieces.len())
-            } else {
-                format!(
-                    "chisel cut: {} pieces, exploded {}",
-                    result.pieces.len(),
-                    args.explode
-                )
-            }),
-            facing,
-            ..Default::default()
+            ..super::preview_options(
+                if args.explode == 0.0 {
+                    format!("chisel cut: {} pieces", result.pieces.len())
+                } else {
+                    format!(
+                        "chisel cut: {} pieces, exploded {}",
+                        result.pieces.len(),
+                        args.explode
+                    )
+                },
+                facing,
+            )
         };
         crate::render::render_png(&gpu, &merged(&result.pieces, args.explode), &opts, path)?;
     }
@@ -272,5 +264,5 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         result.stats.triangles_total,
         args.output.display()
     ));
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::WithJson)
 }

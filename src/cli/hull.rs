@@ -9,11 +9,11 @@ use std::time::Instant;
 use clap::ValueEnum;
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{Global, ViewAxes};
 use crate::hull::{ConvexHull, CoplanarPolicy, HullOptions, HullSummary, Order};
 use crate::polyhedron::{Zkh, background_components};
-use crate::render::{RenderOptions, View};
+use crate::render::RenderOptions;
 use crate::voxel::{CandidateKind, Component, DigitalObject, Selection};
 
 /// Candidate voxels for hull vertices at voxel centres (§4.1.2–4.1.3).
@@ -240,12 +240,8 @@ pub struct Args {
     /// Skip the background components inside the hull (ZKH).
     #[arg(long)]
     no_zkh: bool,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
@@ -257,9 +253,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.preview {
         crate::foundation::fs::check_png_output(path)?;
     }
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     let (selection, component) = args.select.parse()?;
     let mut timings = HullTimings::default();
     let t = Instant::now();
@@ -298,17 +292,15 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.preview {
         let gpu = global.gpu()?;
         let opts = RenderOptions {
-            views: vec![View::Front, View::Right, View::Top, View::Iso],
-            width: 384,
-            height: 384,
             wireframe: true,
-            title: Some(format!(
-                "chisel hull: {} ({} faces)",
-                super::file_name(&args.volume),
-                hull.n_faces()
-            )),
-            facing,
-            ..Default::default()
+            ..super::preview_options(
+                format!(
+                    "chisel hull: {} ({} faces)",
+                    super::file_name(&args.volume),
+                    hull.n_faces()
+                ),
+                facing,
+            )
         };
         crate::render::render_png(&gpu, &mesh, &opts, path)?;
     }
@@ -343,5 +335,5 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             None => format!("{n_zkh} ZKH"),
         }
     ));
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::WithJson)
 }

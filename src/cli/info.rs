@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use super::Global;
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use crate::gpu::{AdapterReport, Gpu, GpuFeatures, GpuOptions, adapter_reports};
 
 /// The report of `chisel info`.
@@ -40,18 +40,12 @@ enum Chosen {
 /// Arguments of `chisel info`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Print the report as JSON.
-    #[arg(long)]
-    json: bool,
-    /// Also write the JSON report to this file.
-    #[arg(long)]
-    report: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     let instance = crate::gpu::instance();
     let adapters = adapter_reports(&instance);
     let choice = global.adapter_choice()?;
@@ -75,7 +69,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             },
         },
     };
-    super::report::emit(&report, Show::Always, args.json, args.report.as_deref())?;
+    args.report.emit(&report, Show::Always)?;
     chosen?;
     Ok(())
 }

@@ -6,11 +6,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes};
 use crate::gpu::Backend;
 use crate::mc::{Group, IsoSpec, McOptions, marching_cubes};
-use crate::render::{RenderOptions, View};
 
 /// The report of `chisel mc`.
 #[derive(Debug, Serialize)]
@@ -86,12 +85,8 @@ pub struct Args {
     preview: Option<PathBuf>,
     #[command(flatten)]
     view: ViewAxes,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
@@ -102,9 +97,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let Some(path) = &args.preview {
         crate::foundation::fs::check_png_output(path)?;
     }
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     if let Some(dir) = &args.groups_dir {
         super::check_output_dir(dir)?;
     }
@@ -184,21 +177,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 &opened
             }
         };
-        let opts = RenderOptions {
-            views: vec![View::Front, View::Right, View::Top, View::Iso],
-            width: 384,
-            height: 384,
-            title: Some(format!(
+        let opts = super::preview_options(
+            format!(
                 "chisel mc: {} at {}",
                 super::file_name(&args.volume),
                 match iso {
                     IsoSpec::Level(l) => format!("level {l}"),
                     IsoSpec::Label(l) => format!("label {l}"),
                 }
-            )),
+            ),
             facing,
-            ..Default::default()
-        };
+        );
         crate::render::render_png(g, &surface.mesh, &opts, path)?;
     }
     let report = McReport {
@@ -234,5 +223,5 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         backend.name(),
         args.output.display()
     ));
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::WithJson)
 }

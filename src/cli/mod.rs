@@ -163,6 +163,24 @@ pub(super) fn clear_numbered_outputs(
     Ok(())
 }
 
+/// The preview a mesh-making command writes with `--preview`: four views
+/// (front, side, top, iso) of 384 px, titled, in the chosen facing.
+fn preview_options(title: String, facing: crate::render::Facing) -> crate::render::RenderOptions {
+    crate::render::RenderOptions {
+        views: vec![
+            crate::render::View::Front,
+            crate::render::View::Right,
+            crate::render::View::Top,
+            crate::render::View::Iso,
+        ],
+        width: 384,
+        height: 384,
+        title: Some(title),
+        facing,
+        ..Default::default()
+    }
+}
+
 /// Where data-parallel work runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum BackendArg {

@@ -16,13 +16,13 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::hull::{HullArgs, ObjectFigures, SelectArgs, SelectionFigures};
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes};
 use crate::gpu::Backend;
 use crate::polyhedron::{
     PolyhedrizeOptions, Polyhedron, PolyhedronSummary, ZkhReport, polyhedrize,
 };
-use crate::render::{RenderOptions, View};
+use crate::render::RenderOptions;
 use crate::voxel::{BoundaryTopology, DigitalObject, marching_cubes_integers};
 
 /// The report of `chisel polyhedrize`.
@@ -143,12 +143,8 @@ pub struct Args {
     /// exactly, by the nested shells and (merged surface) by ray parity.
     #[arg(long)]
     verify: bool,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 /// Largest preview mesh drawn with its edges.
@@ -157,7 +153,7 @@ const WIREFRAME_MAX_TRIANGLES: usize = 20_000;
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     // The preview axes are checked before the work, as the output paths are.
     let facing = args.view.facing()?;
-    for path in [&args.output, &args.cells_json, &args.report]
+    for path in [&args.output, &args.cells_json, &args.report.file]
         .into_iter()
         .flatten()
     {
@@ -298,26 +294,24 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             }
         };
         let opts = RenderOptions {
-            views: vec![View::Front, View::Right, View::Top, View::Iso],
-            width: 384,
-            height: 384,
             // Edges show the faces of a small polyhedron; on tens of
             // thousands of triangles they only darken the picture.
             wireframe: mesh.triangles.len() <= WIREFRAME_MAX_TRIANGLES,
             scalars: Some("depth".into()),
-            title: Some(match &merged {
-                Some(m) => format!(
-                    "chisel polyhedrize: merged surface, {} faces ({} split)",
-                    m.n_faces(),
-                    m.n_faces_split()
-                ),
-                None => format!(
-                    "chisel polyhedrize: {} shells, {} faces",
-                    summary.shells, summary.faces
-                ),
-            }),
-            facing,
-            ..Default::default()
+            ..super::preview_options(
+                match &merged {
+                    Some(m) => format!(
+                        "chisel polyhedrize: merged surface, {} faces ({} split)",
+                        m.n_faces(),
+                        m.n_faces_split()
+                    ),
+                    None => format!(
+                        "chisel polyhedrize: {} shells, {} faces",
+                        summary.shells, summary.faces
+                    ),
+                },
+                facing,
+            )
         };
         // The merged surface drawn face by face: flat, one depth per face.
         let faces = merged
@@ -374,7 +368,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         summary.g_nc,
         if verified.is_some() { "; verified lossless" } else { "" }
     ));
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())?;
+    args.report.emit(&report, Show::WithJson)?;
     if let Some((n, first)) = ray_parity.filter(|r| r.0 > 0) {
         anyhow::bail!(
             "{}: ray parity on the merged surface differs from the object in {n} voxels \

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes, vec3_arg};
 use crate::cut::CutStats;
 use crate::tissue::ct::CtFigures;
@@ -122,12 +122,8 @@ pub struct Args {
     bone_preview: Option<PathBuf>,
     #[command(flatten)]
     view: ViewAxes,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout.
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 /// A relaxation's inputs, ready to run.
@@ -401,9 +397,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     for path in [&args.preview, &args.bone_preview].into_iter().flatten() {
         crate::foundation::fs::check_png_output(path)?;
     }
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     if args.bone_mesh.is_none() && args.ct.is_none() {
         if args.bone_output.is_some() {
             anyhow::bail!("--bone-output needs a bone (--bone-mesh or --ct)");
@@ -527,7 +521,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     if diverged {
         // The report says where and how; the garbage state is not written.
-        if let Some(path) = &args.report {
+        if let Some(path) = &args.report.file {
             super::report::write(path, &run_report)?;
         }
         let at = report
@@ -544,7 +538,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             "the relaxation diverged{at} after {} iterations; {} \
              (use more increments, or a smaller --dt)",
             report.iterations,
-            if args.report.is_some() {
+            if args.report.file.is_some() {
                 "only the report was written"
             } else {
                 "nothing was written"
@@ -619,12 +613,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     });
     run_report.skin_self_intersecting_pairs = Some(crossings);
     run_report.skin_overshoot = Some(overshoot);
-    super::report::emit(
-        &run_report,
-        Show::WithJson,
-        args.json,
-        args.report.as_deref(),
-    )
+    args.report.emit(&run_report, Show::WithJson)
 }
 
 /// Skin moves above this multiple of the bone's largest move are warned about.

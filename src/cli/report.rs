@@ -4,7 +4,7 @@
 //! `schema`, `chisel.<command>/<version>`: the version goes up when a
 //! field changes meaning or goes away (new fields keep it).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 use serde_json::Value;
@@ -38,6 +38,32 @@ pub fn write<R: Report>(path: &Path, report: &R) -> anyhow::Result<()> {
     text.push('\n');
     crate::foundation::fs::write_atomic(path, text.as_bytes())?;
     Ok(())
+}
+
+/// `--report FILE` and `--json`, the same in every command with a report.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReportArgs {
+    /// Write the JSON report to FILE (atomically).
+    #[arg(long = "report", value_name = "FILE")]
+    pub file: Option<PathBuf>,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl ReportArgs {
+    /// Checks the report path before any work.
+    pub fn check(&self) -> crate::Result<()> {
+        match &self.file {
+            Some(path) => crate::foundation::fs::check_output_path(path),
+            None => Ok(()),
+        }
+    }
+
+    /// Prints and writes `report` as these flags ask ([`emit`]).
+    pub fn emit<R: Report>(&self, report: &R, show: Show) -> anyhow::Result<()> {
+        emit(report, show, self.json, self.file.as_deref())
+    }
 }
 
 /// Whether a report shows on stdout without `--json`.

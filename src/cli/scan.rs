@@ -53,7 +53,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::hull::{HullArgs, ObjectFigures};
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global};
 use crate::gpu::Backend;
 use crate::hull::{ConvexHull, HullOptions};
@@ -218,12 +218,8 @@ pub struct Args {
     backend: BackendChoice,
     #[command(flatten)]
     hull: HullArgs,
-    /// JSON report.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the report on stdout as JSON (else only the summary on stderr).
-    #[arg(long)]
-    json: bool,
+    #[command(flatten)]
+    report: ReportArgs,
 }
 
 /// One structure: its id in the per-voxel id map, the label value it
@@ -296,9 +292,7 @@ impl ZkhTotals {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     let name = args.volume.display();
     let t_total = Instant::now();
     let t = Instant::now();
@@ -407,7 +401,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         t_total.elapsed().as_secs_f64(),
         backend.name(),
     ));
-    super::report::emit(&report, Show::WithJson, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::WithJson)
 }
 
 /// The 6-connected components of the samples `≥ threshold`: the per-voxel

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use super::report::{Report, Show};
+use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global};
 use crate::foundation::Aabb;
 use crate::foundation::vertex_components;
@@ -95,12 +95,8 @@ struct GpuRange {
 pub struct Args {
     /// Mesh (.vtk .ply .obj .stl .byu) or volume (.nrrd .nhdr .mhd .mha .nii .nii.gz).
     file: PathBuf,
-    /// Print the report as JSON.
-    #[arg(long)]
-    json: bool,
-    /// Also write the JSON report to this file.
-    #[arg(long)]
-    report: Option<PathBuf>,
+    #[command(flatten)]
+    report: ReportArgs,
     /// Volumes: count voxels with value ≥ this level and their 6-connected components.
     #[arg(long)]
     level: Option<f64>,
@@ -125,9 +121,7 @@ pub fn is_volume(path: &std::path::Path) -> bool {
 }
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    if let Some(path) = &args.report {
-        crate::foundation::fs::check_output_path(path)?;
-    }
+    args.report.check()?;
     let report = if is_volume(&args.file) {
         StatsReport::Volume(volume_stats(global, args)?)
     } else {
@@ -139,7 +133,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         }
         StatsReport::Mesh(mesh_stats(global, args)?)
     };
-    super::report::emit(&report, Show::Always, args.json, args.report.as_deref())
+    args.report.emit(&report, Show::Always)
 }
 
 fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<MeshStats> {

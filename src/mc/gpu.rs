@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::cpu::RawSurface;
 use super::field::Field;
-use super::tables;
+use super::{exclusive_offsets, tables};
 use crate::foundation::vertex_components;
 use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::parity::find_sentinel;
@@ -177,8 +177,8 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     }
 
     // Host exclusive scan of the block sums.
-    let off_v = scan_with_total(counts.iter().map(|c| c[0]))?;
-    let off_t = scan_with_total(counts.iter().map(|c| c[1]))?;
+    let off_v = exclusive_offsets(counts.iter().map(|c| c[0].into()), "vertices")?;
+    let off_t = exclusive_offsets(counts.iter().map(|c| c[1].into()), "triangles")?;
     let per_layer = |z: usize, k: usize| -> u64 {
         counts[z * bpl..(z + 1) * bpl]
             .iter()
@@ -290,22 +290,6 @@ fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<G
         .enumerate()
         .for_each(|(k, out)| field.layer(z0 + k, out));
     GpuArray::from_slice(gpu, "mc.samples", &data)
-}
-
-/// The host scan between the passes: exclusive prefix sum in u32 with the
-/// total appended (one entry more than `values`); errors when the total
-/// overflows.
-pub(super) fn scan_with_total(values: impl Iterator<Item = u32>) -> Result<Vec<u32>> {
-    let mut sum = 0u32;
-    let mut out = Vec::new();
-    for v in values {
-        out.push(sum);
-        sum = sum.checked_add(v).ok_or_else(|| {
-            Error::limit("marching cubes: vertices or triangles", u64::MAX, u32::MAX)
-        })?;
-    }
-    out.push(sum);
-    Ok(out)
 }
 
 #[expect(

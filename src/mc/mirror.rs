@@ -14,8 +14,9 @@
 //! WGSL's 2.5-ulp division bound carried through `f32(p) + t`.
 
 use super::cpu::T_MIN;
+use super::exclusive_offsets;
 use super::field::Field;
-use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams, scan_with_total};
+use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams};
 use super::tables;
 use crate::Result;
 
@@ -268,8 +269,8 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
         level: field.level,
     };
     mc_classify(&classify, &samples, &table, &mut counts);
-    let off_v = scan_with_total(counts.iter().map(|c| c[0]))?;
-    let off_t = scan_with_total(counts.iter().map(|c| c[1]))?;
+    let off_v = exclusive_offsets(counts.iter().map(|c| c[0].into()), "vertices")?;
+    let off_t = exclusive_offsets(counts.iter().map(|c| c[1].into()), "triangles")?;
     let mut vert_base = vec![0u32; nz * layer];
     let mut positions = vec![[0.0f32; 4]; off_v[nz * bpl] as usize];
     let vertices = VerticesParams {

@@ -47,6 +47,30 @@ use crate::foundation::{Aabb, Forest};
 use crate::gpu::Backend;
 use crate::{Result, TriMesh, Volume};
 
+/// The host prefix sum between the passes, for every marching-cubes path
+/// (the fast CPU path, the mirrors and the GPU passes): exclusive offsets of
+/// `counts` with the total appended (one entry more than `counts`), in
+/// `u32` because vertex and triangle ids are `u32`; errors when the total
+/// reaches `u32::MAX`.
+pub(crate) fn exclusive_offsets(
+    counts: impl IntoIterator<Item = u64>,
+    what: &str,
+) -> Result<Vec<u32>> {
+    let mut out = vec![0u32];
+    let mut sum = 0u64;
+    for c in counts {
+        sum += c;
+        let offset = u32::try_from(sum)
+            .ok()
+            .filter(|&s| s < u32::MAX)
+            .ok_or_else(|| {
+                crate::Error::limit(format!("marching cubes: {what}"), sum, u32::MAX - 1)
+            })?;
+        out.push(offset);
+    }
+    Ok(out)
+}
+
 /// Edge of a forest leaf block in marching-cubes cells. The seed's leaf is
 /// one voxel cell (≈ 2 triangles); a leaf of 4³ cells (≈ 30 triangles on a
 /// surface) makes the tree ~50× smaller and the cut query several times

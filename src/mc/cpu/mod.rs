@@ -53,8 +53,8 @@ use stitch::stitch;
 pub const T_MIN: f32 = 1.0 / 1024.0;
 
 use super::field::Field;
-use super::tables;
-use crate::{Error, Result};
+use super::{exclusive_offsets, tables};
+use crate::Result;
 
 /// Index-space output of one marching-cubes run, before world transform.
 #[derive(Debug, Default)]
@@ -96,8 +96,8 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
             (count_vertices(&bits, z), tris)
         })
         .collect();
-    let vbase = exclusive_sum(counts.iter().map(|c| c.0), "vertices")?;
-    let tbase = exclusive_sum(counts.iter().map(|c| c.1), "triangles")?;
+    let vbase = exclusive_offsets(counts.iter().map(|c| c.0), "vertices")?;
+    let tbase = exclusive_offsets(counts.iter().map(|c| c.1), "triangles")?;
     let (n_v, n_t) = (vbase[nz] as usize, tbase[nz] as usize);
     let chunks = chunk_bounds(&bits, &counts);
 
@@ -129,7 +129,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
                 z0,
                 z1,
                 own_end,
-                first_vertex: vbase[z0] as u32,
+                first_vertex: vbase[z0],
                 n_vertices: (vbase[z1 + 1] - vbase[z0]) as usize,
                 positions: p0,
                 edges: e0,
@@ -149,25 +149,6 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
         groups,
         n_groups,
     })
-}
-
-/// Exclusive prefix sums (one more entry than `counts`: the total last);
-/// errors when the total reaches `u32::MAX`.
-fn exclusive_sum(counts: impl Iterator<Item = u64>, what: &str) -> Result<Vec<u64>> {
-    let mut out = vec![0u64];
-    let mut sum = 0u64;
-    for c in counts {
-        sum += c;
-        out.push(sum);
-    }
-    if sum >= u64::from(u32::MAX) {
-        return Err(Error::limit(
-            format!("marching cubes: {what}"),
-            sum,
-            u32::MAX - 1,
-        ));
-    }
-    Ok(out)
 }
 
 /// Cell layers `z0..z1` of each chunk: about `4 × threads` chunks of equal

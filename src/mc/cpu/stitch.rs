@@ -15,8 +15,8 @@ use crate::foundation::UnionFind;
 pub(super) fn stitch(
     chunk_groups: &[ChunkGroups],
     chunks: &[(usize, usize)],
-    vbase: &[u64],
-    tbase: &[u64],
+    vbase: &[u32],
+    tbase: &[u32],
     groups: &mut [u32],
 ) -> usize {
     let mut node_base = Vec::with_capacity(chunk_groups.len());
@@ -33,7 +33,7 @@ pub(super) fn stitch(
     for k in 1..chunk_groups.len() {
         let (prev, next) = (&chunk_groups[k - 1], &chunk_groups[k]);
         let z = chunks[k].0;
-        for id in vbase[z] as u32..vbase[z + 1] as u32 {
+        for id in vbase[z]..vbase[z + 1] {
             let a = prev.vertex_node[(id - prev.first_vertex) as usize];
             let b = next.vertex_node[(id - next.first_vertex) as usize];
             if a != NONE && b != NONE {

@@ -342,3 +342,15 @@ pub fn main() -> ExitCode {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// clap's own checks of every command's arguments (unique names,
+    /// valid `requires`/`conflicts_with` targets), which otherwise fire only
+    /// when that command runs.
+    #[test]
+    fn every_command_line_is_well_formed() {
+        use clap::CommandFactory;
+        super::Cli::command().debug_assert();
+    }
+}

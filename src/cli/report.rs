@@ -44,7 +44,7 @@ pub fn write<R: Report>(path: &Path, report: &R) -> anyhow::Result<()> {
 #[derive(Debug, Clone, clap::Args)]
 pub struct ReportArgs {
     /// Write the JSON report to FILE (atomically).
-    #[arg(long = "report", value_name = "FILE")]
+    #[arg(id = "report_file", long = "report", value_name = "FILE")]
     pub file: Option<PathBuf>,
     /// Print the report as JSON on stdout.
     #[arg(long)]

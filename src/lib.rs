@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue
+//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms
 //!  ③ GPU, parity   gpu (context, Backend, kernel specs, pass builder, buffers), parity (Tolerance, comparators)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -29,6 +29,7 @@
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod cut;
+pub mod dms;
 pub mod error;
 pub mod exclusive_scan;
 pub mod foundation;

@@ -224,6 +224,19 @@ pub enum Refusal {
     /// A selection (of bone vertices, of a bone piece) that selects nothing.
     #[error("{what}: empty selection: {detail}")]
     EmptySelection { what: String, detail: String },
+    /// Parameter triangles that stay degenerate or flipped after the
+    /// repair of isolated ones (DMS parametrisation).
+    #[error(
+        "the parametrisation folds {} triangle(s) (first: {:?}); isolated ones are repaired, \
+         these are not: try another projection",
+        triangles.len(),
+        &triangles[..triangles.len().min(10)]
+    )]
+    FoldedParameters { triangles: Vec<u32> },
+    /// Two boundary edges of the parameter mesh cross: the parameter
+    /// triangles overlap (DMS parametrisation).
+    #[error("the parameter domain's boundary crosses itself: edges {edges:?} meet")]
+    OverlappingParameters { edges: [[u32; 2]; 2] },
     /// A spring network with no springs on free nodes and no damping: no
     /// time step is stable.
     #[error(

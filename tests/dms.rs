@@ -208,3 +208,136 @@ fn fran_cut_at_n_5() {
     assert_eq!((l.points.len(), l.triangles.len()), (34_161, 67_584));
     manifold_edges(&l.triangles);
 }
+
+mod param {
+    use chisel::dms::param::det;
+    use chisel::dms::{Projection, parametrise};
+    use chisel::{Error, Refusal, TriMesh};
+    use glam::{DVec2, Quat, Vec3};
+
+    use super::{common, grid};
+
+    fn mesh(positions: Vec<Vec3>, cols: u32, rows: u32) -> TriMesh {
+        TriMesh::new(positions, grid(cols, rows)).unwrap()
+    }
+
+    fn all_positive(uv: &[DVec2], m: &TriMesh) -> bool {
+        m.triangles.iter().all(|&t| det(uv, t) > 0.0)
+    }
+
+    #[test]
+    fn planar_is_an_isometry_of_a_flat_mesh() {
+        let q = Quat::from_euler(glam::EulerRot::XYZ, 0.7, -1.2, 2.1);
+        let (cols, rows) = (7, 5);
+        let pts: Vec<Vec3> = (0..cols * rows)
+            .map(|k| q * Vec3::new((k % cols) as f32 * 1.5, (k / cols) as f32, 0.0) + Vec3::ONE)
+            .collect();
+        let m = mesh(pts.clone(), cols, rows);
+        let p = parametrise(&m, &Projection::Planar).unwrap();
+        assert!(all_positive(&p.uv, &m) && p.repaired.is_empty());
+        for (a, b) in [(0, 34), (3, 17), (8, 30), (6, 28)] {
+            let d3 = (pts[a] - pts[b]).length() as f64;
+            let d2 = p.uv[a].distance(p.uv[b]);
+            assert!((d3 - d2).abs() < 1e-5, "{a}–{b}: {d3} vs {d2}");
+        }
+    }
+
+    #[test]
+    fn cylinder_unrolls_about_the_fitted_axis() {
+        // A grid on a cylinder of radius 2 about x = 1, z = −3, facing −x.
+        let (cols, rows) = (21, 6);
+        let angle = |c: u32| (std::f32::consts::PI * (0.5 + c as f32 / 20.0 * 1.1)).rem_euclid(6.3);
+        let pts: Vec<Vec3> = (0..cols * rows)
+            .map(|k| {
+                let (c, r) = (k % cols, k / cols);
+                let a = angle(c);
+                Vec3::new(1.0 + 2.0 * a.sin(), r as f32 * 0.4, -3.0 + 2.0 * a.cos())
+            })
+            .collect();
+        let m = mesh(pts, cols, rows);
+        let p = parametrise(&m, &Projection::Cylinder).unwrap();
+        let (centre, radius) = p.axis.unwrap();
+        assert!(centre.distance(DVec2::new(1.0, -3.0)) < 1e-5, "{centre}");
+        assert!((radius - 2.0).abs() < 1e-5, "{radius}");
+        assert!(all_positive(&p.uv, &m) && p.repaired.is_empty());
+        // Arc lengths along a row: R · Δα.
+        let step = 2.0 * std::f64::consts::PI * 1.1 / 20.0;
+        let d = p.uv[1].distance(p.uv[0]);
+        assert!((d - step).abs() < 1e-5, "{d} vs {step}");
+        // The seam lies opposite the mean direction: the domain is centred.
+        let mid = (p.uv[0].x + p.uv[20].x) / 2.0;
+        assert!(mid.abs() < 1e-5, "{mid}");
+    }
+
+    #[test]
+    fn isolated_flips_are_repaired_and_clusters_refused() {
+        let (cols, rows) = (6, 6);
+        let flat: Vec<DVec2> = (0..cols * rows)
+            .map(|k| DVec2::new((k % cols) as f64, (k / cols) as f64))
+            .collect();
+        let m = mesh(vec![Vec3::ZERO; (cols * rows) as usize], cols, rows);
+        // One interior vertex pushed past its neighbour: its star folds.
+        let mut uv = flat.clone();
+        uv[14] = DVec2::new(3.6, 2.0);
+        let bad: Vec<u32> = (0..m.triangles.len() as u32)
+            .filter(|&t| det(&uv, m.triangles[t as usize]) <= 0.0)
+            .collect();
+        assert!(!bad.is_empty());
+        let p = parametrise(&m, &Projection::Given(uv)).unwrap();
+        assert_eq!(p.repaired, bad);
+        assert!(all_positive(&p.uv, &m));
+        // A whole column collapsed (boundary vertices included): refused with its ids.
+        let mut uv = flat;
+        for r in 0..rows {
+            uv[(r * cols + 2) as usize].x = 1.0;
+        }
+        match parametrise(&m, &Projection::Given(uv)) {
+            Err(Error::Refused(Refusal::FoldedParameters { triangles })) => {
+                assert_eq!(triangles.len(), 2 * (rows as usize - 1), "{triangles:?}")
+            }
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn an_overlapping_domain_is_refused() {
+        // A strip wound one and a half times round a spiral: every triangle
+        // positive, the boundary crossing itself.
+        let (cols, rows) = (40, 2);
+        let uv: Vec<DVec2> = (0..cols * rows)
+            .map(|k| {
+                let (c, r) = ((k % cols) as f64, (k / cols) as f64);
+                let a = c / (cols - 1) as f64 * 3.0 * std::f64::consts::PI;
+                // 0.31 wider per turn than a lap, 0.5 wide: the laps overlap.
+                let radius = 3.0 + 0.05 * a - 0.5 * r;
+                DVec2::new(radius * a.cos(), radius * a.sin())
+            })
+            .collect();
+        let m = mesh(vec![Vec3::ZERO; (cols * rows) as usize], cols, rows);
+        let err = parametrise(&m, &Projection::Given(uv)).unwrap_err();
+        assert!(
+            matches!(err, Error::Refused(Refusal::OverlappingParameters { .. })),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn fran_cut_cylinder_and_planar() {
+        let Some(m) = common::real_mesh("fran_cut.vtk") else {
+            return;
+        };
+        // About the fitted axis every triangle comes out negative, so the
+        // domain is mirrored, and none needs repair (docs/design/dms.md §1).
+        let p = parametrise(&m, &Projection::Cylinder).unwrap();
+        assert!(p.mirrored && p.repaired.is_empty());
+        assert!(all_positive(&p.uv, &m));
+        // The planar projection folds the sides of the face (83 triangles,
+        // 53 still after the repair of isolated ones): refused, with ids.
+        match parametrise(&m, &Projection::Planar) {
+            Err(Error::Refused(Refusal::FoldedParameters { triangles })) => {
+                assert_eq!(triangles.len(), 53)
+            }
+            other => panic!("expected a refusal, got {:?}", other.map(|p| p.repaired)),
+        }
+    }
+}

@@ -4,14 +4,18 @@
 //!
 //! The room is being built in steps (issue "DMS spline surfaces"; the
 //! formulas, their checks and the open decisions are in
-//! docs/design/dms.md). Built so far: the evaluation lattice of §2.5
-//! ([`lattice()`]): `n` points per parameter edge, every vertex and edge
-//! point numbered once, `(n − 1)²` output triangles per parameter triangle.
+//! docs/design/dms.md). Built so far: the parametrisation of §2.1
+//! ([`parametrise`]) and the evaluation lattice of §2.5 ([`lattice()`]):
+//! `n` points per parameter edge, every vertex and edge point numbered
+//! once, `(n − 1)²` output triangles per parameter triangle.
 //!
 //! ```text
-//!  parameter triangles (ids) ──lattice(n)──▶ Lattice { points: (triangle, i, j), triangles }
+//!  TriMesh ──parametrise(cylinder | planar | given)──▶ uv per vertex (positive, repaired, no overlap)
+//!  parameter triangles ──lattice(n)──▶ Lattice { points: (triangle, i, j), triangles }
 //! ```
 
 pub mod lattice;
+pub mod param;
 
 pub use lattice::{Lattice, LatticePoint, lattice, lattice_counts};
+pub use param::{Parametrisation, Projection, parametrise};

@@ -237,6 +237,13 @@ pub enum Refusal {
     /// triangles overlap (DMS parametrisation).
     #[error("the parameter domain's boundary crosses itself: edges {edges:?} meet")]
     OverlappingParameters { edges: [[u32; 2]; 2] },
+    /// No knot candidate of a vertex lies in its allowed region (inside its
+    /// star, or outside the boundary edges at it): the star is too thin.
+    #[error(
+        "no position for the knot cloud of parameter vertex {vertex}: its star is too thin \
+         for the candidate circle"
+    )]
+    NoKnotPosition { vertex: u32 },
     /// A spring network with no springs on free nodes and no damping: no
     /// time step is stable.
     #[error(

@@ -341,3 +341,116 @@ mod param {
         }
     }
 }
+
+mod knots {
+    use chisel::dms::knots::{RADIUS_FRACTION, quality, scored_triples};
+    use chisel::dms::{Projection, knot_clouds, parametrise};
+    use chisel::{Error, Refusal};
+    use glam::DVec2;
+
+    use super::{common, grid};
+
+    /// A jittered `cols × rows` grid of parameter points (deterministic).
+    fn jittered(cols: u32, rows: u32) -> Vec<DVec2> {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        (0..cols * rows)
+            .map(|k| {
+                let (c, r) = ((k % cols) as f64, (k / cols) as f64);
+                let interior = c > 0.0 && r > 0.0 && c < (cols - 1) as f64 && r < (rows - 1) as f64;
+                let j = if interior { 0.3 } else { 0.0 };
+                DVec2::new(c + j * next(), r + j * next())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_37_scored_triples() {
+        let t = scored_triples();
+        assert_eq!(t.len(), 37);
+        // The ten DMS triangles [r_i, s_j, t_k], i + j + k ≤ 2, are the signed ones.
+        let signed: Vec<[usize; 3]> = t.iter().filter(|(_, s)| *s).map(|(k, _)| *k).collect();
+        assert_eq!(signed.len(), 10);
+        assert!(
+            signed
+                .iter()
+                .all(|k| k.map(|x| x / 3) == [0, 1, 2]
+                    && k.iter().map(|x| x % 3).sum::<usize>() <= 2)
+        );
+        assert!(
+            (quality(DVec2::ZERO, DVec2::X, DVec2::new(0.5, 3f64.sqrt() / 2.0)) - 1.0).abs()
+                < 1e-12
+        );
+        assert!(quality(DVec2::ZERO, DVec2::new(0.5, 3f64.sqrt() / 2.0), DVec2::X) < 0.0);
+    }
+
+    #[test]
+    fn knots_keep_their_regions_and_every_triple_independent() {
+        let (cols, rows) = (7, 6);
+        let uv = jittered(cols, rows);
+        let tris = grid(cols, rows);
+        let k = knot_clouds(&uv, &tris).unwrap();
+        assert!(k.min_quality > 1e-3, "min quality {}", k.min_quality);
+        let boundary = |v: usize| {
+            let (c, r) = (v as u32 % cols, v as u32 / cols);
+            c == 0 || r == 0 || c == cols - 1 || r == rows - 1
+        };
+        for (v, cloud) in k.knots.iter().enumerate() {
+            assert_eq!(cloud[0], uv[v]);
+            let star: Vec<[DVec2; 3]> = (tris.iter())
+                .filter(|t| t.contains(&(v as u32)))
+                .map(|t| t.map(|w| uv[w as usize]))
+                .collect();
+            let nearest = (star.iter().flatten())
+                .filter(|&&p| p != uv[v])
+                .map(|p| p.distance(uv[v]))
+                .fold(f64::INFINITY, f64::min);
+            for &q in &cloud[1..] {
+                assert!((q.distance(uv[v]) - RADIUS_FRACTION * nearest).abs() < 1e-12);
+                let inside = star.iter().any(|[a, b, c]| {
+                    (*b - *a).perp_dot(q - *a) > 0.0
+                        && (*c - *b).perp_dot(q - *b) > 0.0
+                        && (*a - *c).perp_dot(q - *c) > 0.0
+                });
+                // Interior vertices inside their star, boundary ones outside the domain.
+                assert_eq!(inside, !boundary(v), "vertex {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_star_too_thin_for_the_candidates_is_refused() {
+        // A fan round vertex 0 from 10° to 365°: the outer wedge (5°, 10°)
+        // holds no multiple of the 15° step.
+        let n = 24;
+        let mut uv = vec![DVec2::ZERO];
+        for k in 0..=n {
+            let a = (10.0 + 355.0 * k as f64 / n as f64).to_radians();
+            uv.push(DVec2::new(a.cos(), a.sin()));
+        }
+        let tris: Vec<[u32; 3]> = (1..=n as u32).map(|k| [0, k, k + 1]).collect();
+        assert!(matches!(
+            knot_clouds(&uv, &tris),
+            Err(Error::Refused(Refusal::NoKnotPosition { vertex: 0 }))
+        ));
+    }
+
+    #[test]
+    fn fran_cut_knots() {
+        let Some(m) = common::real_mesh("fran_cut.vtk") else {
+            return;
+        };
+        let p = parametrise(&m, &Projection::Cylinder).unwrap();
+        let k = knot_clouds(&p.uv, &m.triangles).unwrap();
+        eprintln!(
+            "fran_cut: smallest knot-triple quality {:.4}",
+            k.min_quality
+        );
+        assert!(k.min_quality > 0.0, "{}", k.min_quality);
+    }
+}

@@ -1,0 +1,222 @@
+//! Knot clouds (SPEC §2.2, seed §2.2.3 and §2.3.1, l.346–382): every
+//! parameter vertex `t_{i,0}` gets two more knots `t_{i,1}`, `t_{i,2}`, so
+//! that every triple of knots the degree-2 recursion uses stays affinely
+//! independent, and the ten DMS triangles `[r_i, s_j, t_k]` (`i + j + k ≤
+//! 2`) of each parameter triangle stay positively oriented.
+//!
+//! The seed leaves the constants open; chosen here (docs/design/dms.md §2):
+//! - candidates on the circle of radius 1/5 of the distance to the nearest
+//!   neighbour (seed l.362), every [`THETA_DEG`]° (24 candidates);
+//! - the quality of a triple is the normalised determinant
+//!   `q = 2√3·d(a, b, c) / (|ab|² + |bc|² + |ca|²)` (1 for an equilateral
+//!   triangle, scale-free, signed);
+//! - the triples scored per triangle are the 37 three-knot subsets of the
+//!   six knot sets `V_β` (not the seed's 27 cross triples, which miss the
+//!   same-cloud triples the recursion uses); a DMS triangle scores its
+//!   signed `q`, every other triple `|q|`;
+//! - `t_{i,1}` is chosen first, then `t_{i,2}` given it, each maximising the
+//!   smallest score over the incident triangles (maximin), vertices in id
+//!   order, scoring only knots already placed;
+//! - an interior vertex's knots lie strictly inside one of its triangles; a
+//!   boundary vertex's strictly outside every boundary edge at it (the
+//!   outer half-planes: there the terms that do not cancel between
+//!   neighbouring triangles keep their support off the domain, so the
+//!   partition of unity holds up to the border; the seed's "Ω_n covering the
+//!   whole boundary triangle" cannot be met at a vertex of two or more
+//!   triangles).
+//!
+//! The smallest quality reached over all triangles is reported
+//! ([`KnotClouds::min_quality`]).
+
+use std::collections::HashMap;
+
+use glam::DVec2;
+
+use crate::{Error, Refusal, Result};
+
+/// Angle step of the knot candidates, degrees.
+pub const THETA_DEG: f64 = 15.0;
+
+/// Knot radius as a fraction of the distance to the nearest neighbour.
+pub const RADIUS_FRACTION: f64 = 0.2;
+
+/// The knot clouds `[t_{i,0}, t_{i,1}, t_{i,2}]` of every vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnotClouds {
+    pub knots: Vec<[DVec2; 3]>,
+    /// The smallest quality over every scored triple of every triangle.
+    pub min_quality: f64,
+}
+
+/// Normalised determinant of `a b c` (module docs).
+pub fn quality(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    let d = (b - a).perp_dot(c - a);
+    let l = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+    if l == 0.0 {
+        return 0.0;
+    }
+    2.0 * 3f64.sqrt() * d / l
+}
+
+/// The knot indices of one triangle's knot set `V_β`, `β = (i, j, k)`,
+/// `i + j + k = 2`: knot `3·corner + cloud` (`r_0 = 0 … t_2 = 8`).
+pub fn knot_set(beta: [usize; 3]) -> Vec<usize> {
+    (0..3)
+        .flat_map(|corner| (0..=beta[corner]).map(move |cloud| 3 * corner + cloud))
+        .collect()
+}
+
+/// The six `β` of degree 2, in the order `(2,0,0), (1,1,0), (1,0,1),
+/// (0,2,0), (0,1,1), (0,0,2)`.
+pub const BETAS: [[usize; 3]; 6] = [
+    [2, 0, 0],
+    [1, 1, 0],
+    [1, 0, 1],
+    [0, 2, 0],
+    [0, 1, 1],
+    [0, 0, 2],
+];
+
+/// The scored triples of one triangle: `(knots, signed)`, `signed` for the
+/// ten DMS triangles `[r_i, s_j, t_k]`, `i + j + k ≤ 2` (37 in all).
+pub fn scored_triples() -> Vec<([usize; 3], bool)> {
+    let mut out: Vec<([usize; 3], bool)> = Vec::new();
+    for beta in BETAS {
+        let v = knot_set(beta);
+        for a in 0..v.len() {
+            for b in a + 1..v.len() {
+                for c in b + 1..v.len() {
+                    let t = [v[a], v[b], v[c]];
+                    let corners = t.map(|k| k / 3);
+                    let dms = corners == [0, 1, 2];
+                    if !out.iter().any(|(u, _)| *u == t) {
+                        out.push((t, dms));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The knot clouds of the positively oriented parameter triangles
+/// `triangles` over the points `uv` (module docs).
+///
+/// Errors: [`Refusal::NoKnotPosition`] when no candidate of a vertex lies
+/// in its allowed region (a star too thin for the angle step).
+pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
+    let n = uv.len();
+    let mut star: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            star[tri[k] as usize].push(t as u32);
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    // Directed boundary edges (interior on the left).
+    let mut boundary: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
+    for tri in triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if edges[&(a.min(b), a.max(b))] == 1 {
+                boundary[a as usize].push((a, b));
+                boundary[b as usize].push((a, b));
+            }
+        }
+    }
+    let triples = scored_triples();
+    // Knot k of vertex v: None until placed.
+    let mut knots: Vec<[Option<DVec2>; 3]> = uv.iter().map(|&p| [Some(p), None, None]).collect();
+    let score = |knots: &[[Option<DVec2>; 3]], t: u32, need: (usize, usize)| -> Option<f64> {
+        let tri = triangles[t as usize];
+        let mut worst: Option<f64> = None;
+        for &(ks, signed) in &triples {
+            let pts = ks.map(|k| knots[tri[k / 3] as usize][k % 3]);
+            let [Some(a), Some(b), Some(c)] = pts else {
+                continue;
+            };
+            // Only triples with the knot being placed.
+            if !ks
+                .iter()
+                .any(|&k| tri[k / 3] as usize == need.0 && k % 3 == need.1)
+            {
+                continue;
+            }
+            let q = quality(a, b, c);
+            let s = if signed { q } else { q.abs() };
+            worst = Some(worst.map_or(s, |w: f64| w.min(s)));
+        }
+        worst
+    };
+    let steps = (360.0 / THETA_DEG).round() as usize;
+    for v in 0..n {
+        if star[v].is_empty() {
+            continue;
+        }
+        let p = uv[v];
+        let nearest = (star[v].iter())
+            .flat_map(|&t| triangles[t as usize])
+            .filter(|&w| w as usize != v)
+            .map(|w| uv[w as usize].distance(p))
+            .fold(f64::INFINITY, f64::min);
+        let radius = RADIUS_FRACTION * nearest;
+        let allowed = |q: DVec2| -> bool {
+            if boundary[v].is_empty() {
+                star[v].iter().any(|&t| {
+                    let [a, b, c] = triangles[t as usize].map(|w| uv[w as usize]);
+                    (b - a).perp_dot(q - a) > 0.0
+                        && (c - b).perp_dot(q - b) > 0.0
+                        && (a - c).perp_dot(q - c) > 0.0
+                })
+            } else {
+                boundary[v].iter().all(|&(a, b)| {
+                    let (a, b) = (uv[a as usize], uv[b as usize]);
+                    (b - a).perp_dot(q - a) < 0.0
+                })
+            }
+        };
+        for cloud in 1..3 {
+            let mut best: Option<(f64, DVec2)> = None;
+            for s in 0..steps {
+                let angle = (s as f64 * THETA_DEG).to_radians();
+                let q = p + radius * DVec2::new(angle.cos(), angle.sin());
+                if !allowed(q) || knots[v][..cloud].iter().flatten().any(|&k| k == q) {
+                    continue;
+                }
+                knots[v][cloud] = Some(q);
+                let s = (star[v].iter())
+                    .filter_map(|&t| score(&knots, t, (v, cloud)))
+                    .fold(f64::INFINITY, f64::min);
+                knots[v][cloud] = None;
+                if best.is_none_or(|(b, _)| s > b) {
+                    best = Some((s, q));
+                }
+            }
+            let Some((_, q)) = best else {
+                return Err(Refusal::NoKnotPosition { vertex: v as u32 }.into());
+            };
+            knots[v][cloud] = Some(q);
+        }
+    }
+    let mut min_quality = f64::INFINITY;
+    for tri in triangles {
+        for &(ks, signed) in &triples {
+            let [a, b, c] = ks.map(|k| knots[tri[k / 3] as usize][k % 3]);
+            let (Some(a), Some(b), Some(c)) = (a, b, c) else {
+                return Err(Error::Internal("a knot of a used vertex is missing".into()));
+            };
+            let q = quality(a, b, c);
+            min_quality = min_quality.min(if signed { q } else { q.abs() });
+        }
+    }
+    Ok(KnotClouds {
+        knots: knots
+            .into_iter()
+            .zip(uv)
+            .map(|(k, &p)| [p, k[1].unwrap_or(p), k[2].unwrap_or(p)])
+            .collect(),
+        min_quality,
+    })
+}

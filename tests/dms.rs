@@ -348,26 +348,8 @@ mod knots {
     use chisel::{Error, Refusal};
     use glam::DVec2;
 
+    use super::knots_fixture::jittered_domain;
     use super::{common, grid};
-
-    /// A jittered `cols × rows` grid of parameter points (deterministic).
-    fn jittered(cols: u32, rows: u32) -> Vec<DVec2> {
-        let mut s = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        (0..cols * rows)
-            .map(|k| {
-                let (c, r) = ((k % cols) as f64, (k / cols) as f64);
-                let interior = c > 0.0 && r > 0.0 && c < (cols - 1) as f64 && r < (rows - 1) as f64;
-                let j = if interior { 0.3 } else { 0.0 };
-                DVec2::new(c + j * next(), r + j * next())
-            })
-            .collect()
-    }
 
     #[test]
     fn the_37_scored_triples() {
@@ -392,7 +374,7 @@ mod knots {
     #[test]
     fn knots_keep_their_regions_and_every_triple_independent() {
         let (cols, rows) = (7, 6);
-        let uv = jittered(cols, rows);
+        let (uv, _) = jittered_domain(cols, rows);
         let tris = grid(cols, rows);
         let k = knot_clouds(&uv, &tris).unwrap();
         assert!(k.min_quality > 1e-3, "min quality {}", k.min_quality);
@@ -452,5 +434,140 @@ mod knots {
             k.min_quality
         );
         assert!(k.min_quality > 0.0, "{}", k.min_quality);
+    }
+}
+
+mod oracle {
+    use chisel::dms::knot_clouds;
+    use chisel::dms::knots::BETAS;
+    use chisel::dms::oracle::{bsplines, simplex_spline};
+    use glam::DVec2;
+
+    use super::knots_fixture::{jittered_domain, points_of};
+
+    /// Σ over every triangle of the six B-splines at `u`, and each value.
+    fn basis(u: DVec2, clouds: &[[[DVec2; 3]; 3]]) -> Vec<[f64; 6]> {
+        clouds.iter().map(|&c| bsplines(u, c)).collect()
+    }
+
+    #[test]
+    fn partition_of_unity_and_positivity_up_to_the_border() {
+        let (uv, tris) = jittered_domain(7, 6);
+        let k = knot_clouds(&uv, &tris).unwrap();
+        let clouds: Vec<[[DVec2; 3]; 3]> = tris
+            .iter()
+            .map(|t| t.map(|v| k.knots[v as usize]))
+            .collect();
+        for u in points_of(&uv, &tris) {
+            let b = basis(u, &clouds);
+            let sum: f64 = b.iter().flatten().sum();
+            assert!((sum - 1.0).abs() < 1e-12, "Σ N = {sum} at {u}");
+            // N ≥ 0; the recursion's signed λ leave rounding of the
+            // partition's order (−6e-15 seen at a boundary vertex).
+            let low = b.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+            assert!(low >= -1e-12, "negative N {low:e} at {u}");
+        }
+    }
+
+    #[test]
+    fn quadratics_are_reproduced_from_their_blossoms() {
+        let (uv, tris) = jittered_domain(6, 5);
+        let k = knot_clouds(&uv, &tris).unwrap();
+        // P(u) = uᵀAu + b·u + c and its blossom p(x, y) = xᵀAy + b·(x + y)/2 + c.
+        let (a, b, c) = ([0.7, -0.4, 1.3], DVec2::new(-2.0, 0.5), 3.0);
+        let blossom = |x: DVec2, y: DVec2| {
+            a[0] * x.x * y.x
+                + a[1] * (x.x * y.y + x.y * y.x)
+                + a[2] * x.y * y.y
+                + b.dot(x + y) / 2.0
+                + c
+        };
+        for u in points_of(&uv, &tris) {
+            let mut f = 0.0;
+            for t in &tris {
+                let clouds = t.map(|v| k.knots[v as usize]);
+                let n = bsplines(u, clouds);
+                for (s, beta) in BETAS.iter().enumerate() {
+                    // The control point of N_β: the blossom at the first i, j, k
+                    // knots of the clouds of r, s, t.
+                    let args: Vec<DVec2> = (0..3)
+                        .flat_map(|corner| (0..beta[corner]).map(move |x| clouds[corner][x]))
+                        .collect();
+                    f += n[s] * blossom(args[0], args[1]);
+                }
+            }
+            let want = blossom(u, u);
+            assert!(
+                (f - want).abs() < 1e-10 * want.abs().max(1.0),
+                "{f} vs {want} at {u}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_recursion_does_not_depend_on_the_knot_triple() {
+        let (uv, tris) = jittered_domain(5, 5);
+        let k = knot_clouds(&uv, &tris).unwrap();
+        let t = tris[9];
+        let knots: Vec<DVec2> = [(0, 0), (0, 1), (1, 0), (1, 1), (2, 0)]
+            .iter()
+            .map(|&(c, x)| k.knots[t[c] as usize][x])
+            .collect();
+        for u in points_of(&uv, &tris).into_iter().take(60) {
+            let m = simplex_spline(u, &knots);
+            // Another first triple: the knots in reverse and rotated order.
+            for rot in 1..5 {
+                let mut other = knots.clone();
+                other.reverse();
+                other.rotate_left(rot);
+                let n = simplex_spline(u, &other);
+                assert!(
+                    (m - n).abs() <= 1e-12 * m.abs().max(1.0),
+                    "{m} vs {n} at {u}"
+                );
+            }
+        }
+    }
+}
+
+mod knots_fixture {
+    use glam::DVec2;
+
+    use super::grid;
+
+    /// A jittered grid domain: points and counter-clockwise triangles.
+    pub fn jittered_domain(cols: u32, rows: u32) -> (Vec<DVec2>, Vec<[u32; 3]>) {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let uv = (0..cols * rows)
+            .map(|k| {
+                let (c, r) = ((k % cols) as f64, (k / cols) as f64);
+                let inner = c > 0.0 && r > 0.0 && c < (cols - 1) as f64 && r < (rows - 1) as f64;
+                let j = if inner { 0.3 } else { 0.0 };
+                DVec2::new(c + j * next(), r + j * next())
+            })
+            .collect();
+        (uv, grid(cols, rows))
+    }
+
+    /// Every vertex, every edge midpoint and three points inside each
+    /// triangle (the domain's border included).
+    pub fn points_of(uv: &[DVec2], tris: &[[u32; 3]]) -> Vec<DVec2> {
+        let mut out: Vec<DVec2> = uv.to_vec();
+        for t in tris {
+            let [a, b, c] = t.map(|v| uv[v as usize]);
+            out.extend([(a + b) / 2.0, (b + c) / 2.0, (c + a) / 2.0]);
+            out.extend([
+                a * 0.6 + b * 0.3 + c * 0.1,
+                a * 0.2 + b * 0.2 + c * 0.6,
+                (a + b + c) / 3.0,
+            ]);
+        }
+        out
     }
 }

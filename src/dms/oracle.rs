@@ -11,7 +11,7 @@
 //!   same value, seed l.187).
 //! - The six normalised B-splines of a triangle: `N_β(u) = d(r_i, s_j, t_k)
 //!   · M(u | V_β)`, `V_β = {r_0..r_i, s_0..s_j, t_0..t_k}` (eq. 2.7, 2.10),
-//!   in the order of [`BETAS`](super::knots::BETAS).
+//!   in the order of [`BETAS`].
 
 use glam::DVec2;
 

@@ -28,8 +28,6 @@
 //! The smallest quality reached over all triangles is reported
 //! ([`KnotClouds::min_quality`]).
 
-use std::collections::HashMap;
-
 use glam::DVec2;
 
 use crate::{Error, Refusal, Result};
@@ -107,24 +105,16 @@ pub fn scored_triples() -> Vec<([usize; 3], bool)> {
 pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
     let n = uv.len();
     let mut star: Vec<Vec<u32>> = vec![Vec::new(); n];
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
     for (t, tri) in triangles.iter().enumerate() {
-        for k in 0..3 {
-            star[tri[k] as usize].push(t as u32);
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        for &v in tri {
+            star[v as usize].push(t as u32);
         }
     }
-    // Directed boundary edges (interior on the left).
+    // Directed boundary edges at each vertex (interior on the left).
     let mut boundary: Vec<Vec<(u32, u32)>> = vec![Vec::new(); n];
-    for tri in triangles {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            if edges[&(a.min(b), a.max(b))] == 1 {
-                boundary[a as usize].push((a, b));
-                boundary[b as usize].push((a, b));
-            }
-        }
+    for (a, b) in super::param::boundary_edges(triangles) {
+        boundary[a as usize].push((a, b));
+        boundary[b as usize].push((a, b));
     }
     let triples = scored_triples();
     // Knot k of vertex v: None until placed.

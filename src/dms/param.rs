@@ -240,6 +240,23 @@ fn edge_triangles(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), Vec<u32>> {
     edges
 }
 
+/// The boundary edges of `triangles` (used by one triangle), directed as
+/// in it (the interior on the left of a positive triangle), in triangle
+/// order.
+pub(super) fn boundary_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let edges = edge_triangles(triangles);
+    let mut out = Vec::new();
+    for tri in triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            if edges[&(a.min(b), a.max(b))].len() == 1 {
+                out.push((a, b));
+            }
+        }
+    }
+    out
+}
+
 /// Repairs isolated non-positive triangles by moving one of their interior
 /// vertices to the mean of its neighbours where that leaves its star
 /// positive; refuses what stays (outlook 8). Returns the repaired ids.
@@ -257,14 +274,13 @@ fn repair(uv: &mut [DVec2], triangles: &[[u32; 3]], n_vertices: usize) -> Result
     if first.is_empty() {
         return Ok(Vec::new());
     }
-    let edges = edge_triangles(triangles);
     let mut boundary = vec![false; n_vertices];
+    for (a, b) in boundary_edges(triangles) {
+        boundary[a as usize] = true;
+        boundary[b as usize] = true;
+    }
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n_vertices];
-    for (&(a, b), ts) in &edges {
-        if ts.len() == 1 {
-            boundary[a as usize] = true;
-            boundary[b as usize] = true;
-        }
+    for &(a, b) in edge_triangles(triangles).keys() {
         neighbours[a as usize].push(b);
         neighbours[b as usize].push(a);
     }
@@ -305,10 +321,8 @@ fn repair(uv: &mut [DVec2], triangles: &[[u32; 3]], n_vertices: usize) -> Result
 /// overlap although each is positive): every pair of boundary edges that
 /// share no vertex is tested with exact orientation signs.
 fn check_boundary(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<()> {
-    let edges = edge_triangles(triangles);
-    let mut boundary: Vec<(u32, u32)> = (edges.iter())
-        .filter(|(_, ts)| ts.len() == 1)
-        .map(|(&e, _)| e)
+    let mut boundary: Vec<(u32, u32)> = (boundary_edges(triangles).into_iter())
+        .map(|(a, b)| (a.min(b), a.max(b)))
         .collect();
     boundary.sort_unstable();
     let c = |v: u32| robust::Coord {

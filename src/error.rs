@@ -244,6 +244,15 @@ pub enum Refusal {
          for the candidate circle"
     )]
     NoKnotPosition { vertex: u32 },
+    /// An iterative solver stopped before its tolerance.
+    #[error(
+        "{what} did not converge: relative residual {residual:e} after {iterations} iterations"
+    )]
+    NoConvergence {
+        what: &'static str,
+        iterations: u32,
+        residual: f64,
+    },
     /// A spring network with no springs on free nodes and no damping: no
     /// time step is stable.
     #[error(

@@ -256,7 +256,18 @@ mod param {
             .collect();
         let m = mesh(pts, cols, rows);
         let p = parametrise(&m, &Projection::Cylinder).unwrap();
-        let (centre, radius) = p.axis.unwrap();
+        let chisel::dms::param::ParamMap::Cylinder { centre, radius, .. } = p.map else {
+            panic!("a cylinder map: {:?}", p.map)
+        };
+        // Projecting the vertices again gives their parameter points.
+        for (v, q) in m.positions.iter().enumerate() {
+            let u = p.project(*q).unwrap();
+            assert!(
+                u.distance(p.uv[v]) < 1e-12,
+                "vertex {v}: {u} vs {}",
+                p.uv[v]
+            );
+        }
         assert!(centre.distance(DVec2::new(1.0, -3.0)) < 1e-5, "{centre}");
         assert!((radius - 2.0).abs() < 1e-5, "{radius}");
         assert!(all_positive(&p.uv, &m) && p.repaired.is_empty());

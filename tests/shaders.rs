@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::{Error, exclusive_scan, hull_scan, mc, reduce, vertex_normals};
+use chisel::{Error, dms, exclusive_scan, hull_scan, mc, reduce, vertex_normals};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn root() -> PathBuf {
@@ -251,6 +251,14 @@ fn params_sample(kernel: Kernel) -> Sample {
         Kernel::SpringStep | Kernel::SpringChebyshev | Kernel::TissueReduceMax => {
             tissue_params_sample(kernel)
         }
+        Kernel::DmsBasis => (
+            encase_bytes(&dms::basis::gpu::Params { n_points: 0xB1 }),
+            vec![("n_points", 0xB1)],
+        ),
+        Kernel::DmsSurface => (
+            encase_bytes(&dms::surface::gpu::Params { n_points: 0xB2 }),
+            vec![("n_points", 0xB2)],
+        ),
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its `Params` sample to tests/shaders.rs::params_sample",

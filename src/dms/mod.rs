@@ -1,28 +1,37 @@
 //! Quadratic DMS (Dahmen–Micchelli–Seidel) triangular B-spline surfaces
 //! over knot clouds (seed 000 ch. 2; SPEC §2): a smooth skin over a
-//! parametrised triangle mesh.
-//!
-//! The room is being built in steps (issue "DMS spline surfaces"; the
-//! formulas, their checks and the open decisions are in
-//! docs/design/dms.md). Built so far: the parametrisation of §2.1
-//! ([`parametrise`]), the knot clouds of §2.2 ([`knot_clouds`]), the f64
-//! oracle of the basis of §2.3 ([`oracle`]) and the evaluation lattice of
-//! §2.5 ([`lattice()`]):
-//! `n` points per parameter edge, every vertex and edge point numbered
-//! once, `(n − 1)²` output triangles per parameter triangle.
+//! parametrised triangle mesh. Formulas, seed errors and decisions:
+//! docs/design/dms.md.
 //!
 //! ```text
 //!  TriMesh ──parametrise(cylinder | planar | given)──▶ uv per vertex (positive, repaired, no overlap)
 //!  uv + triangles ──knot_clouds──▶ [t_i0, t_i1, t_i2] per vertex, smallest triple quality
-//!  u + a triangle's clouds ──oracle::bsplines──▶ the six N_β(u) (f64, exact half-open rule)
-//!  parameter triangles ──lattice(n)──▶ Lattice { points: (triangle, i, j), triangles }
+//!  triangles + knots ──Domain──▶ shared controls (#V + E), knot hulls on a grid
+//!  parameter triangles ──lattice(n)──▶ n points per edge, (n − 1)² triangles each
+//!  lattice points ──dms_basis──▶ per point: weights [N, ∂N/∂u, ∂N/∂v] of its controls
+//!  rows + control net (identify | least squares) ──dms_surface──▶ points + normals
 //! ```
+//!
+//! [`oracle`] is the f64 reference (exact half-open rule, generic
+//! recursion); [`basis`] and [`surface`] are the two kernels with their
+//! f32 mirrors; [`spline()`] runs the whole chain, and
+//! [`SplineDomain::skin`] redraws a changed mesh (a relaxation frame) with
+//! one gather.
 
+pub mod basis;
+pub mod domain;
+pub mod fit;
 pub mod knots;
 pub mod lattice;
+pub mod neighbourhood;
 pub mod oracle;
 pub mod param;
+pub mod program;
+pub mod spline;
+pub mod surface;
 
+pub use domain::Domain;
 pub use knots::{KnotClouds, knot_clouds};
 pub use lattice::{Lattice, LatticePoint, lattice, lattice_counts};
 pub use param::{Parametrisation, Projection, parametrise};
+pub use spline::{Fit, SplineDomain, SplineOptions, SplineSurface, spline};

@@ -102,3 +102,49 @@ pub fn bsplines(u: DVec2, clouds: [[DVec2; 3]; 3]) -> [f64; 6] {
         norm * simplex_spline(u, &v)
     })
 }
+
+/// The gradients `∇N_β(u)` of [`bsplines`]: `2 Σ_k ∇d_k(W_β) · M(u | V_β ∖
+/// w_k)` with `W_β = (r_i, s_j, t_k)` (Micchelli's derivative formula).
+pub fn bspline_gradients(u: DVec2, clouds: [[DVec2; 3]; 3]) -> [DVec2; 6] {
+    let knot = |k: usize| clouds[k / 3][k % 3];
+    std::array::from_fn(|b| {
+        let beta = BETAS[b];
+        let v = knot_set(beta);
+        let w = [beta[0], 3 + beta[1], 6 + beta[2]];
+        let [w0, w1, w2] = w.map(knot);
+        let g = [
+            DVec2::new(w1.y - w2.y, w2.x - w1.x),
+            DVec2::new(w2.y - w0.y, w0.x - w2.x),
+            DVec2::new(w0.y - w1.y, w1.x - w0.x),
+        ];
+        (0..3)
+            .map(|j| {
+                let rest: Vec<DVec2> = v.iter().filter(|&&k| k != w[j]).map(|&k| knot(k)).collect();
+                2.0 * g[j] * simplex_spline(u, &rest)
+            })
+            .sum()
+    })
+}
+
+/// Every control's weight `[N, ∂N/∂u, ∂N/∂v]` at `u` (parameter plane,
+/// not centred), summed over the triangles whose knot hull holds `u`,
+/// ascending by control.
+pub fn weights(domain: &super::Domain, u: DVec2) -> Vec<(u32, [f64; 3])> {
+    let mut out: Vec<(u32, [f64; 3])> = Vec::new();
+    for t in domain.supports.at(u) {
+        let tri = domain.triangles[t as usize];
+        let clouds = tri.map(|v| domain.knots[v as usize]);
+        let n = bsplines(u, clouds);
+        let g = bspline_gradients(u, clouds);
+        for b in 0..6 {
+            let c = domain.control(t, b);
+            let w = [n[b], g[b].x, g[b].y];
+            match out.iter_mut().find(|(k, _)| *k == c) {
+                Some((_, s)) => (0..3).for_each(|i| s[i] += w[i]),
+                None => out.push((c, w)),
+            }
+        }
+    }
+    out.sort_by_key(|e| e.0);
+    out
+}

@@ -47,8 +47,62 @@ pub struct Parametrisation {
     pub mirrored: bool,
     /// Triangles repaired by moving a vertex (outlook 8).
     pub repaired: Vec<u32>,
-    /// The cylinder's axis `(x, z)` and radius, for [`Projection::Cylinder`].
-    pub axis: Option<(DVec2, f64)>,
+    /// The map from space to the parameter plane (before repairs), for
+    /// projecting further points ([`Parametrisation::project`]).
+    pub map: ParamMap,
+}
+
+/// The map of a parametrisation, mirroring included.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParamMap {
+    /// `u = (s·R·α', y)`: axis `(x, z)` = `centre`, radius `R`, `α'` the
+    /// angle about the axis from `mean`, `s` = −1 when mirrored.
+    Cylinder {
+        centre: DVec2,
+        radius: f64,
+        mean: f64,
+        mirror: bool,
+    },
+    /// `u = (s·e₁·(p − origin), e₂·(p − origin))`.
+    Planar {
+        origin: glam::DVec3,
+        e1: glam::DVec3,
+        e2: glam::DVec3,
+        mirror: bool,
+    },
+    /// UVs came with the mesh: no map for other points.
+    Given,
+}
+
+impl Parametrisation {
+    /// The parameter point of a point in space by the same map as the
+    /// mesh's vertices; `None` for given UVs.
+    pub fn project(&self, p: glam::Vec3) -> Option<DVec2> {
+        let sign = |m: bool| if m { -1.0 } else { 1.0 };
+        match &self.map {
+            ParamMap::Cylinder {
+                centre,
+                radius,
+                mean,
+                mirror,
+            } => {
+                let a = (p.x as f64 - centre.x).atan2(p.z as f64 - centre.y);
+                let a = (a - mean + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                Some(DVec2::new(sign(*mirror) * radius * a, p.y as f64))
+            }
+            ParamMap::Planar {
+                origin,
+                e1,
+                e2,
+                mirror,
+            } => {
+                let d = p.as_dvec3() - *origin;
+                Some(DVec2::new(sign(*mirror) * e1.dot(d), e2.dot(d)))
+            }
+            ParamMap::Given => None,
+        }
+    }
 }
 
 /// Twice the signed area of a parameter triangle (positive counter-clockwise).
@@ -64,12 +118,9 @@ pub fn parametrise(mesh: &TriMesh, projection: &Projection) -> Result<Parametris
     if mesh.triangles.is_empty() {
         return Err(Error::empty("parametrisation: mesh triangles"));
     }
-    let (mut uv, axis) = match projection {
-        Projection::Cylinder => {
-            let (uv, axis) = cylinder(mesh);
-            (uv, Some(axis))
-        }
-        Projection::Planar => (planar(mesh), None),
+    let (mut uv, mut map) = match projection {
+        Projection::Cylinder => cylinder(mesh),
+        Projection::Planar => planar(mesh),
         Projection::Given(uv) => {
             if uv.len() != mesh.n_vertices() {
                 return Err(Error::mismatch(
@@ -81,7 +132,7 @@ pub fn parametrise(mesh: &TriMesh, projection: &Projection) -> Result<Parametris
             if let Some(v) = uv.iter().position(|p| !p.is_finite()) {
                 return Err(Error::data("given UVs", "vertex", v, "not finite"));
             }
-            (uv.clone(), None)
+            (uv.clone(), ParamMap::Given)
         }
     };
     let negative = (mesh.triangles.iter())
@@ -90,6 +141,10 @@ pub fn parametrise(mesh: &TriMesh, projection: &Projection) -> Result<Parametris
     let mirrored = 2 * negative > mesh.triangles.len();
     if mirrored {
         uv.iter_mut().for_each(|p| p.x = -p.x);
+        match &mut map {
+            ParamMap::Cylinder { mirror, .. } | ParamMap::Planar { mirror, .. } => *mirror = true,
+            ParamMap::Given => {}
+        }
     }
     let repaired = repair(&mut uv, &mesh.triangles, mesh.n_vertices())?;
     check_boundary(&uv, &mesh.triangles)?;
@@ -97,12 +152,12 @@ pub fn parametrise(mesh: &TriMesh, projection: &Projection) -> Result<Parametris
         uv,
         mirrored,
         repaired,
-        axis,
+        map,
     })
 }
 
 /// Eq. 2.12 about the least-squares circle axis of the vertices' `(x, z)`.
-fn cylinder(mesh: &TriMesh) -> (Vec<DVec2>, (DVec2, f64)) {
+fn cylinder(mesh: &TriMesh) -> (Vec<DVec2>, ParamMap) {
     let pts: Vec<DVec2> = (mesh.positions.iter())
         .map(|p| DVec2::new(p.x as f64, p.z as f64))
         .collect();
@@ -126,7 +181,15 @@ fn cylinder(mesh: &TriMesh) -> (Vec<DVec2>, (DVec2, f64)) {
             DVec2::new(radius * a, q.y as f64)
         })
         .collect();
-    (uv, (centre, radius))
+    (
+        uv,
+        ParamMap::Cylinder {
+            centre,
+            radius,
+            mean,
+            mirror: false,
+        },
+    )
 }
 
 /// Kåsa's least-squares circle through `pts`: minimises
@@ -162,8 +225,8 @@ fn circle_fit(pts: &[DVec2]) -> Option<(DVec2, f64)> {
 
 /// Onto the two largest principal axes (Jacobi eigenvectors of the
 /// covariance), right-handed with the third.
-fn planar(mesh: &TriMesh) -> Vec<DVec2> {
-    use glam::{DMat3, DVec3};
+fn planar(mesh: &TriMesh) -> (Vec<DVec2>, ParamMap) {
+    use glam::DVec3;
     let pts: Vec<DVec3> = mesh.positions.iter().map(|p| p.as_dvec3()).collect();
     let mean = pts.iter().copied().sum::<DVec3>() / pts.len() as f64;
     let mut cov = [[0.0f64; 3]; 3];
@@ -180,13 +243,19 @@ fn planar(mesh: &TriMesh) -> Vec<DVec2> {
     order.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
     let axis = |k: usize| DVec3::from_array(std::array::from_fn(|r| vectors[r][order[k]]));
     let (e1, e2) = (axis(0), axis(1));
-    let frame = DMat3::from_cols(e1, e2, e1.cross(e2));
-    pts.iter()
-        .map(|&p| {
-            let q = frame.transpose() * (p - mean);
-            DVec2::new(q.x, q.y)
-        })
-        .collect()
+    let uv = pts
+        .iter()
+        .map(|&p| DVec2::new(e1.dot(p - mean), e2.dot(p - mean)))
+        .collect();
+    (
+        uv,
+        ParamMap::Planar {
+            origin: mean,
+            e1,
+            e2,
+            mirror: false,
+        },
+    )
 }
 
 /// Eigenvalues and eigenvectors (columns) of a symmetric 3 × 3 matrix by

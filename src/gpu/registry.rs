@@ -88,6 +88,10 @@ registry! {
     HullRows => "hull_rows" needs SHADER_INT64,
     /// Per-row intervals by binary search on emulated 64-bit products (portable).
     HullRowsI32x2 => "hull_rows_i32x2",
+    /// DMS spline: B-spline weights and derivatives per evaluation point, summed per control.
+    DmsBasis => "dms_basis",
+    /// DMS spline: surface points and normals by gather over the basis rows.
+    DmsSurface => "dms_surface",
 }
 
 registry! {

@@ -42,6 +42,18 @@ impl Csr {
         Csr { offsets, targets }
     }
 
+    /// Rows given as lists, kept in order.
+    pub fn from_rows(rows: &[Vec<u32>]) -> Self {
+        let mut offsets = Vec::with_capacity(rows.len() + 1);
+        offsets.push(0u32);
+        let mut targets = Vec::with_capacity(rows.iter().map(Vec::len).sum());
+        for r in rows {
+            targets.extend_from_slice(r);
+            offsets.push(targets.len() as u32);
+        }
+        Csr { offsets, targets }
+    }
+
     /// Vertex → incident triangle adjacency of a triangle list over
     /// `n_vertices` vertices; each row lists triangle ids in increasing order
     /// (a triangle using a vertex twice is listed once per use).

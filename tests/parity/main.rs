@@ -11,6 +11,8 @@ mod mc_kernels;
 mod mc_surface;
 
 mod bounds_reduce;
+mod dms_basis;
+mod dms_surface;
 mod exclusive_scan;
 mod hull_scan;
 mod mc_classify;

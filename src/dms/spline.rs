@@ -1,0 +1,269 @@
+//! A mesh's DMS spline surface end to end (SPEC §2): parametrisation, knot
+//! clouds, the basis at the evaluation lattice, the control net and the
+//! surface mesh with normals.
+//!
+//! [`SplineDomain`] is the part that depends only on the mesh's
+//! connectivity and parameter points: a relaxation keeps it and redraws
+//! the smooth skin of every frame with one gather ([`SplineDomain::skin`]).
+
+use std::time::Instant;
+
+use glam::{DVec2, DVec3, Vec3};
+use serde::Serialize;
+
+use super::basis::{BasisRows, dms_basis};
+use super::domain::Domain;
+use super::fit::{self, FitReport};
+use super::lattice::{Lattice, lattice};
+use super::surface::{SurfaceInput, SurfacePoints, dms_surface};
+use super::{Parametrisation, Projection, knot_clouds, parametrise};
+use crate::gpu::Backend;
+use crate::mesh::ScalarField;
+use crate::{Error, Result, TriMesh};
+
+/// How the control net is made.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Fit {
+    /// Point identification (eq. 2.13).
+    Identify,
+    /// Least squares with shared controls and a relative fairing weight.
+    LeastSquares { fairing: f64 },
+}
+
+/// Options of [`spline`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplineOptions {
+    pub projection: Projection,
+    pub fit: Fit,
+    /// Points to fit instead of the mesh (projected by the same map).
+    pub data: Option<Vec<Vec3>>,
+    /// Points per parameter edge (≥ 2).
+    pub n: u32,
+}
+
+/// Seconds per phase.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SplineTimings {
+    pub parametrise: f64,
+    pub knots: f64,
+    pub basis: f64,
+    pub fit: f64,
+    pub surface: f64,
+}
+
+/// The parameter domain of a mesh with its lattice and basis rows.
+#[derive(Debug, Clone)]
+pub struct SplineDomain {
+    pub param: Parametrisation,
+    /// The smallest knot-triple quality (knots module docs).
+    pub knot_quality: f64,
+    pub domain: Domain,
+    pub lattice: Lattice,
+    /// The basis at the lattice points, over the shared controls.
+    pub basis: BasisRows,
+    /// The same rows folded onto the vertices (point identification).
+    pub identified: SurfaceInput,
+    pub timings: SplineTimings,
+}
+
+/// A spline surface and how it was made.
+#[derive(Debug, Clone)]
+pub struct SplineSurface {
+    /// The lattice mesh: positions `F(u)`, the input's winding, scalar
+    /// fields `nx ny nz` (unit normals from `F_u × F_v`) and `distance`
+    /// (`|F(u) − M(u)|`, `M` the input mesh at the same parameter point).
+    pub mesh: TriMesh,
+    /// The controls (`#V + E`: vertices, then edges).
+    pub controls: Vec<DVec3>,
+    pub fit: FitReport,
+}
+
+/// The parameter point of every lattice point (vertex points exactly their
+/// vertex's, so the kernel's location-aware zeros apply).
+pub fn lattice_params(lattice: &Lattice, uv: &[DVec2], triangles: &[[u32; 3]]) -> Vec<DVec2> {
+    let last = lattice.n - 1;
+    let s = 1.0 / f64::from(last);
+    lattice
+        .points
+        .iter()
+        .map(|p| {
+            let [a, b, c] = triangles[p.triangle as usize];
+            match (p.i, p.j) {
+                (0, 0) => uv[a as usize],
+                (i, 0) if i == last => uv[b as usize],
+                (0, j) if j == last => uv[c as usize],
+                (i, j) => {
+                    let [a, b, c] = [a, b, c].map(|v| uv[v as usize]);
+                    a + f64::from(i) * s * (b - a) + f64::from(j) * s * (c - a)
+                }
+            }
+        })
+        .collect()
+}
+
+impl SplineDomain {
+    /// Parametrises `mesh`, places the knots and evaluates the basis at the
+    /// lattice of accuracy `n` on `backend`.
+    pub fn new(
+        mesh: &TriMesh,
+        projection: &Projection,
+        n: u32,
+        backend: Backend<'_>,
+    ) -> Result<Self> {
+        let mut timings = SplineTimings::default();
+        let t = Instant::now();
+        let param = parametrise(mesh, projection)?;
+        timings.parametrise = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let clouds = knot_clouds(&param.uv, &mesh.triangles)?;
+        let domain = Domain::new(&mesh.triangles, &clouds);
+        timings.knots = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let lattice = lattice(&mesh.triangles, mesh.n_vertices(), n)?;
+        let params = lattice_params(&lattice, &param.uv, &mesh.triangles);
+        let basis = dms_basis(&domain, &params, backend)?;
+        let identified = SurfaceInput::identify(&basis, domain.n_vertices, &domain.edges);
+        timings.basis = t.elapsed().as_secs_f64();
+        Ok(SplineDomain {
+            param,
+            knot_quality: clouds.min_quality,
+            domain,
+            lattice,
+            basis,
+            identified,
+            timings,
+        })
+    }
+
+    /// The smooth skin of vertex positions `positions` (`[x, y, z, ·]`, the
+    /// mesh's vertices) under point identification: one gather.
+    pub fn skin(&self, positions: &[[f32; 4]], backend: Backend<'_>) -> Result<SurfacePoints> {
+        dms_surface(&self.identified, positions, backend)
+    }
+
+    /// The output mesh of surface points `s` over `mesh` (the input, for
+    /// the distance field).
+    pub fn surface_mesh(&self, s: &SurfacePoints, mesh: &TriMesh) -> TriMesh {
+        let last = (self.lattice.n - 1) as f32;
+        let distance: Vec<f32> = (self.lattice.points.iter().zip(&s.positions))
+            .map(|(p, f)| {
+                let [a, b, c] =
+                    mesh.triangles[p.triangle as usize].map(|v| mesh.positions[v as usize]);
+                let m = a + (p.i as f32 / last) * (b - a) + (p.j as f32 / last) * (c - a);
+                Vec3::new(f[0], f[1], f[2]).distance(m)
+            })
+            .collect();
+        let field = |name: &str, k: usize| ScalarField {
+            name: name.into(),
+            values: s.normals.iter().map(|q| q[k]).collect(),
+        };
+        TriMesh {
+            positions: s
+                .positions
+                .iter()
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect(),
+            triangles: self.lattice.triangles.clone(),
+            scalars: vec![
+                field("nx", 0),
+                field("ny", 1),
+                field("nz", 2),
+                ScalarField {
+                    name: "distance".into(),
+                    values: distance,
+                },
+            ],
+        }
+    }
+
+    /// The control net as a mesh: the six controls of every triangle as
+    /// four triangles, the input's winding.
+    pub fn control_mesh(&self, controls: &[DVec3]) -> TriMesh {
+        let d = &self.domain;
+        TriMesh {
+            positions: controls.iter().map(|c| c.as_vec3()).collect(),
+            triangles: (0..d.triangles.len() as u32)
+                .flat_map(|t| {
+                    // BETAS order: 200 110 101 020 011 002.
+                    let c = |b: usize| d.control(t, b);
+                    [
+                        [c(0), c(1), c(2)],
+                        [c(1), c(3), c(4)],
+                        [c(2), c(4), c(5)],
+                        [c(1), c(4), c(2)],
+                    ]
+                })
+                .collect(),
+            scalars: Vec::new(),
+        }
+    }
+}
+
+/// The spline surface of `mesh` (module docs).
+///
+/// Errors: those of the parametrisation, the knots and the lattice; data
+/// points with given UVs (no map to project them, [`Error::InvalidParameter`]);
+/// the least-squares errors ([`fit::least_squares`]).
+pub fn spline(
+    mesh: &TriMesh,
+    opts: &SplineOptions,
+    backend: Backend<'_>,
+) -> Result<(SplineDomain, SplineSurface)> {
+    let mut sd = SplineDomain::new(mesh, &opts.projection, opts.n, backend)?;
+    let t = Instant::now();
+    let (params, points): (Vec<DVec2>, Vec<DVec3>) = match &opts.data {
+        None => fit::mesh_data(&sd.domain, &sd.param.uv, &mesh.positions),
+        Some(pts) => {
+            let mut params = Vec::with_capacity(pts.len());
+            for p in pts {
+                params.push(sd.param.project(*p).ok_or_else(|| {
+                    Error::param(
+                        "data",
+                        format!("{} points", pts.len()),
+                        "needs a map to project them: use --param cylinder or planar, not given UVs",
+                    )
+                })?);
+            }
+            (params, pts.iter().map(|p| p.as_dvec3()).collect())
+        }
+    };
+    let start = fit::identify(&sd.domain, &mesh.positions);
+    let (controls, report) = match opts.fit {
+        Fit::Identify => {
+            let r = fit::identify_report(&sd.domain, &params, &points, &start, backend)?;
+            (start, r)
+        }
+        Fit::LeastSquares { fairing } => {
+            fit::least_squares(&sd.domain, &params, &points, fairing, start, backend)?
+        }
+    };
+    sd.timings.fit = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let surface = match opts.fit {
+        Fit::Identify => {
+            let pos: Vec<[f32; 4]> = mesh
+                .positions
+                .iter()
+                .map(|p| [p.x, p.y, p.z, 0.0])
+                .collect();
+            sd.skin(&pos, backend)?
+        }
+        Fit::LeastSquares { .. } => {
+            let input = SurfaceInput::over_controls(&sd.basis, sd.domain.n_controls());
+            let src: Vec<[f32; 4]> = (controls.iter())
+                .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
+                .collect();
+            dms_surface(&input, &src, backend)?
+        }
+    };
+    let out = sd.surface_mesh(&surface, mesh);
+    sd.timings.surface = t.elapsed().as_secs_f64();
+    Ok((
+        sd,
+        SplineSurface {
+            mesh: out,
+            controls,
+            fit: report,
+        },
+    ))
+}

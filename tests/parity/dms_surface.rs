@@ -1,0 +1,134 @@
+//! Parity of `kernels/dms_surface.wgsl` against `dms::surface::cpu` on
+//! synthetic rows and fran_cut's identified rows, the gather from a device
+//! buffer, and negative controls.
+
+use chisel::TriMesh;
+use chisel::dms::basis::{BasisRows, cpu as basis_cpu};
+use chisel::dms::surface::gpu::SurfaceBuffers;
+use chisel::dms::surface::{SurfaceInput, SurfacePoints, cpu};
+use chisel::dms::{Projection, parametrise};
+use chisel::gpu::{Gpu, GpuArray};
+use chisel::parity::{compare_vec, find_sentinel};
+
+use super::dms_basis::{input_of, jittered};
+use crate::common;
+
+fn gpu_surface(gpu: &Gpu, what: &str, input: &SurfaceInput, sources: &[[f32; 4]]) -> SurfacePoints {
+    let buffers = SurfaceBuffers::upload(gpu, input).unwrap();
+    let src = GpuArray::from_slice(gpu, "sources", sources).unwrap();
+    let mut encoder = gpu.encoder("dms_surface");
+    buffers.record(gpu, &mut encoder, &src).unwrap();
+    gpu.submit_and_wait(encoder).unwrap();
+    let out = SurfacePoints {
+        positions: buffers.positions.read(gpu).unwrap(),
+        normals: buffers.normals.read(gpu).unwrap(),
+    };
+    assert_eq!(
+        find_sentinel(&out.positions, [f32::NAN; 4]),
+        None,
+        "{what}: positions"
+    );
+    assert_eq!(
+        find_sentinel(&out.normals, [f32::NAN; 4]),
+        None,
+        "{what}: normals"
+    );
+    out
+}
+
+/// The identified rows of `mesh` over `uv` at accuracy `n` and its vertices.
+fn rows_of(uv: &[glam::DVec2], mesh: &TriMesh, n: u32) -> (SurfaceInput, Vec<[f32; 4]>) {
+    let (d, input) = input_of(uv, mesh, n);
+    let basis = BasisRows {
+        weights: basis_cpu::dms_basis(&input),
+        rows: input.rows,
+    };
+    let rows = SurfaceInput::identify(&basis, d.n_vertices, &d.edges);
+    let src = mesh
+        .positions
+        .iter()
+        .map(|p| [p.x, p.y, p.z, 0.0])
+        .collect();
+    (rows, src)
+}
+
+fn extent(src: &[[f32; 4]]) -> f32 {
+    src.iter()
+        .flat_map(|p| p[..3].iter().map(|x| x.abs()))
+        .fold(0.0, f32::max)
+}
+
+fn check(gpu: &Gpu, what: &str, rows: &SurfaceInput, src: &[[f32; 4]]) {
+    let want = cpu::dms_surface(rows, src);
+    let got = gpu_surface(gpu, what, rows, src);
+    let tol = cpu::position_tolerance(extent(src));
+    compare_vec(
+        &format!("dms_surface/{what}/positions"),
+        &want.positions,
+        &got.positions,
+        tol,
+    )
+    .unwrap_or_else(|m| panic!("{m}"));
+    compare_vec(
+        &format!("dms_surface/{what}/normals"),
+        &want.normals,
+        &got.normals,
+        cpu::NORMAL_TOL,
+    )
+    .unwrap_or_else(|m| panic!("{m}"));
+}
+
+#[test]
+fn synthetic() {
+    let Some(gpu) = common::gpu() else { return };
+    for (cols, rows, seed, n) in [(3, 3, 1, 2), (7, 6, 5, 4), (10, 9, 6, 7)] {
+        let (uv, mesh) = jittered(cols, rows, seed);
+        let (r, src) = rows_of(&uv, &mesh, n);
+        check(gpu, &format!("grid{cols}x{rows}/n{n}"), &r, &src);
+    }
+}
+
+#[test]
+fn fran_cut() {
+    let Some(mesh) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let p = parametrise(&mesh, &Projection::Cylinder).unwrap();
+    let (r, src) = rows_of(&p.uv, &mesh, 5);
+    let Some(gpu) = common::gpu() else { return };
+    check(gpu, "fran_cut/n5", &r, &src);
+    // Moved vertices (a relaxation frame) through the same rows.
+    let moved: Vec<[f32; 4]> = src
+        .iter()
+        .map(|q| [q[0] + 0.01 * (q[1] * 40.0).sin(), q[1], q[2] - 0.005, 0.0])
+        .collect();
+    check(gpu, "fran_cut/moved", &r, &moved);
+}
+
+#[test]
+fn negative_controls() {
+    let Some(gpu) = common::gpu() else { return };
+    let (uv, mesh) = jittered(6, 6, 3);
+    let (r, src) = rows_of(&uv, &mesh, 4);
+    let want = cpu::dms_surface(&r, &src);
+    let mut got = gpu_surface(gpu, "control", &r, &src);
+    let tol = cpu::position_tolerance(extent(&src));
+    compare_vec("dms_surface/control", &want.positions, &got.positions, tol).unwrap();
+    let k = got.positions.len() / 3;
+    got.positions[k][2] += 4.0 * tol.abs;
+    let m = compare_vec("dms_surface/control", &want.positions, &got.positions, tol).unwrap_err();
+    assert_eq!((m.index, m.count), (k, 1), "{m}");
+    // Sources one vertex off (the wrong buffer) are caught.
+    let mut shifted = src.clone();
+    shifted.rotate_left(1);
+    let got = gpu_surface(gpu, "shifted", &r, &shifted);
+    assert!(compare_vec("dms_surface/shifted", &want.positions, &got.positions, tol).is_err());
+    // Too few sources on the device is an error, not a read past the end.
+    let buffers = SurfaceBuffers::upload(gpu, &r).unwrap();
+    let few = GpuArray::from_slice(gpu, "few", &src[..src.len() - 1]).unwrap();
+    let mut encoder = gpu.encoder("few");
+    assert!(matches!(
+        buffers.record(gpu, &mut encoder, &few),
+        Err(chisel::Error::Mismatch { .. })
+    ));
+}

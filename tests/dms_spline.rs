@@ -8,6 +8,7 @@
 mod common;
 
 use chisel::dms::basis::{BasisInput, cpu as basis_cpu};
+use chisel::dms::fit::ControlMap;
 use chisel::dms::oracle::{self, bsplines, half_open, orient, simplex_spline};
 use chisel::dms::spline::lattice_params;
 use chisel::dms::surface::{SurfaceInput, cpu as surface_cpu};
@@ -416,17 +417,17 @@ fn affine_maps_commute_and_points_stay_in_the_hull_of_their_controls() {
         rows: input.rows.clone(),
         weights: basis_cpu::dms_basis(&input),
     };
-    let rows = SurfaceInput::identify(&basis, d.n_vertices, &d.edges);
-    let src: Vec<[f32; 4]> = mesh
-        .positions
+    let rows = SurfaceInput::over_controls(&basis, d.n_controls());
+    let controls: Vec<Vec3> = ControlMap::identify(&d)
+        .apply(&mesh.positions)
         .iter()
-        .map(|p| [p.x, p.y, p.z, 0.0])
+        .map(|c| c.as_vec3())
         .collect();
+    let src: Vec<[f32; 4]> = controls.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
     let s = surface_cpu::dms_surface(&rows, &src);
     let m = glam::Mat3::from_cols_array(&[0.8, 0.3, -0.2, -0.4, 1.1, 0.5, 0.1, 0.2, 0.9]);
     let t = Vec3::new(3.0, -1.0, 0.5);
-    let moved: Vec<[f32; 4]> = mesh
-        .positions
+    let moved: Vec<[f32; 4]> = controls
         .iter()
         .map(|p| (m * *p + t).extend(0.0).to_array())
         .collect();
@@ -438,7 +439,7 @@ fn affine_maps_commute_and_points_stay_in_the_hull_of_their_controls() {
             "point {p}"
         );
         // Convex hull: weights ≥ 0 (to rounding) summing to 1, and the
-        // point inside the box of its row's vertices.
+        // point inside the box of its row's controls.
         let (lo, hi) = (
             rows.rows.offsets[p] as usize,
             rows.rows.offsets[p + 1] as usize,
@@ -447,8 +448,8 @@ fn affine_maps_commute_and_points_stay_in_the_hull_of_their_controls() {
         assert!(ws.iter().all(|w| w[0] >= -1e-6), "point {p}: {ws:?}");
         let (mut bl, mut bh) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for &v in &rows.rows.targets[lo..hi] {
-            bl = bl.min(mesh.positions[v as usize]);
-            bh = bh.max(mesh.positions[v as usize]);
+            bl = bl.min(controls[v as usize]);
+            bh = bh.max(controls[v as usize]);
         }
         let f = Vec3::new(a[0], a[1], a[2]);
         assert!(
@@ -630,4 +631,90 @@ fn oracle_bsplines_sum_with_the_rows() {
         .sum();
     assert!((w.iter().map(|e| e.1[0]).sum::<f64>() - total).abs() < 1e-14);
     assert!((total - 1.0).abs() < 1e-12);
+}
+
+/// Mean `1 − n₁·n₂` over the interior edges of `m` (unit face normals):
+/// how faceted the shading looks.
+fn roughness(m: &TriMesh) -> f64 {
+    let normal = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|v| m.positions[v as usize].as_dvec3());
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let mut faces: std::collections::HashMap<(u32, u32), usize> = std::collections::HashMap::new();
+    let (mut sum, mut count) = (0.0, 0);
+    for (i, t) in m.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if let Some(j) = faces.insert((a.min(b), a.max(b)), i) {
+                sum += 1.0 - normal(t).dot(normal(&m.triangles[j]));
+                count += 1;
+            }
+        }
+    }
+    sum / count as f64
+}
+
+#[test]
+fn quasi_interpolation_reproduces_quadratics_and_smooths_the_facets() {
+    // A quadratic height field over its own parameter plane: the quasi
+    // controls are its blossoms, so the spline is the surface itself.
+    let (uv, mesh) = jittered(8, 7);
+    let q = |u: DVec2| 0.3 * u.x * u.x - 0.2 * u.x * u.y + 0.1 * u.y * u.y + 0.5 * u.x - 1.0;
+    let surf = TriMesh::new(
+        uv.iter()
+            .map(|u| Vec3::new(u.x as f32, u.y as f32, q(*u) as f32))
+            .collect(),
+        mesh.triangles.clone(),
+    )
+    .unwrap();
+    let opts = SplineOptions {
+        projection: Projection::Given(uv.clone()),
+        fit: Fit::Quasi,
+        data: None,
+        n: 5,
+    };
+    let (sd, s) = spline(&surf, &opts, Backend::Cpu).unwrap();
+    let pts = lattice_params(&sd.lattice, &uv, &mesh.triangles);
+    let worst = pts
+        .iter()
+        .zip(&s.mesh.positions)
+        .map(|(u, f)| (f.as_dvec3() - DVec3::new(u.x, u.y, q(*u))).length())
+        .fold(0.0, f64::max);
+    eprintln!("quasi-interpolation of a quadratic: {worst:e}");
+    assert!(worst < 1e-4, "{worst:e}");
+    // Identification of the same data is off by the knot offsets.
+    let (_, id) = spline(
+        &surf,
+        &SplineOptions {
+            fit: Fit::Identify,
+            ..opts
+        },
+        Backend::Cpu,
+    )
+    .unwrap();
+    let off = pts
+        .iter()
+        .zip(&id.mesh.positions)
+        .map(|(u, f)| (f.as_dvec3() - DVec3::new(u.x, u.y, q(*u))).length())
+        .fold(0.0, f64::max);
+    assert!(off > 100.0 * worst, "{off:e}");
+    // On fran_cut the quasi skin is less faceted than identification's.
+    let Some(fran) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let run = |fit| {
+        let o = SplineOptions {
+            projection: Projection::Cylinder,
+            fit,
+            data: None,
+            n: 5,
+        };
+        spline(&fran, &o, Backend::Cpu).unwrap().1
+    };
+    let (rq, ri) = (
+        roughness(&run(Fit::Quasi).mesh),
+        roughness(&run(Fit::Identify).mesh),
+    );
+    eprintln!("fran_cut n=5 roughness: quasi {rq:e}, identify {ri:e}");
+    assert!(rq < 0.7 * ri, "{rq:e} vs {ri:e}");
 }

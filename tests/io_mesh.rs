@@ -56,6 +56,17 @@ fn fran_cut_vtk() {
         let y = -0.2048 + 0.0032 * (i % 49) as f32;
         assert!((p.y - y).abs() < 1e-6, "vertex {i}: y {} vs {y}", p.y);
     }
+    // The texture coordinates come as the fields `u` and `v`, in [0, 1].
+    let names: Vec<&str> = m.scalars.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["u", "v"]);
+    for f in &m.scalars {
+        assert_eq!(f.values.len(), 2205);
+        assert!(
+            f.values.iter().all(|x| (0.0..=1.0).contains(x)),
+            "{}",
+            f.name
+        );
+    }
 }
 
 #[test]

@@ -19,6 +19,7 @@ mod relax;
 mod render;
 mod report;
 mod scan;
+mod spline;
 mod stats;
 
 use std::process::ExitCode;
@@ -218,6 +219,8 @@ enum Command {
     Cut(cut::Args),
     /// Relax the soft tissue over the bone after a surgery plan (spring network, GPU or CPU).
     Relax(relax::Args),
+    /// Smooth DMS spline surface of a disk mesh (knot clouds, GPU basis, control net, normals).
+    Spline(spline::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
     /// Lossless polyhedron of a voxel object: nested convex shells, .cells, --verify.
@@ -326,6 +329,7 @@ pub fn main() -> ExitCode {
         Command::Mc(a) => mc::run(&cli.global, a),
         Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
+        Command::Spline(a) => spline::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
         Command::Polyhedrize(a) => polyhedrize::run(&cli.global, a),
         Command::Scan(a) => scan::run(&cli.global, a),

@@ -16,6 +16,16 @@
 //!   per coordinate, started from point identification; never a dense
 //!   solve.
 //!
+//! - Quasi-interpolation (beyond the seed; [`ControlMap::quasi`]): every
+//!   vertex gets the least-squares quadratic `q_v` of its two-ring in the
+//!   parameter plane, and the controls are blossoms (docs/design/dms.md
+//!   §5): the vertex control `P_v(r₀, r₁)`, the edge control `½(P_a(a₀, b₀)
+//!   + P_b(a₀, b₀))`. Quadratics are reproduced exactly, so the surface
+//!   follows the shape the vertices sample instead of the mesh's flat
+//!   facets (which identification and least squares against the
+//!   piecewise-linear mesh both keep); like identification it is a fixed
+//!   linear map of the vertices.
+//!
 //! Data without `--data`: the piecewise-linear mesh at its vertices, edge
 //! midpoints and triangle centroids (`#V + E + t` points for `#V + E`
 //! unknowns; the vertices alone leave the system underdetermined, seed
@@ -27,6 +37,7 @@ use serde::Serialize;
 
 use super::basis::dms_basis;
 use super::domain::Domain;
+use super::surface::SurfaceInput;
 use crate::gpu::Backend;
 use crate::mesh::Csr;
 use crate::{Error, Refusal, Result};
@@ -37,11 +48,11 @@ pub const CG_TOLERANCE: f64 = 1e-10;
 /// How well a control net fits its data.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FitReport {
-    /// `identify` or `lsq`.
+    /// `identify`, `quasi` or `lsq`.
     pub method: &'static str,
     /// Data points used.
     pub data_points: usize,
-    /// Data points whose parameter point lies outside the domain (left out).
+    /// `--data` points whose parameter point lies outside the domain (left out).
     pub outside: usize,
     /// RMS and largest `|F(u_i) − x_i|` over the data points used.
     pub rms: f64,
@@ -52,15 +63,247 @@ pub struct FitReport {
     pub iterations: u32,
 }
 
-/// The controls of point identification: vertex `v` → its position, edge
-/// control `#V + e` → the midpoint of edge `e`.
-pub fn identify(domain: &Domain, positions: &[Vec3]) -> Vec<DVec3> {
-    let p = |v: u32| positions[v as usize].as_dvec3();
-    positions
-        .iter()
-        .map(|x| x.as_dvec3())
-        .chain(domain.edges.iter().map(|&[a, b]| 0.5 * (p(a) + p(b))))
-        .collect()
+/// A control net that is a fixed linear map of the mesh vertices: control
+/// `c` is `Σ weights[k] · vertex[rows.targets[k]]` over `rows.row(c)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlMap {
+    pub rows: Csr,
+    pub weights: Vec<f64>,
+}
+
+impl ControlMap {
+    /// Point identification (eq. 2.13): vertex `v` → itself, edge control
+    /// `#V + e` → the midpoint of edge `e`.
+    pub fn identify(domain: &Domain) -> ControlMap {
+        let mut lists: Vec<Vec<u32>> = (0..domain.n_vertices as u32).map(|v| vec![v]).collect();
+        let mut weights = vec![1.0; domain.n_vertices];
+        for &[a, b] in &domain.edges {
+            lists.push(vec![a, b]);
+            weights.extend([0.5, 0.5]);
+        }
+        ControlMap {
+            rows: Csr::from_rows(&lists),
+            weights,
+        }
+    }
+
+    /// Quasi-interpolation by local quadratic fits (module docs) over the
+    /// parameter points `uv`. A vertex whose two-ring cannot fix a
+    /// quadratic widens it to the three-ring, then falls back to a linear
+    /// fit, then to itself.
+    pub fn quasi(domain: &Domain, uv: &[DVec2]) -> ControlMap {
+        let n = domain.n_vertices;
+        let mut ring1: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for &[a, b] in &domain.edges {
+            ring1[a as usize].push(b);
+            ring1[b as usize].push(a);
+        }
+        // Per used vertex: its neighbourhood and the blossom weights map.
+        let fits: Vec<Option<LocalFit>> = (0..n)
+            .map(|v| (!ring1[v].is_empty()).then(|| LocalFit::new(v as u32, &ring1, uv)))
+            .collect();
+        let mut lists: Vec<Vec<u32>> = Vec::with_capacity(domain.n_controls());
+        let mut weights: Vec<f64> = Vec::new();
+        for v in 0..n {
+            match &fits[v] {
+                Some(f) => {
+                    let k = domain.knots[v];
+                    let w = f.blossom(k[0], k[1]);
+                    lists.push(f.points.clone());
+                    weights.extend(w);
+                }
+                None => {
+                    lists.push(vec![v as u32]);
+                    weights.push(1.0);
+                }
+            }
+        }
+        for &[a, b] in &domain.edges {
+            let (ua, ub) = (uv[a as usize], uv[b as usize]);
+            let mut row: Vec<(u32, f64)> = Vec::new();
+            for v in [a, b] {
+                let f = fits[v as usize]
+                    .as_ref()
+                    .expect("an edge's vertices are used");
+                for (&p, w) in f.points.iter().zip(f.blossom(ua, ub)) {
+                    row.push((p, 0.5 * w));
+                }
+            }
+            row.sort_by_key(|e| e.0);
+            let mut merged: Vec<(u32, f64)> = Vec::new();
+            for (p, w) in row {
+                match merged.last_mut() {
+                    Some(last) if last.0 == p => last.1 += w,
+                    _ => merged.push((p, w)),
+                }
+            }
+            lists.push(merged.iter().map(|e| e.0).collect());
+            weights.extend(merged.iter().map(|e| e.1));
+        }
+        ControlMap {
+            rows: Csr::from_rows(&lists),
+            weights,
+        }
+    }
+
+    /// The map as `dms_surface` rows over `n_vertices` vertices (weights
+    /// `[w, 0, 0, 0]`: the gather's positions are the controls).
+    pub fn gather_input(&self, n_vertices: usize) -> SurfaceInput {
+        SurfaceInput {
+            rows: self.rows.clone(),
+            weights: self
+                .weights
+                .iter()
+                .map(|&w| [w as f32, 0.0, 0.0, 0.0])
+                .collect(),
+            n_sources: n_vertices,
+        }
+    }
+
+    /// The controls of vertex positions `positions`.
+    pub fn apply(&self, positions: &[Vec3]) -> Vec<DVec3> {
+        (0..self.rows.n_rows())
+            .map(|c| {
+                let (lo, hi) = (
+                    self.rows.offsets[c] as usize,
+                    self.rows.offsets[c + 1] as usize,
+                );
+                (lo..hi)
+                    .map(|k| self.weights[k] * positions[self.rows.targets[k] as usize].as_dvec3())
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// The least-squares quadratic of one vertex's neighbourhood, kept as the
+/// linear map from the neighbours' values to its coefficients.
+struct LocalFit {
+    centre: DVec2,
+    scale: f64,
+    /// The vertices fitted.
+    points: Vec<u32>,
+    /// `coeffs = g · values`: `terms × points`, row-major.
+    g: Vec<f64>,
+    terms: usize,
+}
+
+impl LocalFit {
+    fn new(v: u32, ring1: &[Vec<u32>], uv: &[DVec2]) -> LocalFit {
+        let mut points: Vec<u32> = vec![v];
+        let mut frontier: Vec<u32> = vec![v];
+        for ring in 1..=3 {
+            let mut next: Vec<u32> = Vec::new();
+            for &p in &frontier {
+                for &q in &ring1[p as usize] {
+                    if !points.contains(&q) && !next.contains(&q) {
+                        next.push(q);
+                    }
+                }
+            }
+            points.extend(&next);
+            frontier = next;
+            if ring >= 2 {
+                if let Some(fit) = LocalFit::solve(v, &points, uv, 6) {
+                    return fit;
+                }
+            }
+        }
+        LocalFit::solve(v, &points, uv, 3).unwrap_or(LocalFit {
+            centre: uv[v as usize],
+            scale: 1.0,
+            points: vec![v],
+            g: vec![1.0],
+            terms: 1,
+        })
+    }
+
+    /// The fit with `terms` monomials (6: quadratic, 3: linear), `None`
+    /// when the points do not fix it.
+    fn solve(v: u32, points: &[u32], uv: &[DVec2], terms: usize) -> Option<LocalFit> {
+        let centre = uv[v as usize];
+        let scale = (points.iter())
+            .map(|&p| uv[p as usize].distance(centre))
+            .fold(0.0, f64::max);
+        if points.len() < terms || scale <= 0.0 {
+            return None;
+        }
+        let mono = |p: DVec2| -> [f64; 6] {
+            let d = (p - centre) / scale;
+            [1.0, d.x, d.y, d.x * d.x, d.x * d.y, d.y * d.y]
+        };
+        let a: Vec<[f64; 6]> = points.iter().map(|&p| mono(uv[p as usize])).collect();
+        // Normal matrix and its inverse by Gauss–Jordan with pivoting.
+        let mut m = vec![0.0f64; terms * 2 * terms];
+        for row in &a {
+            for i in 0..terms {
+                for j in 0..terms {
+                    m[i * 2 * terms + j] += row[i] * row[j];
+                }
+            }
+        }
+        for i in 0..terms {
+            m[i * 2 * terms + terms + i] = 1.0;
+        }
+        let w = 2 * terms;
+        let norm = (0..terms).map(|i| m[i * w + i]).fold(0.0, f64::max);
+        for col in 0..terms {
+            let piv = (col..terms)
+                .max_by(|&x, &y| m[x * w + col].abs().total_cmp(&m[y * w + col].abs()))?;
+            if m[piv * w + col].abs() <= 1e-10 * norm {
+                return None;
+            }
+            for k in 0..w {
+                m.swap(col * w + k, piv * w + k);
+            }
+            let d = m[col * w + col];
+            for k in 0..w {
+                m[col * w + k] /= d;
+            }
+            for r in 0..terms {
+                if r != col {
+                    let f = m[r * w + col];
+                    for k in 0..w {
+                        m[r * w + k] -= f * m[col * w + k];
+                    }
+                }
+            }
+        }
+        // g = (AᵀA)⁻¹ Aᵀ.
+        let mut g = vec![0.0f64; terms * points.len()];
+        for i in 0..terms {
+            for (p, row) in a.iter().enumerate() {
+                g[i * points.len() + p] = (0..terms).map(|j| m[i * w + terms + j] * row[j]).sum();
+            }
+        }
+        Some(LocalFit {
+            centre,
+            scale,
+            points: points.to_vec(),
+            g,
+            terms,
+        })
+    }
+
+    /// The weights over `points` of the blossom `P(x, y)` of the fit.
+    fn blossom(&self, x: DVec2, y: DVec2) -> Vec<f64> {
+        let (a, b) = (
+            (x - self.centre) / self.scale,
+            (y - self.centre) / self.scale,
+        );
+        let phi = [
+            1.0,
+            (a.x + b.x) / 2.0,
+            (a.y + b.y) / 2.0,
+            a.x * b.x,
+            (a.x * b.y + a.y * b.x) / 2.0,
+            a.y * b.y,
+        ];
+        let n = self.points.len();
+        (0..n)
+            .map(|p| (0..self.terms).map(|i| phi[i] * self.g[i * n + p]).sum())
+            .collect()
+    }
 }
 
 /// The default data of a mesh: vertices, edge midpoints, centroids, with
@@ -274,9 +517,11 @@ fn residuals(rows: &Csr, w: &[f64], c: &[DVec3], x: &[DVec3]) -> (f64, f64) {
 /// fairing weight `fairing`, and the fit's figures; `start` = the
 /// identification controls.
 ///
+/// The data must lie in the domain (the caller leaves out the rest).
+///
 /// Errors: a negative or non-finite weight ([`Error::InvalidParameter`]),
-/// no data point inside the domain ([`Error::Empty`]), conjugate gradients
-/// that do not converge ([`Refusal::NoConvergence`]).
+/// no data point ([`Error::Empty`]), conjugate gradients that do not
+/// converge ([`Refusal::NoConvergence`]).
 pub fn least_squares(
     domain: &Domain,
     params: &[DVec2],
@@ -292,16 +537,12 @@ pub fn least_squares(
             "must be a finite weight ≥ 0",
         ));
     }
-    let inside: Vec<usize> = (0..params.len())
-        .filter(|&i| domain.locate(params[i]).is_some())
-        .collect();
-    if inside.is_empty() {
+    if params.is_empty() {
         return Err(Error::empty(
             "least squares: data points inside the parameter domain",
         ));
     }
-    let u: Vec<DVec2> = inside.iter().map(|&i| params[i]).collect();
-    let x: Vec<DVec3> = inside.iter().map(|&i| points[i]).collect();
+    let (u, x) = (params, points);
     let basis = dms_basis(domain, &u, backend)?;
     let w: Vec<f64> = basis.weights.iter().map(|q| q[0] as f64).collect();
     let n = domain.n_controls();
@@ -340,13 +581,13 @@ pub fn least_squares(
             p[axis] = v;
         }
     }
-    let (rms, max) = residuals(&basis.rows, &w, &controls, &x);
+    let (rms, max) = residuals(&basis.rows, &w, &controls, x);
     Ok((
         controls,
         FitReport {
             method: "lsq",
-            data_points: inside.len(),
-            outside: params.len() - inside.len(),
+            data_points: params.len(),
+            outside: 0,
             rms,
             max,
             fairing,
@@ -355,26 +596,23 @@ pub fn least_squares(
     ))
 }
 
-/// The figures of point identification against data `(params, points)`.
-pub fn identify_report(
+/// The figures of a control net made without the data (`method`) against
+/// the data `(params, points)`.
+pub fn report(
     domain: &Domain,
+    method: &'static str,
     params: &[DVec2],
     points: &[DVec3],
     controls: &[DVec3],
     backend: Backend<'_>,
 ) -> Result<FitReport> {
-    let inside: Vec<usize> = (0..params.len())
-        .filter(|&i| domain.locate(params[i]).is_some())
-        .collect();
-    let u: Vec<DVec2> = inside.iter().map(|&i| params[i]).collect();
-    let x: Vec<DVec3> = inside.iter().map(|&i| points[i]).collect();
-    let basis = dms_basis(domain, &u, backend)?;
+    let basis = dms_basis(domain, params, backend)?;
     let w: Vec<f64> = basis.weights.iter().map(|q| q[0] as f64).collect();
-    let (rms, max) = residuals(&basis.rows, &w, controls, &x);
+    let (rms, max) = residuals(&basis.rows, &w, controls, points);
     Ok(FitReport {
-        method: "identify",
-        data_points: inside.len(),
-        outside: params.len() - inside.len(),
+        method,
+        data_points: params.len(),
+        outside: 0,
         rms,
         max,
         fairing: 0.0,

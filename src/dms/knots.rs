@@ -117,23 +117,28 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
         boundary[b as usize].push((a, b));
     }
     let triples = scored_triples();
+    // Per knot of a triangle (3·corner + cloud), the scored triples that
+    // contain it: placing that knot changes only their scores.
+    let with_knot: Vec<Vec<([usize; 3], bool)>> = (0..9)
+        .map(|k| {
+            triples
+                .iter()
+                .copied()
+                .filter(|(t, _)| t.contains(&k))
+                .collect()
+        })
+        .collect();
     // Knot k of vertex v: None until placed.
     let mut knots: Vec<[Option<DVec2>; 3]> = uv.iter().map(|&p| [Some(p), None, None]).collect();
     let score = |knots: &[[Option<DVec2>; 3]], t: u32, need: (usize, usize)| -> Option<f64> {
         let tri = triangles[t as usize];
+        let corner = tri.iter().position(|&w| w as usize == need.0)?;
         let mut worst: Option<f64> = None;
-        for &(ks, signed) in &triples {
+        for &(ks, signed) in &with_knot[3 * corner + need.1] {
             let pts = ks.map(|k| knots[tri[k / 3] as usize][k % 3]);
             let [Some(a), Some(b), Some(c)] = pts else {
                 continue;
             };
-            // Only triples with the knot being placed.
-            if !ks
-                .iter()
-                .any(|&k| tri[k / 3] as usize == need.0 && k % 3 == need.1)
-            {
-                continue;
-            }
             let q = quality(a, b, c);
             let s = if signed { q } else { q.abs() };
             worst = Some(worst.map_or(s, |w: f64| w.min(s)));

@@ -9,14 +9,14 @@
 //!  triangles + knots ──Domain──▶ shared controls (#V + E), knot hulls on a grid
 //!  parameter triangles ──lattice(n)──▶ n points per edge, (n − 1)² triangles each
 //!  lattice points ──dms_basis──▶ per point: weights [N, ∂N/∂u, ∂N/∂v] of its controls
-//!  rows + control net (identify | least squares) ──dms_surface──▶ points + normals
+//!  rows + control net (identify | quasi | least squares) ──dms_surface──▶ points + normals
 //! ```
 //!
 //! [`oracle`] is the f64 reference (exact half-open rule, generic
 //! recursion); [`basis`] and [`surface`] are the two kernels with their
 //! f32 mirrors; [`spline()`] runs the whole chain, and
 //! [`SplineDomain::skin`] redraws a changed mesh (a relaxation frame) with
-//! one gather.
+//! two gathers.
 
 pub mod basis;
 pub mod domain;

@@ -3,8 +3,9 @@
 //! surface mesh with normals.
 //!
 //! [`SplineDomain`] is the part that depends only on the mesh's
-//! connectivity and parameter points: a relaxation keeps it and redraws
-//! the smooth skin of every frame with one gather ([`SplineDomain::skin`]).
+//! connectivity and parameter points: a relaxation keeps it and, with a
+//! control net that is a fixed linear map of the vertices, redraws the
+//! smooth skin of every frame with two gathers ([`SplineDomain::skin`]).
 
 use std::time::Instant;
 
@@ -13,7 +14,7 @@ use serde::Serialize;
 
 use super::basis::{BasisRows, dms_basis};
 use super::domain::Domain;
-use super::fit::{self, FitReport};
+use super::fit::{self, ControlMap, FitReport};
 use super::lattice::{Lattice, lattice};
 use super::surface::{SurfaceInput, SurfacePoints, dms_surface};
 use super::{Parametrisation, Projection, knot_clouds, parametrise};
@@ -26,8 +27,21 @@ use crate::{Error, Result, TriMesh};
 pub enum Fit {
     /// Point identification (eq. 2.13).
     Identify,
+    /// Blossoms of local quadratic fits ([`ControlMap::quasi`]).
+    Quasi,
     /// Least squares with shared controls and a relative fairing weight.
     LeastSquares { fairing: f64 },
+}
+
+impl Fit {
+    /// `identify`, `quasi` or `lsq`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Fit::Identify => "identify",
+            Fit::Quasi => "quasi",
+            Fit::LeastSquares { .. } => "lsq",
+        }
+    }
 }
 
 /// Options of [`spline`].
@@ -61,8 +75,6 @@ pub struct SplineDomain {
     pub lattice: Lattice,
     /// The basis at the lattice points, over the shared controls.
     pub basis: BasisRows,
-    /// The same rows folded onto the vertices (point identification).
-    pub identified: SurfaceInput,
     pub timings: SplineTimings,
 }
 
@@ -122,7 +134,6 @@ impl SplineDomain {
         let lattice = lattice(&mesh.triangles, mesh.n_vertices(), n)?;
         let params = lattice_params(&lattice, &param.uv, &mesh.triangles);
         let basis = dms_basis(&domain, &params, backend)?;
-        let identified = SurfaceInput::identify(&basis, domain.n_vertices, &domain.edges);
         timings.basis = t.elapsed().as_secs_f64();
         Ok(SplineDomain {
             param,
@@ -130,15 +141,37 @@ impl SplineDomain {
             domain,
             lattice,
             basis,
-            identified,
             timings,
         })
     }
 
-    /// The smooth skin of vertex positions `positions` (`[x, y, z, ·]`, the
-    /// mesh's vertices) under point identification: one gather.
-    pub fn skin(&self, positions: &[[f32; 4]], backend: Backend<'_>) -> Result<SurfacePoints> {
-        dms_surface(&self.identified, positions, backend)
+    /// The control map of `fit` when it is a fixed linear map of the
+    /// vertices (identification, quasi-interpolation), else `None`.
+    pub fn control_map(&self, fit: &Fit) -> Option<ControlMap> {
+        match fit {
+            Fit::Identify => Some(ControlMap::identify(&self.domain)),
+            Fit::Quasi => Some(ControlMap::quasi(&self.domain, &self.param.uv)),
+            Fit::LeastSquares { .. } => None,
+        }
+    }
+
+    /// The rows of the lattice over the shared controls.
+    pub fn control_rows(&self) -> SurfaceInput {
+        SurfaceInput::over_controls(&self.basis, self.domain.n_controls())
+    }
+
+    /// The smooth skin of vertex positions `positions` (a relaxation frame)
+    /// under a control map given as gather rows
+    /// ([`ControlMap::gather_input`]): two gathers, controls then points.
+    pub fn skin(
+        &self,
+        map: &SurfaceInput,
+        rows: &SurfaceInput,
+        positions: &[[f32; 4]],
+        backend: Backend<'_>,
+    ) -> Result<SurfacePoints> {
+        let controls = dms_surface(map, positions, backend)?;
+        dms_surface(rows, &controls.positions, backend)
     }
 
     /// The output mesh of surface points `s` over `mesh` (the input, for
@@ -211,53 +244,70 @@ pub fn spline(
 ) -> Result<(SplineDomain, SplineSurface)> {
     let mut sd = SplineDomain::new(mesh, &opts.projection, opts.n, backend)?;
     let t = Instant::now();
-    let (params, points): (Vec<DVec2>, Vec<DVec3>) = match &opts.data {
-        None => fit::mesh_data(&sd.domain, &sd.param.uv, &mesh.positions),
+    // Mesh data lie in the domain by construction; `--data` points are
+    // projected, and those outside every parameter triangle left out.
+    let (params, points, outside): (Vec<DVec2>, Vec<DVec3>, usize) = match &opts.data {
+        None => {
+            let (u, x) = fit::mesh_data(&sd.domain, &sd.param.uv, &mesh.positions);
+            (u, x, 0)
+        }
         Some(pts) => {
             let mut params = Vec::with_capacity(pts.len());
+            let mut points = Vec::with_capacity(pts.len());
             for p in pts {
-                params.push(sd.param.project(*p).ok_or_else(|| {
+                let u = sd.param.project(*p).ok_or_else(|| {
                     Error::param(
                         "data",
                         format!("{} points", pts.len()),
                         "needs a map to project them: use --param cylinder or planar, not given UVs",
                     )
-                })?);
+                })?;
+                if sd.domain.locate(u).is_some() {
+                    params.push(u);
+                    points.push(p.as_dvec3());
+                }
             }
-            (params, pts.iter().map(|p| p.as_dvec3()).collect())
+            let outside = pts.len() - params.len();
+            if params.is_empty() {
+                return Err(Error::empty(
+                    "spline data: points inside the parameter domain",
+                ));
+            }
+            (params, points, outside)
         }
     };
-    let start = fit::identify(&sd.domain, &mesh.positions);
-    let (controls, report) = match opts.fit {
-        Fit::Identify => {
-            let r = fit::identify_report(&sd.domain, &params, &points, &start, backend)?;
-            (start, r)
+    let (controls, mut report) = match sd.control_map(&opts.fit) {
+        Some(map) => {
+            let controls = map.apply(&mesh.positions);
+            let r = fit::report(
+                &sd.domain,
+                opts.fit.name(),
+                &params,
+                &points,
+                &controls,
+                backend,
+            )?;
+            (controls, r)
         }
-        Fit::LeastSquares { fairing } => {
+        None => {
+            let Fit::LeastSquares { fairing } = opts.fit else {
+                return Err(Error::Internal(
+                    "a fit without a control map is least squares".into(),
+                ));
+            };
+            let start = ControlMap::identify(&sd.domain).apply(&mesh.positions);
             fit::least_squares(&sd.domain, &params, &points, fairing, start, backend)?
         }
     };
     sd.timings.fit = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let surface = match opts.fit {
-        Fit::Identify => {
-            let pos: Vec<[f32; 4]> = mesh
-                .positions
-                .iter()
-                .map(|p| [p.x, p.y, p.z, 0.0])
-                .collect();
-            sd.skin(&pos, backend)?
-        }
-        Fit::LeastSquares { .. } => {
-            let input = SurfaceInput::over_controls(&sd.basis, sd.domain.n_controls());
-            let src: Vec<[f32; 4]> = (controls.iter())
-                .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
-                .collect();
-            dms_surface(&input, &src, backend)?
-        }
-    };
-    let out = sd.surface_mesh(&surface, mesh);
+    let src: Vec<[f32; 4]> = (controls.iter())
+        .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
+        .collect();
+    let surface = dms_surface(&sd.control_rows(), &src, backend)?;
     sd.timings.surface = t.elapsed().as_secs_f64();
+    report.outside = outside;
+    let out = sd.surface_mesh(&surface, mesh);
     Ok((
         sd,
         SplineSurface {

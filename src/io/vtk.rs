@@ -5,9 +5,10 @@
 //! `VERTICES`/`LINES` (skipped), both the classic cell layout and the 5.1
 //! `OFFSETS`/`CONNECTIVITY` layout. Attribute sections (`POINT_DATA`,
 //! `CELL_DATA`, possibly empty) are parsed; one-component point `SCALARS` and
-//! one-component point `FIELD` arrays become [`ScalarField`]s, everything
-//! else (`NORMALS`, `TEXTURE_COORDINATES`, `VECTORS`, colours, cell data) is
-//! skipped. BINARY payloads are big-endian, as the VTK file-format spec says.
+//! one-component point `FIELD` arrays become [`ScalarField`]s, point
+//! `TEXTURE_COORDINATES` the fields `u` and `v` (their first two
+//! components); everything else (`NORMALS`, `VECTORS`, colours, cell data)
+//! is skipped. BINARY payloads are big-endian, as the VTK file-format spec says.
 //!
 //! Write: ASCII, `POLYGONS` of triangles, scalars as `POINT_DATA SCALARS
 //! <name> float 1` with the default lookup table.
@@ -210,13 +211,36 @@ impl Reader<'_> {
                 let (tat, ty) = self.sc.next("a data type")?;
                 let num = vtk_type(&self.sc, tat, ty)?;
                 self.end_header_line();
+                // Point texture coordinates of 2 or 3 components keep their
+                // first two as the fields `u` and `v` (the DMS room's
+                // `--param uv`).
+                let keep = matches!(self.owner, Owner::Points(_)) && dim >= 2;
+                let mut uv: [Vec<f32>; 2] = [Vec::new(), Vec::new()];
+                let mut k = 0u64;
                 self.values(
                     at,
                     "texture coordinates",
                     num,
                     (n as u64).saturating_mul(dim),
-                    |_| (),
-                )
+                    |x| {
+                        if keep && k % dim < 2 {
+                            uv[(k % dim) as usize].push(x as f32);
+                        }
+                        k += 1;
+                    },
+                )?;
+                if keep {
+                    let [u, v] = uv;
+                    self.scalars.push(ScalarField {
+                        name: "u".into(),
+                        values: u,
+                    });
+                    self.scalars.push(ScalarField {
+                        name: "v".into(),
+                        values: v,
+                    });
+                }
+                Ok(())
             }
             "FIELD" => self.field(at),
             "METADATA" => {

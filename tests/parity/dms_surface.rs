@@ -4,6 +4,7 @@
 
 use chisel::TriMesh;
 use chisel::dms::basis::{BasisRows, cpu as basis_cpu};
+use chisel::dms::fit::ControlMap;
 use chisel::dms::surface::gpu::SurfaceBuffers;
 use chisel::dms::surface::{SurfaceInput, SurfacePoints, cpu};
 use chisel::dms::{Projection, parametrise};
@@ -36,18 +37,18 @@ fn gpu_surface(gpu: &Gpu, what: &str, input: &SurfaceInput, sources: &[[f32; 4]]
     out
 }
 
-/// The identified rows of `mesh` over `uv` at accuracy `n` and its vertices.
+/// The rows of `mesh` over `uv` at accuracy `n` and its identification controls.
 fn rows_of(uv: &[glam::DVec2], mesh: &TriMesh, n: u32) -> (SurfaceInput, Vec<[f32; 4]>) {
     let (d, input) = input_of(uv, mesh, n);
     let basis = BasisRows {
         weights: basis_cpu::dms_basis(&input),
         rows: input.rows,
     };
-    let rows = SurfaceInput::identify(&basis, d.n_vertices, &d.edges);
-    let src = mesh
-        .positions
+    let rows = SurfaceInput::over_controls(&basis, d.n_controls());
+    let src = ControlMap::identify(&d)
+        .apply(&mesh.positions)
         .iter()
-        .map(|p| [p.x, p.y, p.z, 0.0])
+        .map(|p| [p.x as f32, p.y as f32, p.z as f32, 0.0])
         .collect();
     (rows, src)
 }
@@ -131,4 +132,42 @@ fn negative_controls() {
         buffers.record(gpu, &mut encoder, &few),
         Err(chisel::Error::Mismatch { .. })
     ));
+}
+
+/// A relaxation frame's skin on the device: the quasi-interpolation map
+/// gathers controls from the vertex buffer, the lattice rows gather the
+/// points from the controls' buffer, with no read-back between; equal to
+/// the CPU's two gathers.
+#[test]
+fn the_skin_chain_stays_on_the_device() {
+    use chisel::dms::SplineDomain;
+    let Some(mesh) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let sd = SplineDomain::new(&mesh, &Projection::Cylinder, 4, chisel::gpu::Backend::Cpu).unwrap();
+    let map = sd
+        .control_map(&chisel::dms::Fit::Quasi)
+        .unwrap()
+        .gather_input(mesh.n_vertices());
+    let rows = sd.control_rows();
+    let src: Vec<[f32; 4]> = mesh
+        .positions
+        .iter()
+        .map(|p| [p.x, p.y + 0.01 * p.x, p.z, 0.0])
+        .collect();
+    let want = sd
+        .skin(&map, &rows, &src, chisel::gpu::Backend::Cpu)
+        .unwrap();
+    let Some(gpu) = common::gpu() else { return };
+    let vertices = GpuArray::from_slice(gpu, "vertices", &src).unwrap();
+    let first = SurfaceBuffers::upload(gpu, &map).unwrap();
+    let second = SurfaceBuffers::upload(gpu, &rows).unwrap();
+    let mut encoder = gpu.encoder("skin");
+    first.record(gpu, &mut encoder, &vertices).unwrap();
+    second.record(gpu, &mut encoder, &first.positions).unwrap();
+    gpu.submit_and_wait(encoder).unwrap();
+    let got = second.positions.read(gpu).unwrap();
+    assert_eq!(find_sentinel(&got, [f32::NAN; 4]), None);
+    let tol = cpu::position_tolerance(2.0 * extent(&src));
+    compare_vec("dms_surface/skin", &want.positions, &got, tol).unwrap_or_else(|m| panic!("{m}"));
 }

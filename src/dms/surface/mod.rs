@@ -4,10 +4,11 @@
 //! point, a plain gather over the point's row.
 //!
 //! The rows depend only on the parameter domain, so a changed control net
-//! is one more gather. With point identification (seed eq. 2.13) the
-//! controls are a fixed linear map of the mesh vertices, and
-//! [`SurfaceInput::identify`] folds it into the rows: the gather then reads
-//! the vertex positions themselves (a relaxation's skin, each frame).
+//! is one more gather. When the controls are a fixed linear map of the mesh
+//! vertices (point identification, eq. 2.13, or quasi-interpolation) that
+//! map is a gather too ([`crate::dms::fit::ControlMap::gather_input`], weights `[w, 0,
+//! 0, 0]`): two gathers turn a relaxation frame's vertex positions into
+//! its smooth skin, on the device without a read-back.
 //!
 //! The parameter triangles are positively oriented, so `F_u × F_v` points
 //! to the side the input triangles' winding points to: the spline's normals
@@ -46,55 +47,6 @@ impl SurfaceInput {
             rows: basis.rows.clone(),
             weights: basis.weights.clone(),
             n_sources: n_controls,
-        }
-    }
-
-    /// Rows over the vertices under point identification (eq. 2.13):
-    /// control `v < n_vertices` is vertex `v`, edge control `n_vertices +
-    /// e` is the midpoint of `edges[e]`. Weights are summed per vertex in
-    /// row order, so the result is deterministic.
-    pub fn identify(basis: &BasisRows, n_vertices: usize, edges: &[[u32; 2]]) -> SurfaceInput {
-        let mut lists: Vec<Vec<u32>> = Vec::with_capacity(basis.rows.n_rows());
-        let mut weights: Vec<[f32; 4]> = Vec::with_capacity(basis.weights.len());
-        let mut terms: Vec<(u32, [f32; 4])> = Vec::new();
-        for p in 0..basis.rows.n_rows() {
-            terms.clear();
-            let (lo, hi) = (
-                basis.rows.offsets[p] as usize,
-                basis.rows.offsets[p + 1] as usize,
-            );
-            for k in lo..hi {
-                let c = basis.rows.targets[k] as usize;
-                let w = basis.weights[k];
-                if c < n_vertices {
-                    terms.push((c as u32, w));
-                } else {
-                    let half = w.map(|x| 0.5 * x);
-                    for v in edges[c - n_vertices] {
-                        terms.push((v, half));
-                    }
-                }
-            }
-            // Stable: equal vertices keep row order for the sum.
-            terms.sort_by_key(|t| t.0);
-            let mut row: Vec<u32> = Vec::new();
-            for &(v, w) in &terms {
-                if row.last() == Some(&v) {
-                    let s = weights.last_mut().expect("a row entry exists");
-                    for i in 0..4 {
-                        s[i] += w[i];
-                    }
-                } else {
-                    row.push(v);
-                    weights.push(w);
-                }
-            }
-            lists.push(row);
-        }
-        SurfaceInput {
-            rows: Csr::from_rows(&lists),
-            weights,
-            n_sources: n_vertices,
         }
     }
 }

@@ -2,8 +2,7 @@
 //!
 //! - Point identification (eq. 2.13): corner controls are the vertices,
 //!   edge controls the edge midpoints — a fixed linear map of the vertices
-//!   ([`identify`]; folded into the surface rows by
-//!   [`super::surface::SurfaceInput::identify`]).
+//!   ([`ControlMap::identify`]).
 //! - Least squares with shared controls (outlook 7; the seed's eq. 2.14
 //!   with the norm squared): the `#V + E` shared controls minimise `Σ_i
 //!   |F(u_i) − x_i|² + λ Σ_(a,b) |c_a − c_b|²` over data points `(u_i,
@@ -15,12 +14,11 @@
 //!   the controls) are solved by Jacobi-preconditioned conjugate gradients
 //!   per coordinate, started from point identification; never a dense
 //!   solve.
-//!
 //! - Quasi-interpolation (beyond the seed; [`ControlMap::quasi`]): every
 //!   vertex gets the least-squares quadratic `q_v` of its two-ring in the
 //!   parameter plane, and the controls are blossoms (docs/design/dms.md
-//!   §5): the vertex control `P_v(r₀, r₁)`, the edge control `½(P_a(a₀, b₀)
-//!   + P_b(a₀, b₀))`. Quadratics are reproduced exactly, so the surface
+//!   §5): the vertex control `P_v(r₀, r₁)`, the edge control
+//!   `½(P_a(a₀, b₀) + P_b(a₀, b₀))`. Quadratics are reproduced exactly, so the surface
 //!   follows the shape the vertices sample instead of the mesh's flat
 //!   facets (which identification and least squares against the
 //!   piecewise-linear mesh both keep); like identification it is a fixed
@@ -29,8 +27,8 @@
 //! Data without `--data`: the piecewise-linear mesh at its vertices, edge
 //! midpoints and triangle centroids (`#V + E + t` points for `#V + E`
 //! unknowns; the vertices alone leave the system underdetermined, seed
-//! l.405). Data points whose parameter point lies in no parameter triangle
-//! are left out and counted.
+//! l.405). `--data` points whose parameter point lies in no parameter
+//! triangle are left out and counted ([`super::spline()`]).
 
 use glam::{DVec2, DVec3, Vec3};
 use serde::Serialize;
@@ -104,8 +102,8 @@ impl ControlMap {
             .collect();
         let mut lists: Vec<Vec<u32>> = Vec::with_capacity(domain.n_controls());
         let mut weights: Vec<f64> = Vec::new();
-        for v in 0..n {
-            match &fits[v] {
+        for (v, fit) in fits.iter().enumerate() {
+            match fit {
                 Some(f) => {
                     let k = domain.knots[v];
                     let w = f.blossom(k[0], k[1]);
@@ -203,10 +201,10 @@ impl LocalFit {
             }
             points.extend(&next);
             frontier = next;
-            if ring >= 2 {
-                if let Some(fit) = LocalFit::solve(v, &points, uv, 6) {
-                    return fit;
-                }
+            if ring >= 2
+                && let Some(fit) = LocalFit::solve(v, &points, uv, 6)
+            {
+                return fit;
             }
         }
         LocalFit::solve(v, &points, uv, 3).unwrap_or(LocalFit {
@@ -543,7 +541,7 @@ pub fn least_squares(
         ));
     }
     let (u, x) = (params, points);
-    let basis = dms_basis(domain, &u, backend)?;
+    let basis = dms_basis(domain, u, backend)?;
     let w: Vec<f64> = basis.weights.iter().map(|q| q[0] as f64).collect();
     let n = domain.n_controls();
     let edges = net_edges(domain);

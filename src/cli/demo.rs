@@ -7,8 +7,9 @@
 //! layered spring network over the bone (seed 000 ch. 4) with bend springs
 //! across the skin → the jaw advanced 6 mm and the tissue relaxed
 //! on the GPU → the same plan on the CPU mirror as a parity check → relaxed
-//! skin, moved bone, the phantom CT, before/after previews and a JSON
-//! report in the output folder.
+//! skin, its face as a smooth DMS spline surface (seed 000 ch. 2), moved
+//! bone, the phantom CT, before/after previews and a JSON report in the
+//! output folder.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -17,10 +18,12 @@ use serde::Serialize;
 
 use super::Global;
 use super::relax::{
-    BoneCutFigures, Crossings, Job, NetworkFigures, Overshoot, before_mesh, bone_before_after,
-    run_job, write_preview,
+    BoneCutFigures, Crossings, Job, NetworkFigures, Overshoot, SkinSpline, before_mesh,
+    bone_before_after, run_job, skin_spline, write_preview,
 };
 use super::report::{Report, Show};
+use glam::Vec3;
+
 use crate::gpu::Backend;
 use crate::gpu::GpuFeatures;
 use crate::mc::McOptions;
@@ -49,6 +52,9 @@ pub struct Args {
     json: bool,
 }
 
+/// Accuracy of the relaxed skin's DMS spline (points per edge).
+const DEMO_SPLINE_N: u32 = 5;
+
 /// Skin and bone levels of the phantom (as for the VTK CT head).
 const SKIN_LEVEL: f32 = 500.0;
 const BONE_LEVEL: f32 = 1150.0;
@@ -67,6 +73,8 @@ pub struct DemoReport<'a> {
     relax_gpu: &'a RelaxReport,
     skin_self_intersecting_pairs: Crossings,
     skin_overshoot: Overshoot,
+    /// The relaxed face as a smooth DMS spline (GPU basis and gathers).
+    skin_spline: &'a SkinSpline,
     parity: DemoParity,
     outputs: DemoOutputs,
     timings_s: DemoTimings,
@@ -101,6 +109,7 @@ struct DemoParity {
 #[derive(Debug, Serialize)]
 struct DemoOutputs {
     skin: PathBuf,
+    skin_spline: PathBuf,
     bone: PathBuf,
     ct: PathBuf,
     preview: PathBuf,
@@ -209,9 +218,22 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let facing = Facing::Axes;
     let views = vec![View::Front, View::Right];
     let title = "chisel demo: jaw osteotomy, 6 mm advance (mm)";
+    let spline = skin_spline(
+        &job.skin,
+        &relaxed.positions,
+        DEMO_SPLINE_N,
+        (Vec3::Z, Vec3::Y),
+        Backend::Gpu(&gpu),
+    )?;
+    crate::io::write_mesh(&out("relaxed_skin_spline.ply"), &spline.after)?;
+    let before = before_mesh(&job.skin);
     write_preview(
         &gpu,
-        (&before_mesh(&job.skin), &relaxed),
+        &[
+            (&before, "before"),
+            (&relaxed, "after"),
+            (&spline.after, "after, DMS spline"),
+        ],
         views.clone(),
         facing,
         format!("{title} - skin"),
@@ -219,7 +241,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     )?;
     write_preview(
         &gpu,
-        (&bone_before, &bone_after),
+        &[(&bone_before, "before"), (&bone_after, "after")],
         views,
         facing,
         format!("{title} - bone"),
@@ -248,6 +270,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         relax_gpu: &gpu_report,
         skin_self_intersecting_pairs: crossings,
         skin_overshoot: overshoot,
+        skin_spline: &spline,
         parity: DemoParity {
             cpu_status: cpu_report.status,
             cpu_iterations: cpu_report.iterations,
@@ -256,6 +279,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         },
         outputs: DemoOutputs {
             skin: out("relaxed_skin.ply"),
+            skin_spline: out("relaxed_skin_spline.ply"),
             bone: out("bone_moved.ply"),
             ct: out("head_ct.nrrd"),
             preview: out("before_after.png"),

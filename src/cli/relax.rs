@@ -120,6 +120,12 @@ pub struct Args {
     /// Before/after preview PNG of the bone (moved fragments coloured).
     #[arg(long)]
     bone_preview: Option<PathBuf>,
+    /// Also write the relaxed skin as its smooth DMS spline surface at this
+    /// accuracy (points per edge) to OUTPUT with `_spline` before the
+    /// extension, and add it to the preview. A closed skin is splined as
+    /// its patch facing `--view-front` (default +z).
+    #[arg(long)]
+    spline: Option<u32>,
     #[command(flatten)]
     view: ViewAxes,
     #[command(flatten)]
@@ -250,27 +256,24 @@ pub fn bone_before_after(job: &Job, report: &RelaxReport) -> Option<(TriMesh, Tr
     ))
 }
 
-/// Writes a before/after preview (shared framing and colour range).
+/// Writes a before/after preview (shared framing and colour range): one
+/// column per `(mesh, caption)`, coloured by `displacement`.
 pub fn write_preview(
     gpu: &crate::Gpu,
-    (before, after): (&TriMesh, &TriMesh),
+    meshes: &[(&TriMesh, &str)],
     views: Vec<View>,
     facing: Facing,
     title: String,
     path: &Path,
 ) -> anyhow::Result<()> {
-    let panels = [
-        Panel {
-            mesh: before,
-            caption: "before".into(),
+    let panels: Vec<Panel<'_>> = meshes
+        .iter()
+        .map(|(mesh, caption)| Panel {
+            mesh,
+            caption: (*caption).into(),
             scalars: None,
-        },
-        Panel {
-            mesh: after,
-            caption: "after".into(),
-            scalars: None,
-        },
-    ];
+        })
+        .collect();
     let opts = RenderOptions {
         width: 384,
         height: 384,
@@ -282,6 +285,112 @@ pub fn write_preview(
     };
     crate::render::render_panels(gpu, &panels, &opts)?.save_png(path)?;
     Ok(())
+}
+
+/// The smooth skin before and after a relaxation (`relax --spline`, the
+/// demo): the quadratic DMS spline at accuracy `n` with the
+/// quasi-interpolation control net, whose rows are built once from the
+/// skin before and gathered for both states. An open skin is splined
+/// whole (cylinder parametrisation); a closed one (a CT's) as its largest
+/// patch facing `front` within 60° (its plane across `front`).
+#[derive(Debug, Serialize)]
+pub struct SkinSpline {
+    n: u32,
+    /// `whole skin` or `patch facing [x, y, z]`.
+    domain: String,
+    patch_vertices: usize,
+    points: usize,
+    triangles: usize,
+    knot_quality: f64,
+    control_net: &'static str,
+    /// Largest |F_after(u) − F_before(u)| over the points.
+    max_displacement: f32,
+    seconds: f64,
+    /// The spline after the relaxation, with `displacement` and normals.
+    #[serde(skip)]
+    pub after: TriMesh,
+}
+
+/// The smallest normal component along the patch direction (cos 60°).
+const PATCH_MIN_COS: f32 = 0.5;
+
+/// [`SkinSpline`] of `before` → `after` (same connectivity).
+pub fn skin_spline(
+    before: &TriMesh,
+    after: &[Vec3],
+    n: u32,
+    (front, up): (Vec3, Vec3),
+    backend: Backend<'_>,
+) -> anyhow::Result<SkinSpline> {
+    use crate::dms::patch::facing_patch;
+    use crate::dms::{Fit, Projection, SplineDomain};
+    let t = Instant::now();
+    let closed = crate::dms::param::boundary_edges(&before.triangles).is_empty();
+    let (mesh, vertices, projection, domain) = if closed {
+        let p = facing_patch(before, front, up, PATCH_MIN_COS)?;
+        let d = format!("patch facing [{}, {}, {}]", front.x, front.y, front.z);
+        (p.mesh, p.vertices, Projection::Given(p.uv), d)
+    } else {
+        let all = (0..before.n_vertices() as u32).collect();
+        (
+            before.clone(),
+            all,
+            Projection::Cylinder,
+            "whole skin".into(),
+        )
+    };
+    let sd = SplineDomain::new(&mesh, &projection, n, backend)
+        .map_err(|e| anyhow::anyhow!("the skin's spline ({domain}): {e}"))?;
+    let map = (sd.control_map(&Fit::Quasi))
+        .ok_or_else(|| anyhow::anyhow!("quasi-interpolation is a control map"))?
+        .gather_input(mesh.n_vertices());
+    let rows = sd.control_rows();
+    let of = |p: &[Vec3]| -> Vec<[f32; 4]> {
+        vertices
+            .iter()
+            .map(|&v| p[v as usize].extend(0.0).to_array())
+            .collect()
+    };
+    let s0 = sd.skin(&map, &rows, &of(&before.positions), backend)?;
+    let s1 = sd.skin(&map, &rows, &of(after), backend)?;
+    let moved = TriMesh {
+        positions: vertices.iter().map(|&v| after[v as usize]).collect(),
+        triangles: mesh.triangles.clone(),
+        scalars: Vec::new(),
+    };
+    let mut out = sd.surface_mesh(&s1, &moved);
+    let displacement: Vec<f32> = (s0.positions.iter().zip(&s1.positions))
+        .map(|(a, b)| Vec3::from_slice(&a[..3]).distance(Vec3::from_slice(&b[..3])))
+        .collect();
+    let max_displacement = displacement.iter().copied().fold(0.0, f32::max);
+    out.scalars.retain(|f| f.name != "distance");
+    out.scalars.push(ScalarField {
+        name: "displacement".into(),
+        values: displacement,
+    });
+    Ok(SkinSpline {
+        n,
+        domain,
+        patch_vertices: mesh.n_vertices(),
+        points: out.n_vertices(),
+        triangles: out.n_triangles(),
+        knot_quality: sd.knot_quality,
+        control_net: "quasi",
+        max_displacement,
+        seconds: t.elapsed().as_secs_f64(),
+        after: out,
+    })
+}
+
+/// `path` with `_spline` before its extension.
+pub fn spline_path(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let ext = path
+        .extension()
+        .map_or_else(String::new, |e| format!(".{}", e.to_string_lossy()));
+    path.with_file_name(format!("{stem}_spline{ext}"))
 }
 
 /// What the plan's cuts did to the bone: its pieces, the vertices of each
@@ -356,6 +465,8 @@ pub struct RelaxRunReport<'a> {
     skin_self_intersecting_pairs: Option<Crossings>,
     #[serde(skip_serializing_if = "Option::is_none")]
     skin_overshoot: Option<Overshoot>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spline: Option<SkinSpline>,
 }
 
 impl Report for RelaxRunReport<'_> {
@@ -372,6 +483,7 @@ struct CtInput<'a> {
 #[derive(Debug, Serialize)]
 struct RelaxOutputs<'a> {
     mesh: &'a Path,
+    spline: Option<PathBuf>,
     bone: Option<&'a Path>,
     preview: Option<&'a Path>,
     bone_preview: Option<&'a Path>,
@@ -391,6 +503,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let facing = args.view.facing()?;
     // Every output is checked before the work starts.
     crate::io::check_mesh_output(&args.output)?;
+    if args.spline.is_some() {
+        crate::io::check_mesh_output(&spline_path(&args.output))?;
+    }
     if let Some(path) = &args.bone_output {
         crate::io::check_mesh_output(path)?;
     }
@@ -518,6 +633,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         outputs: None,
         skin_self_intersecting_pairs: None,
         skin_overshoot: None,
+        spline: None,
     };
     if diverged {
         // The report says where and how; the garbage state is not written.
@@ -565,6 +681,18 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if let (Some(path), Some((_, after))) = (&args.bone_output, &bones) {
         crate::io::write_mesh(path, after)?;
     }
+    let spline = match args.spline {
+        Some(n) => {
+            let axes = match facing {
+                Facing::Anatomical { up, front } => (front, up),
+                _ => (Vec3::Z, Vec3::Y),
+            };
+            let s = skin_spline(&job.skin, &relaxed.positions, n, axes, backend)?;
+            crate::io::write_mesh(&spline_path(&args.output), &s.after)?;
+            Some(s)
+        }
+        None => None,
+    };
     let title = job.plan.name.clone().unwrap_or_default();
     if args.preview.is_some() || args.bone_preview.is_some() {
         let opened;
@@ -576,9 +704,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             }
         };
         if let Some(path) = &args.preview {
+            let before = before_mesh(&job.skin);
+            let mut meshes = vec![(&before, "before"), (&relaxed, "after")];
+            if let Some(s) = &spline {
+                meshes.push((&s.after, "after, spline"));
+            }
             write_preview(
                 preview_gpu,
-                (&before_mesh(&job.skin), &relaxed),
+                &meshes,
                 vec![View::Front, View::Right],
                 facing,
                 format!("relax: {title} - skin displacement (mesh units)"),
@@ -588,7 +721,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         if let (Some(path), Some((before, after))) = (&args.bone_preview, &bones) {
             write_preview(
                 preview_gpu,
-                (before, after),
+                &[(before, "before"), (after, "after")],
                 vec![View::Front, View::Right],
                 facing,
                 format!("relax: {title} - bone displacement (mesh units)"),
@@ -607,12 +740,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     ));
     run_report.outputs = Some(RelaxOutputs {
         mesh: &args.output,
+        spline: spline.as_ref().map(|_| spline_path(&args.output)),
         bone: args.bone_output.as_deref(),
         preview: args.preview.as_deref(),
         bone_preview: args.bone_preview.as_deref(),
     });
     run_report.skin_self_intersecting_pairs = Some(crossings);
     run_report.skin_overshoot = Some(overshoot);
+    run_report.spline = spline;
     args.report.emit(&run_report, Show::WithJson)
 }
 

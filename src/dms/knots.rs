@@ -6,7 +6,9 @@
 //!
 //! The seed leaves the constants open; chosen here (docs/design/dms.md §2):
 //! - candidates on the circle of radius 1/5 of the distance to the nearest
-//!   neighbour (seed l.362), every [`THETA_DEG`]° (24 candidates);
+//!   neighbour (seed l.362), every [`THETA_DEG`]° (24 candidates), the
+//!   step halved up to [`REFINEMENTS`] times where fewer than two of them
+//!   lie in the vertex's allowed region;
 //! - the quality of a triple is the normalised determinant
 //!   `q = 2√3·d(a, b, c) / (|ab|² + |bc|² + |ca|²)` (1 for an equilateral
 //!   triangle, scale-free, signed);
@@ -34,6 +36,10 @@ use crate::{Error, Refusal, Result};
 
 /// Angle step of the knot candidates, degrees.
 pub const THETA_DEG: f64 = 15.0;
+
+/// Halvings of the angle step tried where fewer than two candidates lie in
+/// a vertex's allowed region (Θ/64 ≈ 0.23° at the finest).
+pub const REFINEMENTS: u32 = 6;
 
 /// Knot radius as a fraction of the distance to the nearest neighbour.
 pub const RADIUS_FRACTION: f64 = 0.2;
@@ -172,12 +178,28 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
                 })
             }
         };
+        // The candidates every Θ; where fewer than two of them lie in the
+        // allowed region (a sharp boundary corner, a thin star), every
+        // Θ/2, Θ/4, … down to Θ/64.
+        let mut candidates: Vec<DVec2> = Vec::new();
+        for refine in 0..=REFINEMENTS {
+            let n_steps = steps << refine;
+            let step = THETA_DEG / f64::from(1u32 << refine);
+            candidates = (0..n_steps)
+                .map(|s| {
+                    let angle = (s as f64 * step).to_radians();
+                    p + radius * DVec2::new(angle.cos(), angle.sin())
+                })
+                .filter(|&q| allowed(q))
+                .collect();
+            if candidates.len() >= 2 {
+                break;
+            }
+        }
         for cloud in 1..3 {
             let mut best: Option<(f64, DVec2)> = None;
-            for s in 0..steps {
-                let angle = (s as f64 * THETA_DEG).to_radians();
-                let q = p + radius * DVec2::new(angle.cos(), angle.sin());
-                if !allowed(q) || knots[v][..cloud].iter().flatten().any(|&k| k == q) {
+            for &q in &candidates {
+                if knots[v][..cloud].iter().flatten().any(|&k| k == q) {
                     continue;
                 }
                 knots[v][cloud] = Some(q);

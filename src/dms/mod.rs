@@ -26,6 +26,7 @@ pub mod lattice;
 pub mod neighbourhood;
 pub mod oracle;
 pub mod param;
+pub mod patch;
 pub mod program;
 pub mod spline;
 pub mod surface;

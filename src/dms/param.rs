@@ -312,7 +312,7 @@ fn edge_triangles(triangles: &[[u32; 3]]) -> HashMap<(u32, u32), Vec<u32>> {
 /// The boundary edges of `triangles` (used by one triangle), directed as
 /// in it (the interior on the left of a positive triangle), in triangle
 /// order.
-pub(super) fn boundary_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
+pub fn boundary_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
     let edges = edge_triangles(triangles);
     let mut out = Vec::new();
     for tri in triangles {

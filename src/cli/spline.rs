@@ -47,6 +47,7 @@ pub enum FitArg {
 
 /// Arguments of `chisel spline`.
 #[derive(Debug, clap::Args)]
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Triangle mesh, a disk (any format `chisel stats` reads).
     mesh: PathBuf,
@@ -58,7 +59,7 @@ pub struct Args {
     fit: FitArg,
     /// Points to fit instead of the mesh (any mesh format; its vertices),
     /// projected by the same parametrisation (`--fit lsq`).
-    #[arg(long, requires = "fit")]
+    #[arg(long)]
     data: Option<PathBuf>,
     /// Fairing weight W ≥ 0 of least squares, relative (0 = none).
     #[arg(long, default_value_t = 0.0)]

@@ -20,4 +20,5 @@ mod polyhedrize;
 mod relax;
 mod render;
 mod scan;
+mod spline;
 mod stats;

@@ -39,7 +39,7 @@ fn relax_fran_chin_advance_agrees_between_backends() {
         ];
         let preview = tmp.path().join("fran.png");
         if backend == "gpu" {
-            args.extend(["--preview", path_str(&preview)]);
+            args.extend(["--preview", path_str(&preview), "--spline", "3"]);
         }
         let run = chisel(&args);
         assert!(
@@ -53,6 +53,25 @@ fn relax_fran_chin_advance_agrees_between_backends() {
         // The plan moves the chin by 4 mm; the skin follows by millimetres.
         assert!(max > 0.002 && max < 0.008, "max displacement {max} m");
         let v: Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        if backend == "gpu" {
+            // `--spline 3`: the relaxed skin as its DMS spline, written next
+            // to the output; its displacement is the relaxation's.
+            let s = &v["spline"];
+            assert_eq!(s["domain"], "whole skin");
+            assert_eq!(
+                (s["points"].as_u64(), s["triangles"].as_u64()),
+                (Some(8633), Some(16896))
+            );
+            let spline_path = tmp.path().join(format!("fran_{backend}_spline.ply"));
+            assert_eq!(v["outputs"]["spline"], path_str(&spline_path));
+            let sm = chisel::io::read_mesh(&spline_path).unwrap();
+            assert_eq!(sm.n_triangles(), 16_896);
+            let smax = s["max_displacement"].as_f64().unwrap();
+            assert!(
+                (smax - max as f64).abs() < 0.3 * max as f64,
+                "{smax} vs {max}"
+            );
+        }
         assert_eq!(
             v["skin_self_intersecting_pairs"],
             serde_json::json!({ "before": 0, "after": 0 }),

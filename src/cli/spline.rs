@@ -75,7 +75,7 @@ pub struct Args {
     /// Also write the control net (six controls per triangle as four triangles).
     #[arg(long)]
     control_net: Option<PathBuf>,
-    /// Preview PNG: the input beside the spline coloured by their distance.
+    /// Preview PNG: the input, the spline, and the spline coloured by their distance.
     #[arg(long)]
     preview: Option<PathBuf>,
     #[command(flatten)]
@@ -255,6 +255,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             Panel {
                 mesh: &s.mesh,
                 caption: format!("spline n={}", args.n),
+                scalars: None,
+            },
+            Panel {
+                mesh: &s.mesh,
+                caption: "distance".into(),
                 scalars: Some("distance".into()),
             },
         ];

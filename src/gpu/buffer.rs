@@ -300,3 +300,38 @@ pub fn chunk_ranges(n: usize, elem_bytes: usize, max_bytes: u64) -> Vec<Range<us
         .map(|i| i * per..((i + 1) * per).min(n))
         .collect()
 }
+
+/// Splits the rows of CSR arrays into consecutive row ranges whose entries
+/// fit one storage binding each: `arrays` lists each CSR's offsets (one
+/// more than the rows, shared row numbering) with its bytes per entry. A
+/// row too large for a binding on its own gets a range of its own (its
+/// upload then reports the limit).
+pub fn row_chunks(arrays: &[(&[u32], u64)], max_bytes: u64) -> Vec<Range<usize>> {
+    let n_rows = arrays.first().map_or(0, |(o, _)| o.len().saturating_sub(1));
+    let bytes = |r: Range<usize>| -> u64 {
+        (arrays.iter())
+            .map(|(o, b)| u64::from(o[r.end] - o[r.start]) * b)
+            .max()
+            .unwrap_or(0)
+    };
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < n_rows {
+        let mut end = start + 1;
+        // Doubling then bisection keeps this O(chunks · log rows).
+        let mut step = 1;
+        while end + step <= n_rows && bytes(start..end + step) <= max_bytes {
+            end += step;
+            step *= 2;
+        }
+        while step > 1 {
+            step /= 2;
+            if end + step <= n_rows && bytes(start..end + step) <= max_bytes {
+                end += step;
+            }
+        }
+        out.push(start..end);
+        start = end;
+    }
+    out
+}

@@ -18,7 +18,7 @@ mod timing;
 
 pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
 pub use backend::Backend;
-pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges};
+pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges, row_chunks};
 pub use pass::{Binder, BoundKernel};
 pub use registry::{Kernel, Shader, preprocess};
 pub use spec::{BindKind, KernelSpec};

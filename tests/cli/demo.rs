@@ -67,4 +67,24 @@ fn demo_runs_and_writes_its_outputs() {
             > 1000
     );
     assert!(report["network"]["springs_per_class"][5].as_u64().unwrap() > 10_000);
+    // The relaxed face as its DMS spline: the patch facing +z at n = 5,
+    // (n − 1)² = 16 triangles per patch triangle, moved with the jaw.
+    let s = &report["skin_spline"];
+    assert_eq!(s["domain"], "patch facing [0, 0, 1]");
+    let spline = chisel::io::read_mesh(&out_dir.join("relaxed_skin_spline.ply")).unwrap();
+    assert_eq!(spline.n_vertices() as u64, s["points"].as_u64().unwrap());
+    assert_eq!(
+        spline.n_triangles() as u64,
+        s["triangles"].as_u64().unwrap()
+    );
+    assert_eq!(spline.n_triangles() % 16, 0);
+    assert!(spline.n_vertices() > 5_000, "{}", spline.n_vertices());
+    let smax = s["max_displacement"].as_f64().unwrap();
+    assert!(
+        (smax - max as f64).abs() < 1.5,
+        "spline {smax} vs mesh {max} mm"
+    );
+    for f in ["nx", "ny", "nz", "displacement"] {
+        assert!(spline.scalar(f).is_some(), "{f}");
+    }
 }

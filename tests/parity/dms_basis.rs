@@ -185,3 +185,24 @@ fn negative_controls() {
     let (a, b) = scaled(&input, &want, &got);
     assert!(compare_vec("dms_basis/dropped", &a, &b, cpu::TOL).is_err());
 }
+
+/// Inputs larger than one storage binding run in ranges of points: with
+/// bindings capped at 16 KiB the grid's rows take several dispatches, and
+/// the weights equal one dispatch's.
+#[test]
+fn chunked_dispatches_equal_one() {
+    let Some(base) = common::gpu() else { return };
+    let (uv, mesh) = jittered(9, 8, 11);
+    let (_, input) = input_of(&uv, &mesh, 5);
+    let small = base.view(Some(16 << 10), false);
+    let parts = chisel::gpu::row_chunks(
+        &[(&input.rows.offsets, 16), (&input.candidates.offsets, 24)],
+        small.max_binding_bytes(),
+    );
+    assert!(parts.len() > 3, "{} parts", parts.len());
+    assert_eq!(parts.first().map(|r| r.start), Some(0));
+    assert_eq!(parts.last().map(|r| r.end), Some(input.points.len()));
+    let whole = gpu_weights(base, "whole", &input);
+    let chunked = chisel::dms::basis::gpu::dms_basis(&small, &input).unwrap();
+    assert_eq!(whole, chunked);
+}

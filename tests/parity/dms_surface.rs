@@ -171,3 +171,17 @@ fn the_skin_chain_stays_on_the_device() {
     let tol = cpu::position_tolerance(2.0 * extent(&src));
     compare_vec("dms_surface/skin", &want.positions, &got, tol).unwrap_or_else(|m| panic!("{m}"));
 }
+
+/// The gather in ranges of points (bindings capped at 8 KiB) equals one
+/// dispatch.
+#[test]
+fn chunked_gathers_equal_one() {
+    let Some(base) = common::gpu() else { return };
+    let (uv, mesh) = jittered(9, 8, 12);
+    let (r, src) = rows_of(&uv, &mesh, 5);
+    let small = base.view(Some(8 << 10), false);
+    let whole = gpu_surface(base, "whole", &r, &src);
+    let chunked = chisel::dms::surface::gpu::dms_surface(&small, &r, &src).unwrap();
+    assert!(r.weights.len() * 16 > 4 * (8 << 10));
+    assert_eq!(whole, chunked);
+}

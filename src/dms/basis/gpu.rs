@@ -2,7 +2,7 @@
 
 use super::BasisInput;
 use crate::Result;
-use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer, row_chunks};
 
 /// Uniform parameters of `dms_basis`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
@@ -66,11 +66,27 @@ impl BasisBuffers {
     }
 }
 
-/// Uploads, dispatches once and reads the weights back.
+/// Uploads, dispatches and reads the weights back, in ranges of points
+/// whose weights and slots fit one storage binding each.
 pub fn dms_basis(gpu: &Gpu, input: &BasisInput) -> Result<Vec<[f32; 4]>> {
-    let buffers = BasisBuffers::upload(gpu, input)?;
-    let mut encoder = gpu.encoder("dms_basis");
-    buffers.record(gpu, &mut encoder)?;
-    gpu.submit_and_wait(encoder)?;
-    buffers.weights.read(gpu)
+    let parts = row_chunks(
+        &[(&input.rows.offsets, 16), (&input.candidates.offsets, 24)],
+        gpu.max_binding_bytes(),
+    );
+    let mut out = Vec::with_capacity(input.rows.targets.len());
+    for range in parts {
+        let part;
+        let input = if range.len() == input.points.len() {
+            input
+        } else {
+            part = input.part(range);
+            &part
+        };
+        let buffers = BasisBuffers::upload(gpu, input)?;
+        let mut encoder = gpu.encoder("dms_basis");
+        buffers.record(gpu, &mut encoder)?;
+        gpu.submit_and_wait(encoder)?;
+        out.extend(buffers.weights.read(gpu)?);
+    }
+    Ok(out)
 }

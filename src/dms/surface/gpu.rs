@@ -2,7 +2,7 @@
 
 use super::{SurfaceInput, SurfacePoints};
 use crate::Result;
-use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer, row_chunks};
 
 /// Uniform parameters of `dms_surface`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
@@ -77,15 +77,29 @@ impl SurfaceBuffers {
     }
 }
 
-/// Uploads, gathers once and reads positions and normals back.
+/// Uploads, gathers and reads positions and normals back, in ranges of
+/// points whose rows fit one storage binding each.
 pub fn dms_surface(gpu: &Gpu, input: &SurfaceInput, sources: &[[f32; 4]]) -> Result<SurfacePoints> {
-    let buffers = SurfaceBuffers::upload(gpu, input)?;
     let src = GpuArray::from_slice(gpu, "dms_surface.sources", sources)?;
-    let mut encoder = gpu.encoder("dms_surface");
-    buffers.record(gpu, &mut encoder, &src)?;
-    gpu.submit_and_wait(encoder)?;
-    Ok(SurfacePoints {
-        positions: buffers.positions.read(gpu)?,
-        normals: buffers.normals.read(gpu)?,
-    })
+    let n = input.rows.n_rows();
+    let mut out = SurfacePoints {
+        positions: Vec::with_capacity(n),
+        normals: Vec::with_capacity(n),
+    };
+    for range in row_chunks(&[(&input.rows.offsets, 16)], gpu.max_binding_bytes()) {
+        let part;
+        let input = if range.len() == n {
+            input
+        } else {
+            part = input.part(range);
+            &part
+        };
+        let buffers = SurfaceBuffers::upload(gpu, input)?;
+        let mut encoder = gpu.encoder("dms_surface");
+        buffers.record(gpu, &mut encoder, &src)?;
+        gpu.submit_and_wait(encoder)?;
+        out.positions.extend(buffers.positions.read(gpu)?);
+        out.normals.extend(buffers.normals.read(gpu)?);
+    }
+    Ok(out)
 }

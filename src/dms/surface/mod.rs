@@ -51,6 +51,24 @@ impl SurfaceInput {
     }
 }
 
+impl SurfaceInput {
+    /// The rows of the points `range` alone (offsets rebased).
+    pub fn part(&self, range: std::ops::Range<usize>) -> SurfaceInput {
+        let (r0, r1) = (self.rows.offsets[range.start], self.rows.offsets[range.end]);
+        SurfaceInput {
+            rows: Csr {
+                offsets: self.rows.offsets[range.start..=range.end]
+                    .iter()
+                    .map(|o| o - r0)
+                    .collect(),
+                targets: self.rows.targets[r0 as usize..r1 as usize].to_vec(),
+            },
+            weights: self.weights[r0 as usize..r1 as usize].to_vec(),
+            n_sources: self.n_sources,
+        }
+    }
+}
+
 /// The surface of `sources` (one `[x, y, z, ·]` per source) on `backend`.
 ///
 /// Errors: a source count other than the rows' ([`crate::Error::Mismatch`]).

@@ -418,17 +418,27 @@ mod knots {
 
     #[test]
     fn a_star_too_thin_for_the_candidates_is_refused() {
-        // A fan round vertex 0 from 10° to 365°: the outer wedge (5°, 10°)
-        // holds no multiple of the 15° step.
-        let n = 24;
-        let mut uv = vec![DVec2::ZERO];
-        for k in 0..=n {
-            let a = (10.0 + 355.0 * k as f64 / n as f64).to_radians();
-            uv.push(DVec2::new(a.cos(), a.sin()));
+        // A fan round vertex 0 from `from`° to 365°: the outer wedge
+        // (5°, `from`°). At 10° the 15° step has no candidate there, its
+        // halvings do (Θ/8: 5.6°, 7.5°, 9.4°); at 5.1° not even Θ/64 ≈
+        // 0.23° fits two.
+        let fan = |from: f64| {
+            let n = 24;
+            let mut uv = vec![DVec2::ZERO];
+            for k in 0..=n {
+                let a = (from + (365.0 - from) * k as f64 / n as f64).to_radians();
+                uv.push(DVec2::new(a.cos(), a.sin()));
+            }
+            let tris: Vec<[u32; 3]> = (1..=n as u32).map(|k| [0, k, k + 1]).collect();
+            knot_clouds(&uv, &tris)
+        };
+        let k = fan(10.0).unwrap();
+        for knot in &k.knots[0][1..] {
+            let a = knot.y.atan2(knot.x).to_degrees();
+            assert!(a > 5.0 && a < 10.0, "{a}°");
         }
-        let tris: Vec<[u32; 3]> = (1..=n as u32).map(|k| [0, k, k + 1]).collect();
         assert!(matches!(
-            knot_clouds(&uv, &tris),
+            fan(5.1),
             Err(Error::Refused(Refusal::NoKnotPosition { vertex: 0 }))
         ));
     }

@@ -136,20 +136,29 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
         .collect();
     // Knot k of vertex v: None until placed.
     let mut knots: Vec<[Option<DVec2>; 3]> = uv.iter().map(|&p| [Some(p), None, None]).collect();
-    let score = |knots: &[[Option<DVec2>; 3]], t: u32, need: (usize, usize)| -> Option<f64> {
+    // The smallest score of triangle t's triples with the knot `need`,
+    // folded into `worst`; stops once it is at or below `bound` (a
+    // candidate that low cannot win the maximin).
+    let score = |knots: &[[Option<DVec2>; 3]],
+                 t: u32,
+                 need: (usize, usize),
+                 worst: &mut f64,
+                 bound: f64| {
         let tri = triangles[t as usize];
-        let corner = tri.iter().position(|&w| w as usize == need.0)?;
-        let mut worst: Option<f64> = None;
+        let Some(corner) = tri.iter().position(|&w| w as usize == need.0) else {
+            return;
+        };
         for &(ks, signed) in &with_knot[3 * corner + need.1] {
             let pts = ks.map(|k| knots[tri[k / 3] as usize][k % 3]);
             let [Some(a), Some(b), Some(c)] = pts else {
                 continue;
             };
             let q = quality(a, b, c);
-            let s = if signed { q } else { q.abs() };
-            worst = Some(worst.map_or(s, |w: f64| w.min(s)));
+            *worst = worst.min(if signed { q } else { q.abs() });
+            if *worst <= bound {
+                return;
+            }
         }
-        worst
     };
     let steps = (360.0 / THETA_DEG).round() as usize;
     for v in 0..n {
@@ -203,9 +212,17 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
                     continue;
                 }
                 knots[v][cloud] = Some(q);
-                let s = (star[v].iter())
-                    .filter_map(|&t| score(&knots, t, (v, cloud)))
-                    .fold(f64::INFINITY, f64::min);
+                // Branch and bound: the maximin only needs to know whether
+                // this candidate beats the best so far (same choice as
+                // scoring every triple).
+                let bound = best.map_or(f64::NEG_INFINITY, |(b, _)| b);
+                let mut s = f64::INFINITY;
+                for &t in &star[v] {
+                    score(&knots, t, (v, cloud), &mut s, bound);
+                    if s <= bound {
+                        break;
+                    }
+                }
                 knots[v][cloud] = None;
                 if best.is_none_or(|(b, _)| s > b) {
                     best = Some((s, q));

@@ -82,34 +82,47 @@ impl BasisInput {
         if n_slots > u64::from(u32::MAX) {
             return Err(Error::limit("dms_basis: B-spline slots", n_slots, u32::MAX));
         }
-        let mut row_lists: Vec<Vec<u32>> = Vec::with_capacity(points.len());
-        let mut slot_entry: Vec<u32> = Vec::with_capacity(n_slots as usize);
-        let mut base: u64 = 0;
-        for p in 0..points.len() {
-            let tris = candidates.row(p);
-            let mut row: Vec<u32> = (tris.iter())
-                .flat_map(|&t| (0..6).map(move |b| domain.control(t, b)))
-                .collect();
-            row.sort_unstable();
-            row.dedup();
-            for &t in tris {
-                for b in 0..6 {
-                    let k = row.binary_search(&domain.control(t, b)).unwrap_or(0);
-                    slot_entry.push((base + k as u64) as u32);
-                }
-            }
-            base += row.len() as u64;
-            if base > u64::from(u32::MAX) {
-                return Err(Error::limit("dms_basis: row entries", base, u32::MAX));
-            }
-            row_lists.push(row);
+        // Per point (in parallel): its distinct controls and, per slot, the
+        // position of the slot's control among them.
+        use rayon::prelude::*;
+        let per_point: Vec<(Vec<u32>, Vec<u32>)> = (0..points.len())
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|p| {
+                let tris = candidates.row(p);
+                let slots: Vec<u32> = (tris.iter())
+                    .flat_map(|&t| (0..6).map(move |b| domain.control(t, b)))
+                    .collect();
+                let mut row = slots.clone();
+                row.sort_unstable();
+                row.dedup();
+                let local = (slots.iter())
+                    .map(|c| row.binary_search(c).unwrap_or(0) as u32)
+                    .collect();
+                (row, local)
+            })
+            .collect();
+        let total: u64 = per_point.iter().map(|(r, _)| r.len() as u64).sum();
+        if total > u64::from(u32::MAX) {
+            return Err(Error::limit("dms_basis: row entries", total, u32::MAX));
         }
+        let mut slot_entry: Vec<u32> = Vec::with_capacity(n_slots as usize);
+        let mut offsets: Vec<u32> = Vec::with_capacity(points.len() + 1);
+        let mut targets: Vec<u32> = Vec::with_capacity(total as usize);
+        offsets.push(0);
+        for (row, local) in &per_point {
+            let base = targets.len() as u32;
+            slot_entry.extend(local.iter().map(|k| base + k));
+            targets.extend_from_slice(row);
+            offsets.push(targets.len() as u32);
+        }
+        let rows = Csr { offsets, targets };
         Ok(BasisInput {
             points: points.iter().map(|&p| f(p)).collect(),
             tri_knots,
             candidates,
             slot_entry,
-            rows: Csr::from_rows(&row_lists),
+            rows,
         })
     }
 }

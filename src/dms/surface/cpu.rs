@@ -53,12 +53,21 @@ fn point(input: &SurfaceInput, sources: &[[f32; 4]], p: usize) -> ([f32; 4], [f3
     ([f[0], f[1], f[2], 0.0], normal)
 }
 
-/// Positions and normals of every point.
+/// Positions and normals of every point (points in parallel, each
+/// written in place).
 pub fn dms_surface(input: &SurfaceInput, sources: &[[f32; 4]]) -> SurfacePoints {
-    let (positions, normals) = (0..input.rows.n_rows())
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|p| point(input, sources, p))
-        .unzip();
+    const CHUNK: usize = 2048;
+    let n = input.rows.n_rows();
+    let mut positions = vec![[0.0f32; 4]; n];
+    let mut normals = vec![[0.0f32; 4]; n];
+    positions
+        .par_chunks_mut(CHUNK)
+        .zip(normals.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(c, (pos, nrm))| {
+            for (k, (p, q)) in pos.iter_mut().zip(nrm.iter_mut()).enumerate() {
+                (*p, *q) = point(input, sources, c * CHUNK + k);
+            }
+        });
     SurfacePoints { positions, normals }
 }

@@ -41,11 +41,29 @@ pub struct SurfacePoints {
 }
 
 impl SurfaceInput {
-    /// Rows over the `n_controls` shared controls, as the basis gave them.
+    /// Rows over the `n_controls` shared controls, as the basis gave them,
+    /// without the entries whose weight and derivatives are all exactly
+    /// zero (a candidate triangle whose B-splines vanish at the point adds
+    /// nothing; dropping them leaves every sum the same, up to the sign of
+    /// a zero, for finite controls, and shortens the gather).
     pub fn over_controls(basis: &BasisRows, n_controls: usize) -> SurfaceInput {
+        let mut offsets = Vec::with_capacity(basis.rows.offsets.len());
+        let mut targets = Vec::with_capacity(basis.rows.targets.len());
+        let mut weights = Vec::with_capacity(basis.weights.len());
+        offsets.push(0u32);
+        for p in 0..basis.rows.n_rows() {
+            for k in basis.rows.offsets[p] as usize..basis.rows.offsets[p + 1] as usize {
+                let w = basis.weights[k];
+                if w[..3] != [0.0; 3] {
+                    targets.push(basis.rows.targets[k]);
+                    weights.push(w);
+                }
+            }
+            offsets.push(targets.len() as u32);
+        }
         SurfaceInput {
-            rows: basis.rows.clone(),
-            weights: basis.weights.clone(),
+            rows: Csr { offsets, targets },
+            weights,
             n_sources: n_controls,
         }
     }

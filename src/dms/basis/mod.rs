@@ -3,7 +3,7 @@
 //! every triangle whose knot hull contains it, with their derivatives.
 //!
 //! Per point `P` the host lists the contributing triangles
-//! ([`Supports::candidates`]) and the distinct controls they name, sorted:
+//! ([`crate::dms::neighbourhood::Supports::candidates`]) and the distinct controls they name, sorted:
 //! the point's *row* (`rows.row(P)`). Each candidate's six B-splines `N_β`
 //! land in the row entry of their control through `slot_entry`, so one
 //! invocation owns its row and sums without atomics. The output per row

@@ -10,9 +10,12 @@
 //   row_src:   source id per row entry (a control, or a vertex under point
 //              identification)
 //   weights:   vec4<f32> per row entry: (w, ∂w/∂u, ∂w/∂v, 0)
+//   base:      #P vec4<f32>, xyz added to F (zero for a plain gather; the
+//              controls of the rest state when the sources are a
+//              relaxation's displacements from rest)
 //   sources:   vec4<f32> per source, xyz = position (any buffer another
-//              pass keeps, e.g. a relaxation's vertex positions)
-//   positions: #P vec4<f32> out, xyz = F, w = 0
+//              pass keeps, e.g. a relaxation's state)
+//   positions: #P vec4<f32> out, xyz = base + F, w = 0
 //   normals:   #P vec4<f32> out, xyz = unit F_u × F_v (0 where it
 //              vanishes), w = 0
 // Mirror: dms::surface::cpu::dms_surface.
@@ -29,9 +32,10 @@ const WG_SIZE: u32 = 256u;
 @group(0) @binding(1) var<storage, read> row_off: array<u32>;
 @group(0) @binding(2) var<storage, read> row_src: array<u32>;
 @group(0) @binding(3) var<storage, read> weights: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> sources: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> positions: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> normals: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> base: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> sources: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> positions: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> normals: array<vec4<f32>>;
 
 @compute @workgroup_size(WG_SIZE)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>,
@@ -40,7 +44,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>,
     if ix >= params.n_points {
         return;
     }
-    var f = vec3<f32>(0.0);
+    var f = base[ix].xyz;
     var fu = vec3<f32>(0.0);
     var fv = vec3<f32>(0.0);
     for (var e = row_off[ix]; e < row_off[ix + 1u]; e++) {

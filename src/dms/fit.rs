@@ -155,6 +155,7 @@ impl ControlMap {
                 .map(|&w| [w as f32, 0.0, 0.0, 0.0])
                 .collect(),
             n_sources: n_vertices,
+            base: None,
         }
     }
 

@@ -35,4 +35,4 @@ pub use domain::Domain;
 pub use knots::{KnotClouds, knot_clouds};
 pub use lattice::{Lattice, LatticePoint, lattice, lattice_counts};
 pub use param::{Parametrisation, Projection, parametrise};
-pub use spline::{Fit, SplineDomain, SplineOptions, SplineSurface, spline};
+pub use spline::{Fit, LiveSkin, SplineDomain, SplineOptions, SplineSurface, spline};

@@ -16,9 +16,10 @@ use super::basis::{BasisRows, dms_basis};
 use super::domain::Domain;
 use super::fit::{self, ControlMap, FitReport};
 use super::lattice::{Lattice, lattice};
+use super::surface::gpu::SurfaceBuffers;
 use super::surface::{SurfaceInput, SurfacePoints, dms_surface};
 use super::{Parametrisation, Projection, knot_clouds, parametrise};
-use crate::gpu::Backend;
+use crate::gpu::{Backend, Gpu, GpuArray};
 use crate::mesh::ScalarField;
 use crate::{Error, Result, TriMesh};
 
@@ -316,4 +317,72 @@ pub fn spline(
             fit: report,
         },
     ))
+}
+
+/// The smooth skin of a state that lives on the device (a relaxation's
+/// `x − x_rest` per node, [`crate::tissue::Simulation::device_state`]):
+/// two `dms_surface` gathers recorded into the caller's encoder, the first
+/// from the state to the controls (with the rest state's controls as its
+/// base, so the controls are absolute), the second from the controls to the
+/// lattice points. Nothing is read back.
+#[derive(Debug)]
+pub struct LiveSkin {
+    controls: SurfaceBuffers,
+    points: SurfaceBuffers,
+}
+
+impl LiveSkin {
+    /// The chain for `sd` under the control map `map`; `nodes[v]` is the
+    /// state index of mesh vertex `v`, `rest[v]` its rest position.
+    ///
+    /// Errors: `nodes` or `rest` not one per vertex ([`Error::Mismatch`]),
+    /// the buffer errors of the uploads.
+    pub fn new(
+        gpu: &Gpu,
+        sd: &SplineDomain,
+        map: &ControlMap,
+        nodes: &[u32],
+        rest: &[Vec3],
+    ) -> Result<LiveSkin> {
+        let nv = sd.domain.n_vertices;
+        if nodes.len() != nv || rest.len() != nv {
+            return Err(Error::mismatch(
+                "live skin: node ids and rest positions (one per vertex)",
+                nv,
+                nodes.len().min(rest.len()),
+            ));
+        }
+        let mut input = map.gather_input(nv);
+        input
+            .rows
+            .targets
+            .iter_mut()
+            .for_each(|v| *v = nodes[*v as usize]);
+        input.n_sources = nodes.iter().map(|&n| n as usize + 1).max().unwrap_or(0);
+        input.base = Some(
+            (map.apply(rest).iter())
+                .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
+                .collect(),
+        );
+        Ok(LiveSkin {
+            controls: SurfaceBuffers::upload(gpu, &input)?,
+            points: SurfaceBuffers::upload(gpu, &sd.control_rows())?,
+        })
+    }
+
+    /// Records both gathers from `state` into `encoder`.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        state: &GpuArray<[f32; 4]>,
+    ) -> Result<()> {
+        self.controls.record(gpu, encoder, state)?;
+        self.points.record(gpu, encoder, &self.controls.positions)
+    }
+
+    /// The lattice points and unit normals after [`LiveSkin::record`].
+    pub fn output(&self) -> (&GpuArray<[f32; 4]>, &GpuArray<[f32; 4]>) {
+        (&self.points.positions, &self.points.normals)
+    }
 }

@@ -415,6 +415,10 @@ impl Stepper for GpuStepper<'_> {
         let state = self.pos[self.cur].read(self.gpu)?;
         Ok(absolute(&self.rest, &state))
     }
+
+    fn device_state(&self) -> Option<&GpuArray<[f32; 4]>> {
+        Some(&self.pos[self.cur])
+    }
 }
 
 /// One dispatch of `spring_step` on explicit inputs (the buffers of

@@ -310,6 +310,14 @@ impl<'a> Simulation<'a> {
     pub fn positions(&mut self) -> Result<Vec<[f32; 4]>> {
         self.stepper.positions()
     }
+
+    /// On the GPU: the buffer holding every node's `x − x_rest` after the
+    /// last [`Simulation::step`] (node order as the network's: the
+    /// epidermis vertices first), for passes that read the state without a
+    /// read-back (the smooth skin of `dms::LiveSkin`); `None` on the CPU.
+    pub fn device_state(&self) -> Option<&crate::gpu::GpuArray<[f32; 4]>> {
+        self.stepper.device_state()
+    }
 }
 
 /// Relaxes `network` through `plan` on `backend`.

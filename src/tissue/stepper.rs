@@ -115,6 +115,11 @@ pub(crate) trait Stepper {
     fn advance(&mut self, n: u32, window: bool) -> Result<Probe>;
     /// All node positions.
     fn positions(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// The node states `x − x_rest` on the device, when the state lives
+    /// there.
+    fn device_state(&self) -> Option<&crate::gpu::GpuArray<[f32; 4]>> {
+        None
+    }
 }
 
 /// The kernel one iteration of a solver runs, with its parameters.

@@ -185,3 +185,89 @@ fn chunked_gathers_equal_one() {
     assert!(r.weights.len() * 16 > 4 * (8 << 10));
     assert_eq!(whole, chunked);
 }
+
+/// The smooth skin of a relaxation on the device: the two gathers read the
+/// GPU stepper's state buffer (x − x_rest per node) directly, with the rest
+/// skin's controls as base, and match the CPU chain on the read-back
+/// positions.
+#[test]
+fn the_live_skin_reads_the_relaxation_state() {
+    use chisel::dms::{Fit, LiveSkin, SplineDomain};
+    use chisel::tissue::{NetworkParams, RelaxOptions, Simulation, SpringNetwork};
+    let Some(mesh) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let Some(gpu) = common::gpu() else { return };
+    let net = SpringNetwork::build(&mesh, None, &NetworkParams::default()).unwrap();
+    let mut sim = Simulation::new(
+        &net,
+        &RelaxOptions::default(),
+        chisel::gpu::Backend::Gpu(gpu),
+    )
+    .unwrap();
+    let bone: Vec<[f32; 4]> = net
+        .bone_rest()
+        .iter()
+        .map(|p| [p[0] + 0.003, p[1], p[2] - 0.002, p[3]])
+        .collect();
+    sim.set_bone(&bone).unwrap();
+    sim.step(40).unwrap();
+    let sd = SplineDomain::new(&mesh, &Projection::Cylinder, 3, chisel::gpu::Backend::Cpu).unwrap();
+    let map = sd.control_map(&Fit::Quasi).unwrap();
+    let nv = mesh.n_vertices();
+    let nodes: Vec<u32> = (0..nv as u32).collect();
+    let live = LiveSkin::new(gpu, &sd, &map, &nodes, &mesh.positions).unwrap();
+    let mut encoder = gpu.encoder("live skin");
+    live.record(gpu, &mut encoder, sim.device_state().expect("a GPU state"))
+        .unwrap();
+    gpu.submit_and_wait(encoder).unwrap();
+    let (pos, nrm) = live.output();
+    let (pos, nrm) = (pos.read(gpu).unwrap(), nrm.read(gpu).unwrap());
+    assert_eq!(find_sentinel(&pos, [f32::NAN; 4]), None);
+    // The CPU chain on the read-back absolute positions.
+    let all = sim.positions().unwrap();
+    let want = sd
+        .skin(
+            &map.gather_input(nv),
+            &sd.control_rows(),
+            &all[..nv],
+            chisel::gpu::Backend::Cpu,
+        )
+        .unwrap();
+    let moved = want
+        .positions
+        .iter()
+        .zip(&pos)
+        .map(|(a, b)| (a[0] - b[0]).abs().max((a[2] - b[2]).abs()))
+        .fold(0.0f32, f32::max);
+    let tol = cpu::position_tolerance(2.0 * extent(&all[..nv]));
+    compare_vec("dms_surface/live_skin", &want.positions, &pos, tol)
+        .unwrap_or_else(|m| panic!("{m}"));
+    compare_vec(
+        "dms_surface/live_skin/normals",
+        &want.normals,
+        &nrm,
+        cpu::NORMAL_TOL,
+    )
+    .unwrap_or_else(|m| panic!("{m}"));
+    // The skin moved (the comparison is not of two rest states).
+    let rest = sd
+        .skin(
+            &map.gather_input(nv),
+            &sd.control_rows(),
+            &mesh
+                .positions
+                .iter()
+                .map(|p| [p.x, p.y, p.z, 0.0])
+                .collect::<Vec<_>>(),
+            chisel::gpu::Backend::Cpu,
+        )
+        .unwrap();
+    let shift = rest
+        .positions
+        .iter()
+        .zip(&pos)
+        .map(|(a, b)| (a[0] - b[0]).abs())
+        .fold(0.0f32, f32::max);
+    assert!(shift > 1e-4, "the skin did not move: {shift} ({moved})");
+}

@@ -27,7 +27,8 @@ pub const NORMAL_TOL: Tolerance = Tolerance {
 
 /// Position and normal of point `p`, same loop and order as the kernel.
 fn point(input: &SurfaceInput, sources: &[[f32; 4]], p: usize) -> ([f32; 4], [f32; 4]) {
-    let mut f = [0.0f32; 3];
+    let b = input.base.as_ref().map_or([0.0; 4], |b| b[p]);
+    let mut f = [b[0], b[1], b[2]];
     let mut fu = [0.0f32; 3];
     let mut fv = [0.0f32; 3];
     for e in input.rows.offsets[p]..input.rows.offsets[p + 1] {

@@ -19,6 +19,8 @@ pub struct SurfaceBuffers {
     row_off: GpuArray<u32>,
     row_src: GpuArray<u32>,
     weights: GpuArray<[f32; 4]>,
+    /// Per-point base (zeros, cleared on the device, when the input has none).
+    base: GpuArray<[f32; 4]>,
     /// Output positions (NaN sentinels until written, on a device with
     /// sentinels on).
     pub positions: GpuArray<[f32; 4]>,
@@ -39,6 +41,10 @@ impl SurfaceBuffers {
             row_off: GpuArray::from_slice(gpu, "dms_surface.row_off", &input.rows.offsets)?,
             row_src: GpuArray::from_slice(gpu, "dms_surface.row_src", &input.rows.targets)?,
             weights: GpuArray::from_slice(gpu, "dms_surface.weights", &input.weights)?,
+            base: match &input.base {
+                Some(b) => GpuArray::from_slice(gpu, "dms_surface.base", b)?,
+                None => GpuArray::zeroed(gpu, "dms_surface.base", n)?,
+            },
             positions: GpuArray::output(gpu, "dms_surface.positions", n, [f32::NAN; 4])?,
             normals: GpuArray::output(gpu, "dms_surface.normals", n, [f32::NAN; 4])?,
             n_points,
@@ -68,6 +74,7 @@ impl SurfaceBuffers {
             .read(&self.row_off)
             .read(&self.row_src)
             .read(&self.weights)
+            .read(&self.base)
             .read(sources)
             .write(&self.positions)
             .write(&self.normals)

@@ -31,6 +31,9 @@ pub struct SurfaceInput {
     pub weights: Vec<[f32; 4]>,
     /// Number of sources the rows index.
     pub n_sources: usize,
+    /// Per point, added to `F` (`None`: zero). The controls of a rest state
+    /// when the sources are displacements from it.
+    pub base: Option<Vec<[f32; 4]>>,
 }
 
 /// Surface positions and unit normals (`[x, y, z, 0]` each).
@@ -65,6 +68,7 @@ impl SurfaceInput {
             rows: Csr { offsets, targets },
             weights,
             n_sources: n_controls,
+            base: None,
         }
     }
 }
@@ -83,6 +87,7 @@ impl SurfaceInput {
             },
             weights: self.weights[r0 as usize..r1 as usize].to_vec(),
             n_sources: self.n_sources,
+            base: self.base.as_ref().map(|b| b[range].to_vec()),
         }
     }
 }

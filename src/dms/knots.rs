@@ -138,8 +138,10 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
     let mut knots: Vec<[Option<DVec2>; 3]> = uv.iter().map(|&p| [Some(p), None, None]).collect();
     // The smallest score of triangle t's triples with the knot `need`,
     // folded into `worst`; stops once it is at or below `bound` (a
-    // candidate that low cannot win the maximin).
+    // candidate that low cannot win the maximin). `own` overrides the
+    // knots of the vertex being placed.
     let score = |knots: &[[Option<DVec2>; 3]],
+                 own: &[Option<DVec2>; 3],
                  t: u32,
                  need: (usize, usize),
                  worst: &mut f64,
@@ -148,8 +150,15 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
         let Some(corner) = tri.iter().position(|&w| w as usize == need.0) else {
             return;
         };
+        let get = |w: u32, c: usize| {
+            if w as usize == need.0 {
+                own[c]
+            } else {
+                knots[w as usize][c]
+            }
+        };
         for &(ks, signed) in &with_knot[3 * corner + need.1] {
-            let pts = ks.map(|k| knots[tri[k / 3] as usize][k % 3]);
+            let pts = ks.map(|k| get(tri[k / 3], k % 3));
             let [Some(a), Some(b), Some(c)] = pts else {
                 continue;
             };
@@ -161,10 +170,9 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
         }
     };
     let steps = (360.0 / THETA_DEG).round() as usize;
-    for v in 0..n {
-        if star[v].is_empty() {
-            continue;
-        }
+    // The two extra knots of vertex v, given the knots placed so far
+    // (`None` when no candidate fits).
+    let place = |v: usize, knots: &[[Option<DVec2>; 3]]| -> Option<[DVec2; 2]> {
         let p = uv[v];
         let nearest = (star[v].iter())
             .flat_map(|&t| triangles[t as usize])
@@ -205,34 +213,77 @@ pub fn knot_clouds(uv: &[DVec2], triangles: &[[u32; 3]]) -> Result<KnotClouds> {
                 break;
             }
         }
+        let mut own: [Option<DVec2>; 3] = [Some(p), None, None];
         for cloud in 1..3 {
             let mut best: Option<(f64, DVec2)> = None;
             for &q in &candidates {
-                if knots[v][..cloud].iter().flatten().any(|&k| k == q) {
+                if own[..cloud].iter().flatten().any(|&k| k == q) {
                     continue;
                 }
-                knots[v][cloud] = Some(q);
+                own[cloud] = Some(q);
                 // Branch and bound: the maximin only needs to know whether
                 // this candidate beats the best so far (same choice as
                 // scoring every triple).
                 let bound = best.map_or(f64::NEG_INFINITY, |(b, _)| b);
                 let mut s = f64::INFINITY;
                 for &t in &star[v] {
-                    score(&knots, t, (v, cloud), &mut s, bound);
+                    score(knots, &own, t, (v, cloud), &mut s, bound);
                     if s <= bound {
                         break;
                     }
                 }
-                knots[v][cloud] = None;
+                own[cloud] = None;
                 if best.is_none_or(|(b, _)| s > b) {
                     best = Some((s, q));
                 }
             }
-            let Some((_, q)) = best else {
-                return Err(Refusal::NoKnotPosition { vertex: v as u32 }.into());
-            };
-            knots[v][cloud] = Some(q);
+            own[cloud] = Some(best?.1);
         }
+        Some([own[1]?, own[2]?])
+    };
+    // Vertices are placed in id order, each seeing the knots of its
+    // lower-numbered neighbours only. Vertex v depends on those alone, so
+    // the vertices of one level (1 + the largest level of a lower-numbered
+    // neighbour) are independent and placed in parallel, with the same
+    // result as the sequential order.
+    let mut level = vec![0u32; n];
+    for v in 0..n {
+        for &t in &star[v] {
+            for w in triangles[t as usize] {
+                if (w as usize) < v {
+                    level[v] = level[v].max(level[w as usize] + 1);
+                }
+            }
+        }
+    }
+    let mut by_level: Vec<Vec<usize>> = Vec::new();
+    for v in (0..n).filter(|&v| !star[v].is_empty()) {
+        let l = level[v] as usize;
+        if by_level.len() <= l {
+            by_level.resize(l + 1, Vec::new());
+        }
+        by_level[l].push(v);
+    }
+    let mut failed: Option<usize> = None;
+    for vertices in &by_level {
+        use rayon::prelude::*;
+        let placed: Vec<Option<[DVec2; 2]>> = vertices
+            .par_iter()
+            .with_min_len(64)
+            .map(|&v| place(v, &knots))
+            .collect();
+        for (&v, k) in vertices.iter().zip(placed) {
+            match k {
+                Some([a, b]) => {
+                    knots[v][1] = Some(a);
+                    knots[v][2] = Some(b);
+                }
+                None => failed = Some(failed.map_or(v, |f| f.min(v))),
+            }
+        }
+    }
+    if let Some(v) = failed {
+        return Err(Refusal::NoKnotPosition { vertex: v as u32 }.into());
     }
     let mut min_quality = f64::INFINITY;
     for tri in triangles {

@@ -69,13 +69,14 @@ pub struct Args {
     n: u32,
     #[command(flatten)]
     backend: BackendChoice,
-    /// Output spline mesh with normals `nx ny nz` and `distance` (written atomically).
+    /// Output spline mesh with normals `nx ny nz`, `distance` and `curvature` (written atomically).
     #[arg(short, long)]
     output: PathBuf,
     /// Also write the control net (six controls per triangle as four triangles).
     #[arg(long)]
     control_net: Option<PathBuf>,
-    /// Preview PNG: the input, the spline, and the spline coloured by their distance.
+    /// Preview PNG: the input, the spline, the spline coloured by their
+    /// distance, and below it coloured by curvature.
     #[arg(long)]
     preview: Option<PathBuf>,
     #[command(flatten)]
@@ -275,7 +276,26 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             facing,
             ..Default::default()
         };
-        crate::render::render_panels(g, &panels, &opts)?.save_png(path)?;
+        let top = crate::render::render_panels(g, &panels, &opts)?;
+        // Curvature on its own colour scale, where faceting shows.
+        let curvature = Panel {
+            mesh: &s.mesh,
+            caption: "curvature".into(),
+            scalars: Some("curvature".into()),
+        };
+        let bottom = crate::render::render_panels(
+            g,
+            &[curvature],
+            &RenderOptions {
+                views: vec![View::Front, View::Iso],
+                title: Some(
+                    "curvature: normal turning rate |dn|/|dp| (where the input's facets show)"
+                        .into(),
+                ),
+                ..opts
+            },
+        )?;
+        crate::render::Image::stack(&[top, bottom]).save_png(path)?;
     }
     let (p, e, t) = (
         sd.domain

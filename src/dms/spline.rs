@@ -83,8 +83,12 @@ pub struct SplineDomain {
 #[derive(Debug, Clone)]
 pub struct SplineSurface {
     /// The lattice mesh: positions `F(u)`, the input's winding, scalar
-    /// fields `nx ny nz` (unit normals from `F_u × F_v`) and `distance`
-    /// (`|F(u) − M(u)|`, `M` the input mesh at the same parameter point).
+    /// fields `nx ny nz` (unit normals from `F_u × F_v`), `distance`
+    /// (`|F(u) − M(u)|`, `M` the input mesh at the same parameter point)
+    /// and `curvature` (the largest `|n_a − n_b| / |F_a − F_b|` over the
+    /// lattice edges at the point: how fast the normal turns, about the
+    /// largest principal curvature; where the surface keeps the input's
+    /// facets it peaks along their edges).
     pub mesh: TriMesh,
     /// The controls (`#V + E`: vertices, then edges).
     pub controls: Vec<DVec3>,
@@ -191,6 +195,19 @@ impl SplineDomain {
             name: name.into(),
             values: s.normals.iter().map(|q| q[k]).collect(),
         };
+        let mut curvature = vec![0.0f32; s.positions.len()];
+        let v3 = |q: &[f32; 4]| Vec3::new(q[0], q[1], q[2]);
+        for t in &self.lattice.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+                let d = v3(&s.positions[a]).distance(v3(&s.positions[b]));
+                if d > 0.0 {
+                    let c = v3(&s.normals[a]).distance(v3(&s.normals[b])) / d;
+                    curvature[a] = curvature[a].max(c);
+                    curvature[b] = curvature[b].max(c);
+                }
+            }
+        }
         TriMesh {
             positions: s
                 .positions
@@ -205,6 +222,10 @@ impl SplineDomain {
                 ScalarField {
                     name: "distance".into(),
                     values: distance,
+                },
+                ScalarField {
+                    name: "curvature".into(),
+                    values: curvature,
                 },
             ],
         }

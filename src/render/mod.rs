@@ -242,6 +242,19 @@ impl Image {
         crate::foundation::fs::write_atomic(path, &self.to_png()?)
     }
 
+    /// `images` one below the other, left-aligned on the background.
+    pub fn stack(images: &[Image]) -> Image {
+        let width = images.iter().map(|i| i.width).max().unwrap_or(0);
+        let height = images.iter().map(|i| i.height).sum();
+        let mut out = Image::blank(width, height);
+        let mut y = 0;
+        for i in images {
+            out.blit(i, 0, y);
+            y += i.height;
+        }
+        out
+    }
+
     fn blank(width: u32, height: u32) -> Self {
         Image {
             width,

@@ -49,7 +49,7 @@ fn fran_cut_spline_on_both_backends() {
         let d = v["distance"]["max"].as_f64().unwrap();
         assert!(d > 1e-4 && d < 6e-3, "{d}");
         let mesh = chisel::io::read_mesh(&out).unwrap();
-        for f in ["nx", "ny", "nz", "distance"] {
+        for f in ["nx", "ny", "nz", "distance", "curvature"] {
             assert!(mesh.scalar(f).is_some(), "{f}");
         }
         let net = chisel::io::read_mesh(&net).unwrap();

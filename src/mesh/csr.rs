@@ -42,6 +42,18 @@ impl Csr {
         Csr { offsets, targets }
     }
 
+    /// Rows `range` alone, offsets rebased to start at 0.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Csr {
+        let (lo, hi) = (self.offsets[range.start], self.offsets[range.end]);
+        Csr {
+            offsets: self.offsets[range.start..=range.end]
+                .iter()
+                .map(|o| o - lo)
+                .collect(),
+            targets: self.targets[lo as usize..hi as usize].to_vec(),
+        }
+    }
+
     /// Rows given as lists, kept in order.
     pub fn from_rows(rows: &[Vec<u32>]) -> Self {
         let mut offsets = Vec::with_capacity(rows.len() + 1);

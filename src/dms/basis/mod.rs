@@ -134,28 +134,15 @@ impl BasisInput {
         let c0 = self.candidates.offsets[range.start];
         let c1 = self.candidates.offsets[range.end];
         let r0 = self.rows.offsets[range.start];
-        let r1 = self.rows.offsets[range.end];
         BasisInput {
             points: self.points[range.clone()].to_vec(),
             tri_knots: self.tri_knots.clone(),
-            candidates: Csr {
-                offsets: self.candidates.offsets[range.start..=range.end]
-                    .iter()
-                    .map(|o| o - c0)
-                    .collect(),
-                targets: self.candidates.targets[c0 as usize..c1 as usize].to_vec(),
-            },
+            candidates: self.candidates.slice(range.clone()),
             slot_entry: self.slot_entry[6 * c0 as usize..6 * c1 as usize]
                 .iter()
                 .map(|e| e - r0)
                 .collect(),
-            rows: Csr {
-                offsets: self.rows.offsets[range.start..=range.end]
-                    .iter()
-                    .map(|o| o - r0)
-                    .collect(),
-                targets: self.rows.targets[r0 as usize..r1 as usize].to_vec(),
-            },
+            rows: self.rows.slice(range),
         }
     }
 }

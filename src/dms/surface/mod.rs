@@ -78,13 +78,7 @@ impl SurfaceInput {
     pub fn part(&self, range: std::ops::Range<usize>) -> SurfaceInput {
         let (r0, r1) = (self.rows.offsets[range.start], self.rows.offsets[range.end]);
         SurfaceInput {
-            rows: Csr {
-                offsets: self.rows.offsets[range.start..=range.end]
-                    .iter()
-                    .map(|o| o - r0)
-                    .collect(),
-                targets: self.rows.targets[r0 as usize..r1 as usize].to_vec(),
-            },
+            rows: self.rows.slice(range.clone()),
             weights: self.weights[r0 as usize..r1 as usize].to_vec(),
             n_sources: self.n_sources,
             base: self.base.as_ref().map(|b| b[range].to_vec()),

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms
+//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms implicit
 //!  ③ GPU, parity   gpu (context, Backend, kernel specs, pass builder, buffers), parity (Tolerance, comparators)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -36,6 +36,7 @@ pub mod foundation;
 pub mod gpu;
 pub mod hull;
 pub mod hull_scan;
+pub mod implicit;
 pub mod io;
 pub mod mc;
 pub mod mesh;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use chisel::gpu::{BindKind, Gpu, GpuArray, UniformBuffer};
 use chisel::gpu::{Kernel, Shader, preprocess};
 use chisel::tissue::gpu as tissue;
-use chisel::{Error, dms, exclusive_scan, hull_scan, mc, reduce, vertex_normals};
+use chisel::{Error, dms, exclusive_scan, hull_scan, implicit, mc, reduce, vertex_normals};
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn root() -> PathBuf {
@@ -259,6 +259,10 @@ fn params_sample(kernel: Kernel) -> Sample {
             encase_bytes(&dms::surface::gpu::Params { n_points: 0xB2 }),
             vec![("n_points", 0xB2)],
         ),
+        Kernel::ImplicitField => (
+            encase_bytes(&implicit::field::gpu::Params { n_points: 0xC1 }),
+            vec![("n_points", 0xC1)],
+        ),
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its `Params` sample to tests/shaders.rs::params_sample",
@@ -348,6 +352,66 @@ fn params_match_the_wgsl_layout() {
             assert_eq!(layouter[m.ty].size, 4, "{path}: Params.{name} is 4 bytes");
         }
     }
+}
+
+/// The host's `FieldParams` (the second uniform of every kernel that
+/// imports `skeletal_field`) has the WGSL struct's members at its offsets.
+#[test]
+fn field_params_match_the_wgsl_layout() {
+    use glam::{UVec3, Vec3};
+    let host = implicit::field::FieldParams {
+        grid_origin: Vec3::new(1.0, 2.0, 3.0),
+        inv_cell: 4.0,
+        grid_dims: UVec3::new(5, 6, 7),
+        n_prims: 8,
+        iso: 9.0,
+        blend_max: 10,
+        piece_base: 11,
+        cell_base: 12,
+    };
+    let bytes = encase_bytes(&host);
+    let words: Vec<u32> = [1.0f32, 2.0, 3.0, 4.0]
+        .iter()
+        .map(|f| f.to_bits())
+        .chain([5, 6, 7, 8, 9.0f32.to_bits(), 10, 11, 12])
+        .collect();
+    let mut users = 0;
+    for &kernel in Kernel::ALL {
+        let path = kernel.path();
+        let module = validate(&path, kernel.source(), kernel.requires());
+        let Some((handle, ty)) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("FieldParams"))
+        else {
+            continue;
+        };
+        users += 1;
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).unwrap();
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{path}: `FieldParams` is not a struct");
+        };
+        assert_eq!(layouter[handle].size, *span);
+        assert_eq!(
+            bytes.len() as u32,
+            *span,
+            "{path}: encase size vs naga span"
+        );
+        // Every 4-byte word of the host bytes at the WGSL members' offsets.
+        let mut k = 0;
+        for m in members {
+            let n = layouter[m.ty].size as usize / 4;
+            for w in 0..n {
+                let at = m.offset as usize + 4 * w;
+                let word = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+                assert_eq!(word, words[k], "{path}: FieldParams.{:?} word {w}", m.name);
+                k += 1;
+            }
+        }
+        assert_eq!(k, words.len(), "{path}: FieldParams members");
+    }
+    assert!(users >= 1, "no kernel imports skeletal_field");
 }
 
 /// The pass builder refuses bindings that disagree with the WGSL: a read

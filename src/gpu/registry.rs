@@ -92,6 +92,8 @@ registry! {
     DmsBasis => "dms_basis",
     /// DMS spline: surface points and normals by gather over the basis rows.
     DmsSurface => "dms_surface",
+    /// Skeletal implicit field: F − I, ∇F and ∂F/∂t at many points.
+    ImplicitField => "implicit_field",
 }
 
 registry! {
@@ -122,6 +124,10 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../kernels/shared/hull_face.wgsl"),
     ),
     ("i32x2", include_str!("../../kernels/shared/i32x2.wgsl")),
+    (
+        "skeletal_field",
+        include_str!("../../kernels/shared/skeletal_field.wgsl"),
+    ),
     (
         "block_scan",
         include_str!("../../kernels/shared/block_scan.wgsl"),

@@ -37,6 +37,7 @@
 //! so callers can warn before a scalar field is dropped).
 
 mod byu;
+pub(crate) mod config;
 mod metaimage;
 mod nifti;
 mod nrrd;

@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 use super::fragments::{BoneCut, Fragments};
 use super::network::SpringNetwork;
 use super::selector::{Selector, finite3, point_text, select};
+use crate::io::config::{line_column, toml_message};
 use crate::{Error, Position, Result};
 
 /// A rigid rotation about a point, applied before the translation.
@@ -223,35 +224,6 @@ pub struct Plan {
 /// and keeps a report line.
 pub const MAX_INCREMENTS: u32 = 100_000;
 
-/// Line and column (1-based, the column in characters) of byte `offset` in `text`.
-fn line_column(text: &str, offset: usize) -> Position {
-    let mut offset = offset.min(text.len());
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
-    }
-    let before = &text[..offset];
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    Position::LineColumn(
-        before.matches('\n').count() + 1,
-        before[line_start..].chars().count() + 1,
-    )
-}
-
-/// A TOML error's message, with the offending key or value quoted when the
-/// message does not already quote it (toml says only "duplicate key").
-fn toml_message(text: &str, e: &toml::de::Error) -> String {
-    let message = e.message().trim_end().to_string();
-    let snippet = e
-        .span()
-        .and_then(|s| text.get(s))
-        .map(str::trim)
-        .filter(|t| !t.is_empty() && t.len() <= 60 && !t.contains('\n'));
-    match snippet {
-        Some(t) if !message.contains('`') && !message.contains('"') => format!("{message} `{t}`"),
-        _ => message,
-    }
-}
-
 impl Plan {
     /// Parses and validates a TOML plan; `origin` names the source in errors.
     pub fn from_toml_str(text: &str, origin: &str) -> Result<Plan> {
@@ -300,7 +272,7 @@ impl Plan {
 
     /// Reads a plan file: `.json` is JSON, anything else TOML.
     pub fn from_path(path: &Path) -> Result<Plan> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::io::config::read_text(path)?;
         let origin = path.display().to_string();
         if path
             .extension()

@@ -15,6 +15,7 @@ mod dms_basis;
 mod dms_surface;
 mod exclusive_scan;
 mod hull_scan;
+mod implicit_field;
 mod mc_classify;
 mod mc_triangles;
 mod mc_vertices;

@@ -329,13 +329,16 @@ fn apply_key(
                 _ => s.kind() == prev.skeleton.kind(),
             };
             if !same {
+                let shape = |s: &Skeleton| {
+                    let n = s.points().len();
+                    format!("{} of {n} point{}", s.kind(), if n == 1 { "" } else { "s" })
+                };
                 return Err((
                     format!(
-                        "a skeleton of the primitive's kind ({} of {} points)",
-                        prev.skeleton.kind(),
-                        prev.skeleton.points().len()
+                        "a skeleton of the primitive's kind ({})",
+                        shape(&prev.skeleton)
                     ),
-                    format!("{} of {} points", s.kind(), s.points().len()),
+                    shape(s),
                 ));
             }
             s.clone()
@@ -742,7 +745,10 @@ influence = { wyvill = { strength = 4.0 } }
                 .replace("[-1.4, 0.0, 0.0]", "[[-1.4, 0.0, 0.0], [0, 0, 0]]")
                 .replace("point = [[", "segment = [["),
         );
-        assert!(e.contains("line 14") && e.contains("kind"), "{e}");
+        assert!(
+            e.contains("line 13") && e.contains("point of 1 point)"),
+            "{e}"
+        );
         let e = error(&DUMBBELL.replace(
             "blobby = { a = 1.0, b = 1.0 }",
             "blobby = { a = 1.0, c = 1.0 }",

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms implicit
+//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms implicit particles
 //!  ③ GPU, parity   gpu (context, Backend, kernel specs, pass builder, buffers), parity (Tolerance, comparators)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -41,6 +41,7 @@ pub mod io;
 pub mod mc;
 pub mod mesh;
 pub mod parity;
+pub mod particles;
 pub mod phantom;
 pub mod polyhedron;
 pub mod reduce;

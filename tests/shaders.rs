@@ -263,12 +263,64 @@ fn params_sample(kernel: Kernel) -> Sample {
             encase_bytes(&implicit::field::gpu::Params { n_points: 0xC1 }),
             vec![("n_points", 0xC1)],
         ),
+        Kernel::ParticleUpdate => particle_params_sample(),
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its `Params` sample to tests/shaders.rs::params_sample",
             other.path()
         ),
     }
+}
+
+/// `particle_update`'s `Params` with distinct values (floats by their bits).
+fn particle_params_sample() -> Sample {
+    use chisel::particles::wh::UpdateParams;
+    let f = |v: u32| f32::from_bits(v);
+    let p = UpdateParams {
+        nx: 0xD1,
+        ny: 0xD2,
+        nz: 0xD3,
+        n_particles: 0xD4,
+        n_cells: 0xD5,
+        dt: f(0x3F00_0001),
+        delta: f(0x3F00_0002),
+        kappa: f(0x3F00_0003),
+        alpha: f(0x3F00_0004),
+        e_hat: f(0x3F00_0005),
+        rho_sigma: f(0x3F00_0006),
+        beta_sigma: f(0x3F00_0007),
+        sigma_lo: f(0x3F00_0008),
+        sigma_hi: f(0x3F00_0009),
+        g_min2: f(0x3F00_000A),
+        adapt: 0xD6,
+    };
+    let names = [
+        "dt",
+        "delta",
+        "kappa",
+        "alpha",
+        "e_hat",
+        "rho_sigma",
+        "beta_sigma",
+        "sigma_lo",
+        "sigma_hi",
+        "g_min2",
+    ];
+    let mut fields = vec![
+        ("nx", 0xD1),
+        ("ny", 0xD2),
+        ("nz", 0xD3),
+        ("n_particles", 0xD4),
+        ("n_cells", 0xD5),
+    ];
+    fields.extend(
+        names
+            .iter()
+            .enumerate()
+            .map(|(k, n)| (*n, 0x3F00_0001 + k as u32)),
+    );
+    fields.push(("adapt", 0xD6));
+    (encase_bytes(&p), fields)
 }
 
 /// Every kernel's spec reflects from its WGSL: one compute entry `main`,

@@ -94,6 +94,8 @@ registry! {
     DmsSurface => "dms_surface",
     /// Skeletal implicit field: F − I, ∇F and ∂F/∂t at many points.
     ImplicitField => "implicit_field",
+    /// Witkin–Heckbert particles: repulsion over the cell list, constraint velocity, Euler step.
+    ParticleUpdate => "particle_update",
 }
 
 registry! {

@@ -11,6 +11,7 @@ mod convert;
 mod cut;
 mod demo;
 mod hull;
+mod implicit;
 mod info;
 mod mc;
 mod phantom;
@@ -221,6 +222,8 @@ enum Command {
     Relax(relax::Args),
     /// Smooth DMS spline surface of a disk mesh (knot clouds, GPU basis, control net, normals).
     Spline(spline::Args),
+    /// Skeletal implicit scene sampled over its time span by Witkin–Heckbert particles.
+    Implicit(implicit::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
     /// Lossless polyhedron of a voxel object: nested convex shells, .cells, --verify.
@@ -330,6 +333,7 @@ pub fn main() -> ExitCode {
         Command::Cut(a) => cut::run(&cli.global, a),
         Command::Relax(a) => relax::run(&cli.global, a),
         Command::Spline(a) => spline::run(&cli.global, a),
+        Command::Implicit(a) => implicit::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
         Command::Polyhedrize(a) => polyhedrize::run(&cli.global, a),
         Command::Scan(a) => scan::run(&cli.global, a),

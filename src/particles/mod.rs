@@ -11,6 +11,7 @@
 //!
 //! Design notes, derivations and defaults: `docs/design/particles.md`.
 
+pub mod animate;
 pub mod cells;
 pub mod wh;
 

@@ -14,6 +14,7 @@ mod cross_command;
 mod cut;
 mod demo;
 mod hull;
+mod implicit;
 mod info;
 mod mc;
 mod polyhedrize;

@@ -121,6 +121,16 @@ pub struct WhOptions {
     pub skin: f64,
     /// Seed of the fission offsets and death tests.
     pub seed: u64,
+    /// Target spacing (edge length); `--edge-length` overrides it, and
+    /// without either it is the surface's bounding-box diagonal / 64.
+    pub edge_length: Option<f64>,
+    /// Iterations that carry the particles from one frame's time to the
+    /// next (scene time advancing by 1/transport of the gap each).
+    pub transport: u32,
+    /// Iterations at each frame's time after the transport.
+    pub relax: u32,
+    /// Most iterations of the first frame's relaxation.
+    pub start_iterations: u32,
 }
 
 impl Default for WhOptions {
@@ -140,7 +150,62 @@ impl Default for WhOptions {
             alpha_dt: 0.25,
             skin: 0.5,
             seed: 1,
+            edge_length: None,
+            transport: 4,
+            relax: 8,
+            start_iterations: 1000,
         }
+    }
+}
+
+impl WhOptions {
+    /// The `[particles]` table of a scene file (defaults when absent);
+    /// errors name the file, line and key.
+    pub fn from_scene(text: &str, origin: &str) -> Result<WhOptions> {
+        #[derive(serde::Deserialize)]
+        struct Tables {
+            #[serde(default)]
+            particles: Option<WhOptions>,
+        }
+        let t: Tables = toml::from_str(text).map_err(|e| {
+            let at = (e.span()).map_or(crate::Position::Whole, |s| {
+                crate::io::config::line_column(text, s.start)
+            });
+            Error::format(
+                origin,
+                at,
+                "a [particles] table",
+                crate::io::config::toml_message(text, &e),
+            )
+        })?;
+        let o = t.particles.unwrap_or_default();
+        let positive = [
+            ("alpha", o.alpha),
+            ("energy", o.energy),
+            ("rho_sigma", o.rho_sigma),
+            ("kappa", o.kappa),
+            ("beta", o.beta),
+            ("gamma", o.gamma),
+            ("nu", o.nu),
+            ("death", o.death),
+            ("sigma_max", o.sigma_max),
+            ("sigma_clamp", o.sigma_clamp),
+            ("sigma_floor", o.sigma_floor),
+            ("alpha_dt", o.alpha_dt),
+            ("skin", o.skin),
+            ("edge_length", o.edge_length.unwrap_or(1.0)),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::format(
+                    origin,
+                    crate::Position::Field(format!("particles.{name}")),
+                    "a positive finite number",
+                    v.to_string(),
+                ));
+            }
+        }
+        Ok(o)
     }
 }
 
@@ -259,6 +324,10 @@ pub struct Relaxation {
     pub energy_change: f64,
     /// The residual bound used: 1e-4 of the particles' bounding-box diagonal.
     pub residual_bound: f32,
+    /// Fissions, deaths and lost particles over all iterations.
+    pub fissions: u32,
+    pub deaths: u32,
+    pub lost: u32,
 }
 
 /// A 32-bit mix of (seed, iteration, id): exact integer hashing (PCG-style
@@ -450,12 +519,18 @@ impl Sampler {
             last: Iteration::default(),
             energy_change: f64::INFINITY,
             residual_bound: 0.0,
+            fissions: 0,
+            deaths: 0,
+            lost: 0,
         };
         let mut calm = 0;
         while out.adapt_iterations < max_iter && calm < 5 {
             let n = self.particles.len();
             out.last = self.iterate(field, 0.0, true, backend)?;
             out.adapt_iterations += 1;
+            out.fissions += out.last.fissions;
+            out.deaths += out.last.deaths;
+            out.lost += out.last.lost;
             let changed = (out.last.fissions + out.last.deaths + out.last.lost) as usize;
             calm = if changed * 1000 <= n { calm + 1 } else { 0 };
         }

@@ -54,12 +54,9 @@ fn dumbbell_particles_split_on_both_backends() {
                 .map(|f| f["clusters"].as_u64().unwrap())
                 .collect::<Vec<_>>(),
         );
-        for k in 0..3 {
+        for (k, f) in frames.iter().enumerate() {
             let mesh = chisel::io::read_mesh(&out.join(format!("frame_{k:04}.ply"))).unwrap();
-            assert_eq!(
-                mesh.n_vertices() as u64,
-                frames[k]["particles"].as_u64().unwrap()
-            );
+            assert_eq!(mesh.n_vertices() as u64, f["particles"].as_u64().unwrap());
             let names: Vec<&str> = mesh.scalars.iter().map(|s| s.name.as_str()).collect();
             assert_eq!(names, ["nx", "ny", "nz", "sigma"]);
         }

@@ -264,6 +264,28 @@ fn params_sample(kernel: Kernel) -> Sample {
             vec![("n_points", 0xC1)],
         ),
         Kernel::ParticleUpdate => particle_params_sample(),
+        Kernel::NetworkUpdate => {
+            let f = |v: u32| f32::from_bits(v);
+            let p = chisel::particles::network::NetworkParams {
+                n_vertices: 0xE1,
+                dt: f(0x3F10_0001),
+                delta: f(0x3F10_0002),
+                kappa: f(0x3F10_0003),
+                rho: f(0x3F10_0004),
+                g_min2: f(0x3F10_0005),
+                step_max: f(0x3F10_0006),
+            };
+            let fields = vec![
+                ("n_vertices", 0xE1),
+                ("dt", 0x3F10_0001),
+                ("delta", 0x3F10_0002),
+                ("kappa", 0x3F10_0003),
+                ("rho", 0x3F10_0004),
+                ("g_min2", 0x3F10_0005),
+                ("step_max", 0x3F10_0006),
+            ];
+            (encase_bytes(&p), fields)
+        }
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its `Params` sample to tests/shaders.rs::params_sample",

@@ -96,6 +96,8 @@ registry! {
     ImplicitField => "implicit_field",
     /// Witkin–Heckbert particles: repulsion over the cell list, constraint velocity, Euler step.
     ParticleUpdate => "particle_update",
+    /// Particle spring network: eq. 13 springs over CSR rows, projected by eq. 8, Euler step.
+    NetworkUpdate => "network_update",
 }
 
 registry! {

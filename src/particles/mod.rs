@@ -13,7 +13,13 @@
 
 pub mod animate;
 pub mod cells;
+pub mod network;
 pub mod wh;
 
 pub use cells::CellList;
+pub use network::{Network, NetworkOptions};
 pub use wh::{Particles, Sampler, WhOptions};
+
+/// One step's outputs of `particle_update` or `network_update`: new
+/// positions (and σ) and the per-particle state or field sample.
+pub type StepOutput = (Vec<[f32; 4]>, Vec<[f32; 4]>);

@@ -17,7 +17,7 @@ use chisel::particles::{CellList, Particles, Sampler, WhOptions};
 
 use crate::common;
 
-use chisel::particles::wh::StepOutput as Step;
+use chisel::particles::StepOutput as Step;
 
 fn gpu_step(gpu: &Gpu, what: &str, field: &FieldInput, input: &StepInput<'_>) -> Step {
     let fb = FieldBuffers::upload(gpu, field).unwrap();

@@ -3,9 +3,10 @@
 
 use rayon::prelude::*;
 
-use super::{StepInput, StepOutput, UpdateParams};
+use super::{StepInput, UpdateParams};
 use crate::implicit::field::FieldInput;
 use crate::implicit::field::cpu::skeletal_field;
+use crate::particles::StepOutput;
 
 fn sub(a: [f32; 4], b: [f32; 4]) -> [f32; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]

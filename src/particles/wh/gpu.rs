@@ -1,10 +1,11 @@
 //! GPU pass for `kernels/particle_update.wgsl`.
 
-use super::{StepInput, StepOutput, UpdateParams};
+use super::{StepInput, UpdateParams};
 use crate::Result;
 use crate::gpu::{Gpu, GpuArray, Kernel, UniformBuffer};
 use crate::implicit::field::FieldInput;
 use crate::implicit::field::gpu::FieldBuffers;
+use crate::particles::StepOutput;
 
 /// Device buffers of one step.
 #[derive(Debug)]

@@ -22,6 +22,7 @@ pub mod gpu;
 
 use glam::Vec3;
 
+use super::StepOutput;
 use super::cells::CellList;
 use crate::gpu::Backend;
 use crate::implicit::Pose;
@@ -70,10 +71,6 @@ pub struct StepInput<'a> {
     /// (position, σ) per particle.
     pub positions: &'a [[f32; 4]],
 }
-
-/// One step's outputs: new (position, σ) and (D_i, |Δp|/Δt, (F − I)/|∇F|,
-/// |∇F|) per particle.
-pub type StepOutput = (Vec<[f32; 4]>, Vec<[f32; 4]>);
 
 /// One `particle_update` step on `backend`: new (position, σ) and
 /// (D_i, |Δp|/Δt, (F − I)/|∇F|, |∇F|) per particle.

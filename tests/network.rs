@@ -1,56 +1,38 @@
 //! The particle spring network (SPEC §3.3).
 
 use chisel::Backend;
+use chisel::implicit::Scene;
 use chisel::implicit::field::FieldInput;
 use chisel::implicit::scene::EXAMPLES;
-use chisel::implicit::{Scene, grid};
-use chisel::mesh::Topology;
-use chisel::mesh::collapse::collapse_short_edges;
-use chisel::particles::{Network, NetworkOptions};
+use chisel::mesh::intersect::self_intersections;
+use chisel::particles::NetworkOptions;
+use chisel::particles::animate::start_network;
 
 #[test]
 fn explore() {
     let name = std::env::var("SCENE").unwrap_or("dumbbell".into());
-    let name = name.as_str();
     let text = EXAMPLES.iter().find(|e| e.0 == name).unwrap().1;
-    let scene = Scene::from_toml_str(text, name).unwrap();
-    let pose = scene.pose(0.0);
-    let field = FieldInput::new(&pose).unwrap();
-    let r: f64 = std::env::var("R")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0.05);
-    let mc = grid::marching_cubes(&pose, r, Backend::Cpu).unwrap();
-    let start = collapse_short_edges(&mc.mesh, 0.3 * r as f32).mesh;
-    let mut net = Network::new(&start, r, NetworkOptions::default(), &field).unwrap();
-    for _ in 0..20 {
-        net.iterate(&field, 0.0, Backend::Cpu).unwrap();
-    }
-    let steps = 400;
-    let t0 = std::time::Instant::now();
-    for k in 0..steps {
-        let t = k as f64 / steps as f64;
-        let field = FieldInput::new(&scene.pose(t)).unwrap();
-        net.iterate(&field, (1.0 / steps as f64) as f32, Backend::Cpu)
-            .unwrap();
-        let field = FieldInput::new(&scene.pose(t + 1.0 / steps as f64)).unwrap();
-        let cuts = net.surgery(&field);
-        let top = net.check().map(|t| t.components.len());
-        if cuts != Default::default() || k % 40 == 0 {
+    let scene = Scene::from_toml_str(text, &name).unwrap();
+    let field = FieldInput::new(&scene.pose(0.0)).unwrap();
+    let mut net = start_network(&scene, 0.05, NetworkOptions::default(), Backend::Cpu).unwrap();
+    println!("start si {}", self_intersections(&net.mesh()).pairs.len());
+    for k in 0..12 {
+        let it = net.iterate(&field, 0.0, Backend::Cpu).unwrap();
+        let si = self_intersections(&net.mesh());
+        let m = net.mesh();
+        for p in &si.pairs {
+            let (a, b) = (m.triangles[p[0] as usize], m.triangles[p[1] as usize]);
+            let shared = a.iter().filter(|v| b.contains(v)).count();
+            let n = |t: [u32; 3]| {
+                let [x, y, z] = t.map(|v| m.positions[v as usize]);
+                (y - x).cross(z - x).normalize()
+            };
             println!(
-                "k={k} t={:.4} dist={:.4} cuts={cuts:?} V={} comps={top:?} {:?}",
-                t + 1.0 / steps as f64,
-                0.0,
-                net.positions.len(),
-                t0.elapsed()
+                "{k} pair {a:?} {b:?} shared {shared} cos {:.3} splits {} collapses {}",
+                n(a).dot(n(b)),
+                it.splits,
+                it.collapses
             );
         }
     }
-    let t = Topology::of(&net.mesh());
-    println!(
-        "end: comps {} closed {} manifold {}",
-        t.components.len(),
-        t.closed,
-        t.is_manifold()
-    );
 }

@@ -10,10 +10,11 @@ use serde::Serialize;
 
 use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes};
+use crate::TriMesh;
 use crate::gpu::Backend;
 use crate::implicit::Scene;
-use crate::particles::WhOptions;
-use crate::particles::animate::{self, FrameReport, Setup};
+use crate::particles::animate::{self, FrameReport, NetworkFrameReport, Setup};
+use crate::particles::{NetworkOptions, WhOptions};
 use crate::render::{Panel, RenderOptions, View};
 
 /// How the surface is sampled.
@@ -22,6 +23,8 @@ use crate::render::{Panel, RenderOptions, View};
 pub enum MethodArg {
     /// Witkin–Heckbert particles (point sets with normals).
     Particles,
+    /// The particle spring network (closed triangle meshes through splits and merges).
+    Network,
 }
 
 /// Arguments of `chisel implicit`.
@@ -45,7 +48,7 @@ pub struct Args {
     /// Output folder for `frame_NNNN.ply` (created; older frames removed).
     #[arg(short, long)]
     output: PathBuf,
-    /// Contact sheet PNG: up to 6 frames side by side.
+    /// Contact sheet PNG: up to 6 frames side by side (front and iso views).
     #[arg(long)]
     preview: Option<PathBuf>,
     #[command(flatten)]
@@ -62,13 +65,32 @@ struct ImplicitReport<'a> {
     method: MethodArg,
     primitives: usize,
     duration: f64,
-    setup: Setup,
-    frames: Vec<FrameReport>,
+    setup: SetupReport,
+    frames: Frames,
     backend: &'static str,
     adapter: Option<String>,
     seconds: f64,
     output: &'a Path,
     preview: Option<&'a Path>,
+}
+
+/// The sampler's setup, by method.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+enum SetupReport {
+    Particles(Setup),
+    Network {
+        edge_length: f64,
+        options: NetworkOptions,
+    },
+}
+
+/// Per-frame figures, by method.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+enum Frames {
+    Particles(Vec<FrameReport>),
+    Network(Vec<NetworkFrameReport>),
 }
 
 impl Report for ImplicitReport<'_> {
@@ -89,27 +111,57 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let text = crate::io::config::read_text(&args.scene)?;
     let origin = args.scene.display().to_string();
     let scene = Scene::from_toml_str(&text, &origin)?;
-    let opts = WhOptions::from_scene(&text, &origin)?;
-    let r = animate::edge_length(&scene, &opts, args.edge_length)?;
     let times = animate::frame_times(&scene, args.frames);
     let gpu = global.backend(&args.backend)?;
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     super::clear_numbered_outputs(global, &args.output, "frame_")?;
     let bar = global.progress(times.len() as u64, "frames");
-    let mut frames = Vec::new();
-    let mut sheet = Vec::new();
     let shown = sheet_frames(times.len(), 6);
-    let setup = animate::sample(&scene, &times, r, opts, backend, |p, field, report| {
-        let points = animate::point_set(p, field);
-        let path = args.output.join(format!("frame_{:04}.ply", report.frame));
-        crate::io::write_mesh(&path, &points)?;
-        if args.preview.is_some() && shown.contains(&(report.frame as usize)) {
-            sheet.push((animate::splats(&points, 0.8), report.time));
+    let mut sheet: Vec<(TriMesh, f64)> = Vec::new();
+    let frame_path = |k: u32| args.output.join(format!("frame_{k:04}.ply"));
+    let (r, setup, frames) = match args.method {
+        MethodArg::Particles => {
+            let opts = WhOptions::from_scene(&text, &origin)?;
+            let r = animate::edge_length(&scene, opts.edge_length, args.edge_length)?;
+            let mut frames = Vec::new();
+            let setup = animate::sample(&scene, &times, r, opts, backend, |p, field, report| {
+                let points = animate::point_set(p, field);
+                crate::io::write_mesh(&frame_path(report.frame), &points)?;
+                if args.preview.is_some() && shown.contains(&(report.frame as usize)) {
+                    sheet.push((animate::splats(&points, 0.8), report.time));
+                }
+                frames.push(report.clone());
+                bar.inc(1);
+                Ok(())
+            })?;
+            (r, SetupReport::Particles(setup), Frames::Particles(frames))
         }
-        frames.push(report.clone());
-        bar.inc(1);
-        Ok(())
-    })?;
+        MethodArg::Network => {
+            let opts = NetworkOptions::from_scene(&text, &origin)?;
+            let r = animate::edge_length(&scene, opts.edge_length, args.edge_length)?;
+            let net = animate::start_network(&scene, r, opts, backend)?;
+            let mut frames = Vec::new();
+            animate::network(&scene, &times, net, backend, |net, t, steps| {
+                let k = frames.len() as u32;
+                let mesh = net.mesh();
+                crate::io::write_mesh(&frame_path(k), &mesh)?;
+                if args.preview.is_some() && shown.contains(&(k as usize)) {
+                    sheet.push((mesh, t));
+                }
+                frames.push(animate::network_report(net, &scene, k, t, steps, backend)?);
+                bar.inc(1);
+                Ok(())
+            })?;
+            (
+                r,
+                SetupReport::Network {
+                    edge_length: r,
+                    options: opts,
+                },
+                Frames::Network(frames),
+            )
+        }
+    };
     bar.finish_and_clear();
     if let Some(path) = &args.preview {
         let opened;
@@ -132,23 +184,45 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             height: 320,
             views: vec![View::Front, View::Iso],
             title: Some(format!(
-                "chisel implicit: {} (Witkin-Heckbert particles, spacing {r:.3})",
-                super::file_name(&args.scene)
+                "chisel implicit: {} ({}, spacing {r:.3})",
+                super::file_name(&args.scene),
+                match args.method {
+                    MethodArg::Particles => "Witkin-Heckbert particles",
+                    MethodArg::Network => "spring network",
+                }
             )),
             facing,
             ..Default::default()
         };
         crate::render::render_panels(g, &panels, &opts)?.save_png(path)?;
     }
-    let last = frames.last().expect("at least one frame");
-    global.note(format!(
-        "{} frames, {} particles in the last ({} clusters, residual max {:.2e}); wrote {}",
-        frames.len(),
-        last.particles,
-        last.clusters,
-        last.residual_max,
-        args.output.display()
-    ));
+    global.note(match &frames {
+        Frames::Particles(f) => {
+            let last = f.last().expect("at least one frame");
+            format!(
+                "{} frames, {} particles in the last ({} clusters, residual max {:.2e}); wrote {}",
+                f.len(),
+                last.particles,
+                last.clusters,
+                last.residual_max,
+                args.output.display()
+            )
+        }
+        Frames::Network(f) => {
+            let last = f.last().expect("at least one frame");
+            let events: usize = f.iter().map(|x| x.steps.events.len()).sum();
+            format!(
+                "{} frames, {} triangles in the last ({} components, genus {:?}, {} topology events, Hausdorff {:.2e}); wrote {}",
+                f.len(),
+                last.triangles,
+                last.components,
+                last.genus,
+                events,
+                last.hausdorff,
+                args.output.display()
+            )
+        }
+    });
     let report = ImplicitReport {
         command: "implicit",
         scene: &args.scene,

@@ -7,6 +7,7 @@
 
 pub mod collapse;
 pub mod csr;
+pub mod distance;
 pub mod icosphere;
 pub mod intersect;
 pub mod orient;

@@ -1,12 +1,14 @@
-//! Sampling a scene's time span with Witkin–Heckbert particles: frame 0 is
-//! relaxed from projected marching-cubes vertices; every later frame
-//! carries the particles along with the moving surface (scene time
-//! advancing inside eq. 8 through F_t) and relaxes them at the frame's
-//! time, with fission and death keeping the density.
+//! Sampling a scene's time span, with Witkin–Heckbert particles or the
+//! spring network: frame 0 is relaxed from marching cubes of the field;
+//! every later frame carries the samples along with the moving surface
+//! (scene time advancing inside eq. 8 through F_t) and relaxes them at the
+//! frame's time, with fission and death (particles) or splits, collapses
+//! and surgery (network) keeping the sampling and the topology.
 
 use glam::Vec3;
 
 use super::cells::CellList;
+use super::network::{Network, NetworkOptions};
 use super::wh::{Iteration, Particles, Sampler, WhOptions, sigma_for_spacing};
 use crate::foundation::union_find::UnionFind;
 use crate::gpu::Backend;
@@ -14,6 +16,7 @@ use crate::implicit::field::FieldInput;
 use crate::implicit::field::cpu::skeletal_field;
 use crate::implicit::{Scene, grid};
 use crate::mesh::ScalarField;
+use crate::mesh::collapse::collapse_short_edges;
 use crate::{Result, TriMesh};
 
 /// Per-frame figures.
@@ -61,10 +64,10 @@ pub fn frame_times(scene: &Scene, frames: u32) -> Vec<f64> {
         .collect()
 }
 
-/// The edge length of `opts` (or `override_r`), else the bounding-box
-/// diagonal of the surface at t = 0 over 64.
-pub fn edge_length(scene: &Scene, opts: &WhOptions, override_r: Option<f64>) -> Result<f64> {
-    if let Some(r) = override_r.or(opts.edge_length) {
+/// `override_r` (the command line), else `table` (the scene file's), else
+/// the bounding-box diagonal of the surface at t = 0 over 64.
+pub fn edge_length(scene: &Scene, table: Option<f64>, override_r: Option<f64>) -> Result<f64> {
+    if let Some(r) = override_r.or(table) {
         if !(r.is_finite() && r > 0.0) {
             return Err(crate::Error::param(
                 "edge-length",
@@ -245,4 +248,268 @@ pub fn splats(points: &TriMesh, scale: f32) -> TriMesh {
         values: sig,
     });
     out
+}
+
+/// Triangle quality of a mesh: minimum-angle distribution and aspect ratios.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Quality {
+    /// Fraction of triangles whose smallest angle is ≥ 30°.
+    pub min_angle_30: f64,
+    /// 5th percentile and median of the smallest angles (degrees).
+    pub min_angle_p5: f32,
+    pub min_angle_median: f32,
+    /// Longest edge over shortest altitude · √3/2 (1 for equilateral): max, mean.
+    pub aspect_max: f32,
+    pub aspect_mean: f32,
+}
+
+impl Quality {
+    /// The figures of `mesh`'s triangles.
+    pub fn of(mesh: &TriMesh) -> Quality {
+        let mut angles = Vec::with_capacity(mesh.triangles.len());
+        let mut aspects = Vec::with_capacity(mesh.triangles.len());
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            let ang = |p: Vec3, q: Vec3, r: Vec3| (q - p).angle_between(r - p).to_degrees();
+            angles.push(ang(a, b, c).min(ang(b, c, a)).min(ang(c, a, b)));
+            let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+            let area2 = (b - a).cross(c - a).length();
+            aspects.push(if area2 > 0.0 {
+                longest * longest / area2 * 3f32.sqrt() / 2.0
+            } else {
+                f32::INFINITY
+            });
+        }
+        angles.sort_by(f32::total_cmp);
+        let n = angles.len().max(1);
+        let pick = |f: f64| {
+            angles
+                .get(((angles.len().saturating_sub(1)) as f64 * f) as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        Quality {
+            min_angle_30: angles.iter().filter(|&&a| a >= 30.0).count() as f64 / n as f64,
+            min_angle_p5: pick(0.05),
+            min_angle_median: pick(0.5),
+            aspect_max: aspects.iter().copied().fold(0.0, f32::max),
+            aspect_mean: aspects.iter().sum::<f32>() / n as f32,
+        }
+    }
+}
+
+/// A topology change the network's surgery made.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Event {
+    /// Scene time at the end of the iteration that made it.
+    pub time: f64,
+    /// Fans closing loops (two per cut neck) and strips joining loops.
+    pub caps: u32,
+    pub bridges: u32,
+    /// Components and Σ genus after it.
+    pub components: usize,
+    pub genus: i64,
+}
+
+/// What the network did between two frames.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct NetworkSteps {
+    pub iterations: u32,
+    pub splits: u32,
+    pub collapses: u32,
+    /// Surgeries refused (retried at the next iteration).
+    pub refused_surgeries: u32,
+    /// Max |F − I|/|∇F| at the vertices before the frame's last step.
+    pub residual: f32,
+    pub events: Vec<Event>,
+}
+
+/// The start network of `scene` at t = 0: marching cubes at lattice spacing
+/// R, edges shorter than 0.3 R collapsed.
+pub fn start_network(
+    scene: &Scene,
+    r: f64,
+    opts: NetworkOptions,
+    backend: Backend<'_>,
+) -> Result<Network> {
+    let pose = scene.pose(0.0);
+    let field = FieldInput::new(&pose)?;
+    let mc = grid::marching_cubes(&pose, r, backend)?;
+    let start = collapse_short_edges(&mc.mesh, 0.3 * r as f32).mesh;
+    Network::new(&start, r, opts, &field)
+}
+
+/// One iteration and the surgery after it, with the scene at `t0` moving
+/// to `t1`; events are recorded at `t1`.
+fn network_step(
+    net: &mut Network,
+    scene: &Scene,
+    t0: f64,
+    t1: f64,
+    backend: Backend<'_>,
+    steps: &mut NetworkSteps,
+) -> Result<()> {
+    let it = net.iterate(
+        &FieldInput::new(&scene.pose(t0))?,
+        (t1 - t0) as f32,
+        backend,
+    )?;
+    steps.iterations += 1;
+    steps.splits += it.splits;
+    steps.collapses += it.collapses;
+    steps.residual = it.residual;
+    let s = net.surgery(&FieldInput::new(&scene.pose(t1))?);
+    steps.refused_surgeries += s.refused;
+    if s.caps > 0 || s.bridges > 0 {
+        let t = net.check()?;
+        steps.events.push(Event {
+            time: t1,
+            caps: s.caps,
+            bridges: s.bridges,
+            components: t.components.len(),
+            genus: t.components.iter().filter_map(|c| c.genus).sum(),
+        });
+    }
+    Ok(())
+}
+
+/// Runs the network over `times`: frame 0 relaxes the start mesh, every
+/// later frame transports it (scene time advancing in steps that move the
+/// surface by at most R/8 at the vertices) and relaxes it at the frame's time;
+/// `on_frame` gets the network after each frame.
+pub fn network(
+    scene: &Scene,
+    times: &[f64],
+    mut net: Network,
+    backend: Backend<'_>,
+    mut on_frame: impl FnMut(&Network, f64, &NetworkSteps) -> Result<()>,
+) -> Result<()> {
+    let opts = net.opts;
+    let mut prev: Option<f64> = None;
+    for &t in times {
+        let mut steps = NetworkSteps::default();
+        match prev {
+            None => {
+                for _ in 0..opts.start_iterations {
+                    network_step(&mut net, scene, t, t, backend, &mut steps)?;
+                }
+            }
+            Some(t0) => {
+                // Sub-steps in which the surface moves by at most R/8 at the
+                // vertices, at least `transport`, at most MAX_SUBSTEPS.
+                let mut a = t0;
+                let least = (t - t0) / f64::from(opts.transport.max(1));
+                let floor = (t - t0) / f64::from(MAX_SUBSTEPS);
+                while a < t {
+                    let v = surface_speed(&net, &FieldInput::new(&scene.pose(a))?);
+                    let by_speed = if v > 0.0 {
+                        f64::from(net.rest) / 8.0 / f64::from(v)
+                    } else {
+                        f64::INFINITY
+                    };
+                    let b = (a + least.min(by_speed).max(floor)).min(t);
+                    network_step(&mut net, scene, a, b, backend, &mut steps)?;
+                    a = b;
+                }
+                for _ in 0..opts.relax {
+                    network_step(&mut net, scene, t, t, backend, &mut steps)?;
+                }
+            }
+        }
+        prev = Some(t);
+        on_frame(&net, t, &steps)?;
+    }
+    Ok(())
+}
+
+/// Most sub-steps between two frames.
+pub const MAX_SUBSTEPS: u32 = 400;
+
+/// Largest normal speed |F_t|/|∇F| of the surface at the network's
+/// vertices, with |∇F| taken as at least 100 g_min (a tenth of the median
+/// at the start): near a critical point the surface moves without bound,
+/// and surgery, not tracking, handles it.
+fn surface_speed(net: &Network, field: &FieldInput) -> f32 {
+    (net.positions.iter())
+        .map(|p| {
+            let (s, _) = skeletal_field(field, p.to_array());
+            s.rate.abs() / Vec3::from_array(s.grad).length().max(100.0 * net.g_min)
+        })
+        .fold(0.0, f32::max)
+}
+
+/// Per-frame figures of the network, checked against the field.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct NetworkFrameReport {
+    pub frame: u32,
+    pub time: f64,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub components: usize,
+    /// Genus per component (descending size).
+    pub genus: Vec<i64>,
+    pub euler: i64,
+    /// Closed, consistently oriented 2-manifold.
+    pub manifold: bool,
+    /// Triangle pairs crossing each other (exact test).
+    pub self_intersections: usize,
+    pub steps: NetworkSteps,
+    /// Max and mean |F − I|/|∇F| at the vertices after the frame.
+    pub residual_max: f32,
+    pub residual_mean: f32,
+    pub quality: Quality,
+    /// The marching-cubes mesh of the same surface at lattice spacing R.
+    pub marching_cubes_quality: Quality,
+    /// A dense marching-cubes reference (spacing R/4): its components and
+    /// genus, and the symmetric Hausdorff distance over vertices to it.
+    pub reference_components: usize,
+    pub reference_genus: Vec<i64>,
+    pub hausdorff: f64,
+}
+
+/// The figures of frame `frame` at time `t`.
+pub fn network_report(
+    net: &Network,
+    scene: &Scene,
+    frame: u32,
+    t: f64,
+    steps: &NetworkSteps,
+    backend: Backend<'_>,
+) -> Result<NetworkFrameReport> {
+    let mesh = net.mesh();
+    let topo = crate::mesh::Topology::of(&mesh);
+    let pose = scene.pose(t);
+    let field = FieldInput::new(&pose)?;
+    let residuals: Vec<f32> = (mesh.positions.iter())
+        .map(|p| {
+            let (s, _) = skeletal_field(&field, p.to_array());
+            s.value.abs() / Vec3::from_array(s.grad).length().max(net.g_min)
+        })
+        .collect();
+    let r = f64::from(net.rest);
+    let coarse = grid::marching_cubes(&pose, r, backend)?;
+    let dense = grid::marching_cubes(&pose, r / 4.0, backend)?;
+    let mut reference_genus: Vec<i64> = dense.groups.iter().filter_map(|g| g.genus).collect();
+    reference_genus.sort_unstable_by(|a, b| b.cmp(a));
+    Ok(NetworkFrameReport {
+        frame,
+        time: t,
+        vertices: mesh.positions.len(),
+        triangles: mesh.triangles.len(),
+        components: topo.components.len(),
+        genus: topo.components.iter().filter_map(|c| c.genus).collect(),
+        euler: topo.euler,
+        manifold: topo.closed && topo.is_manifold() && topo.consistently_oriented,
+        self_intersections: crate::mesh::intersect::self_intersections(&mesh)
+            .pairs
+            .len(),
+        steps: steps.clone(),
+        residual_max: residuals.iter().copied().fold(0.0, f32::max),
+        residual_mean: residuals.iter().sum::<f32>() / residuals.len().max(1) as f32,
+        quality: Quality::of(&mesh),
+        marching_cubes_quality: Quality::of(&coarse.mesh),
+        reference_components: dense.groups.len(),
+        reference_genus,
+        hausdorff: crate::mesh::distance::hausdorff(&mesh, &dense.mesh),
+    })
 }

@@ -94,6 +94,45 @@ pub struct NetworkOptions {
     pub theta: f64,
     /// Rest-length bound λ_R / R (0.5).
     pub lambda: f64,
+    /// Target spring length R; `--edge-length` overrides it, and without
+    /// either it is the surface's bounding-box diagonal / 64.
+    pub edge_length: Option<f64>,
+    /// Least iterations carrying the network from one frame's time to the
+    /// next (more when the surface would move over R/8 at a vertex in one).
+    pub transport: u32,
+    /// Iterations at each frame's time after the transport.
+    pub relax: u32,
+    /// Iterations relaxing the start mesh at frame 0.
+    pub start_iterations: u32,
+}
+
+impl NetworkOptions {
+    /// The `[network]` table of a scene file (defaults when absent).
+    pub fn from_scene(text: &str, origin: &str) -> Result<NetworkOptions> {
+        let o: NetworkOptions = super::scene_table(text, origin, "network")?;
+        let positive = [
+            ("rho", o.rho),
+            ("d_min", o.d_min),
+            ("d_max", o.d_max),
+            ("epsilon", o.epsilon),
+            ("kappa", o.kappa),
+            ("lambda", o.lambda),
+            ("edge_length", o.edge_length.unwrap_or(1.0)),
+        ];
+        super::check_positive(origin, "network", &positive)?;
+        if o.d_min >= o.d_max || o.theta < 0.0 || o.lambda >= 1.0 {
+            return Err(Error::format(
+                origin,
+                crate::Position::Field("network".into()),
+                "d_min < d_max, theta ≥ 0, lambda < 1",
+                format!(
+                    "d_min {}, d_max {}, theta {}, lambda {}",
+                    o.d_min, o.d_max, o.theta, o.lambda
+                ),
+            ));
+        }
+        Ok(o)
+    }
 }
 
 impl Default for NetworkOptions {
@@ -106,6 +145,10 @@ impl Default for NetworkOptions {
             kappa: 0.5,
             theta: 0.0,
             lambda: 0.5,
+            edge_length: None,
+            transport: 4,
+            relax: 8,
+            start_iterations: 40,
         }
     }
 }
@@ -123,6 +166,8 @@ pub struct NetworkIteration {
     pub refused: u32,
     /// Max |F − I|/|∇F| at the vertices before the step.
     pub residual: f32,
+    /// Vertices moved back into their rings by the fold repair.
+    pub repaired: u32,
     /// Spring energy ρ Σ g(l_e), g(l) = l³/(3R) − l²/2 (f64).
     pub energy: f64,
 }
@@ -135,6 +180,10 @@ pub const SURGERY_COOLDOWN: u32 = 10;
 /// Per iteration, rest lengths set by a surgery move this fraction of the
 /// way back to R (when the curvature adaptation is off).
 const REST_RECOVERY: f32 = 0.1;
+
+/// Largest angle sum of a vertex's fan: 2π + π/2 (a saddle's excess at the
+/// scale of R is far smaller; a fan wound twice has about 4π).
+const MAX_FAN_ANGLE: f32 = 2.5 * std::f32::consts::PI;
 
 /// A vertex's side before dilation (dilated marks, ±2, count as 0).
 fn side_of(side: &[i8], v: u32) -> i8 {
@@ -247,6 +296,9 @@ impl Network {
                 t.consistently_oriented
             )));
         }
+        if let Some(v) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(bad(format!("vertex {v} is not finite")));
+        }
         if t.used_vertices != t.vertices {
             return Err(bad(format!(
                 "{} unused vertices",
@@ -349,6 +401,7 @@ impl Network {
         };
         it.energy = self.energy();
         self.positions = next.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+        it.repaired = self.repair_folds(field);
         if self.opts.theta > 0.0 {
             self.adapt_rest_lengths(&samples);
         } else {
@@ -360,6 +413,53 @@ impl Network {
         }
         self.remesh(&mut it);
         Ok(it)
+    }
+
+    /// Fold repair after the step: a vertex with a triangle facing against
+    /// the field's outward normal (−∇F at its centre) or a fan wound more
+    /// than once (angle sum > 2π + π/2) moves to the mean of its ring; up to
+    /// three passes. Returns the vertices moved.
+    fn repair_folds(&mut self, field: &FieldInput) -> u32 {
+        let mut moved = 0;
+        for _ in 0..3 {
+            let mut bad = vec![false; self.positions.len()];
+            let mut angle = vec![0.0f32; self.positions.len()];
+            for t in &self.triangles {
+                let [p, q, r] = t.map(|v| self.positions[v as usize]);
+                let n = (q - p).cross(r - p);
+                let (f, _) = skeletal_field(field, ((p + q + r) / 3.0).to_array());
+                if n.dot(-Vec3::from_array(f.grad)) <= 0.0 {
+                    for &v in t {
+                        bad[v as usize] = true;
+                    }
+                }
+                for k in 0..3 {
+                    let (o, u, w) = ([p, q, r][k], [p, q, r][(k + 1) % 3], [p, q, r][(k + 2) % 3]);
+                    angle[t[k] as usize] += (u - o).angle_between(w - o);
+                }
+            }
+            let n = self.neighbours();
+            let fix: Vec<(usize, Vec3)> = (0..self.positions.len())
+                .filter(|&v| bad[v] || angle[v] > MAX_FAN_ANGLE)
+                .map(|v| {
+                    (
+                        v,
+                        n[v].iter()
+                            .map(|&u| self.positions[u as usize])
+                            .sum::<Vec3>()
+                            / n[v].len().max(1) as f32,
+                    )
+                })
+                .collect();
+            if fix.is_empty() {
+                break;
+            }
+            moved += fix.len() as u32;
+            for (v, p) in fix {
+                self.positions[v] = p;
+            }
+        }
+        moved
     }
 
     /// Spring energy ρ Σ_e (l³/(3R_e) − l²/2).
@@ -979,6 +1079,20 @@ impl Ops {
             {
                 return None;
             }
+        }
+        // The merged fan must wind once: its angles at the midpoint sum to
+        // less than 2π + π/2 (a fan wound twice overlaps itself in the surface).
+        let angle_sum: f32 = (self.vt[a as usize].iter().chain(&self.vt[b as usize]))
+            .filter(|&&i| i != t1 && i != t2)
+            .map(|&i| {
+                let t = net.triangles[i];
+                let k = t.iter().position(|&v| v == a || v == b).unwrap_or(0);
+                let (p, q) = (moved(t[(k + 1) % 3]), moved(t[(k + 2) % 3]));
+                (p - mid).angle_between(q - mid)
+            })
+            .sum();
+        if angle_sum > MAX_FAN_ANGLE {
+            return None;
         }
         net.positions[a as usize] = mid;
         let mut ring: Vec<u32> = na.iter().chain(&nb).copied().collect();

@@ -159,23 +159,7 @@ impl WhOptions {
     /// The `[particles]` table of a scene file (defaults when absent);
     /// errors name the file, line and key.
     pub fn from_scene(text: &str, origin: &str) -> Result<WhOptions> {
-        #[derive(serde::Deserialize)]
-        struct Tables {
-            #[serde(default)]
-            particles: Option<WhOptions>,
-        }
-        let t: Tables = toml::from_str(text).map_err(|e| {
-            let at = (e.span()).map_or(crate::Position::Whole, |s| {
-                crate::io::config::line_column(text, s.start)
-            });
-            Error::format(
-                origin,
-                at,
-                "a [particles] table",
-                crate::io::config::toml_message(text, &e),
-            )
-        })?;
-        let o = t.particles.unwrap_or_default();
+        let o: WhOptions = super::scene_table(text, origin, "particles")?;
         let positive = [
             ("alpha", o.alpha),
             ("energy", o.energy),
@@ -192,16 +176,7 @@ impl WhOptions {
             ("skin", o.skin),
             ("edge_length", o.edge_length.unwrap_or(1.0)),
         ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::format(
-                    origin,
-                    crate::Position::Field(format!("particles.{name}")),
-                    "a positive finite number",
-                    v.to_string(),
-                ));
-            }
-        }
+        super::check_positive(origin, "particles", &positive)?;
         Ok(o)
     }
 }

@@ -104,3 +104,42 @@ fn bad_scenes_are_clean_errors() {
     let o = chisel(&["implicit", path_str(&missing), "-o", path_str(&out)]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+#[test]
+fn dumbbell_network_splits_with_a_clean_manifold_every_frame() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("net");
+    let v = ok_json(&[
+        "implicit",
+        path_str(&scene("dumbbell")),
+        "--method",
+        "network",
+        "--frames",
+        "3",
+        "--edge-length",
+        "0.12",
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&out),
+        "--json",
+    ]);
+    let frames = v["frames"].as_array().unwrap();
+    let comps: Vec<u64> = frames
+        .iter()
+        .map(|f| f["components"].as_u64().unwrap())
+        .collect();
+    assert_eq!(comps, [1, 2, 2]);
+    for f in frames {
+        assert_eq!(f["manifold"], true, "{f}");
+        assert_eq!(f["self_intersections"], 0, "{f}");
+        assert_eq!(f["components"], f["reference_components"], "{f}");
+        assert!(f["hausdorff"].as_f64().unwrap() < 0.5 * 0.12, "{f}");
+        assert!(f["quality"]["min_angle_30"].as_f64().unwrap() > 0.9, "{f}");
+    }
+    let mesh = chisel::io::read_mesh(&out.join("frame_0002.ply")).unwrap();
+    assert_eq!(
+        mesh.n_triangles() as u64,
+        frames[2]["triangles"].as_u64().unwrap()
+    );
+}

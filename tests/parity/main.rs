@@ -19,6 +19,7 @@ mod implicit_field;
 mod mc_classify;
 mod mc_triangles;
 mod mc_vertices;
+mod network_update;
 mod particle_update;
 mod range_reduce;
 mod spring_chebyshev;

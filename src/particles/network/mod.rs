@@ -208,6 +208,9 @@ pub struct Surgery {
     /// Surgeries not done (loops not simple, or a result that is not a
     /// closed oriented manifold); retried at the next iteration.
     pub refused: u32,
+    /// Stranded or submerged vertices moved onto the surface instead, where
+    /// closing their region again would not change the topology.
+    pub projected: u32,
 }
 
 /// A spring network on an implicit surface.
@@ -605,9 +608,10 @@ impl Network {
     /// other (opposite mean normals, centres within 4R) are **bridged** by a
     /// strip (χ − 2, the merge the seed leaves open), every other loop is
     /// **capped** by a fan around a new centre vertex (a neck cut: χ + 2 for
-    /// the two caps, the seed's step 3; a local remesh elsewhere). Nothing
-    /// changes when the loops are not simple or the result would not be a
-    /// closed, consistently oriented manifold.
+    /// the two caps, the seed's step 3). A surgery is kept only when it
+    /// changes the components or their genus and leaves a closed,
+    /// consistently oriented manifold; otherwise the mesh stays and the
+    /// marked vertices are moved onto the surface by Newton steps.
     pub fn surgery(&mut self, field: &FieldInput) -> Surgery {
         if self.cooldown > 0 {
             self.cooldown -= 1;
@@ -637,21 +641,53 @@ impl Network {
             return Surgery::default();
         }
         let before = (self.positions.clone(), self.triangles.clone());
+        let shape = |t: &Topology| {
+            let mut g: Vec<Option<i64>> = t.components.iter().map(|c| c.genus).collect();
+            g.sort_unstable();
+            g
+        };
+        let topology_before = shape(&self.check().expect("the network is kept a closed manifold"));
         match self.reclose(&side, field) {
-            Some(done) if self.check().is_ok() => {
+            Some(done) if self.check().is_ok_and(|t| shape(&t) != topology_before) => {
                 if done.bridges > 0 {
                     self.cooldown = SURGERY_COOLDOWN;
                 }
                 done
             }
-            _ => {
+            result => {
+                // No topology change (or none possible yet): keep the mesh
+                // and move the stranded and submerged vertices onto the
+                // surface instead.
                 (self.positions, self.triangles) = before;
+                let mut projected = 0;
+                for (v, &sd) in side.iter().enumerate() {
+                    if sd != 0 {
+                        self.positions[v] = self.project(field, self.positions[v]);
+                        projected += 1;
+                    }
+                }
                 Surgery {
-                    refused: 1,
+                    refused: u32::from(result.is_none()),
+                    projected,
                     ..Surgery::default()
                 }
             }
         }
+    }
+
+    /// `x` moved onto the surface by Newton steps along ∇F (at most R
+    /// each, 20 of them).
+    fn project(&self, field: &FieldInput, mut x: Vec3) -> Vec3 {
+        for _ in 0..20 {
+            let (f, _) = skeletal_field(field, x.to_array());
+            let g = Vec3::from_array(f.grad);
+            let step = -f.value / g.length_squared().max(self.g_min * self.g_min) * g;
+            x += step.clamp_length_max(self.rest);
+            if step.length() < 1e-4 * self.rest {
+                break;
+            }
+        }
+        x
     }
 
     /// Marks as submerged the vertices of **facing pairs**: i, j not joined
@@ -846,16 +882,8 @@ impl Network {
     /// steps along ∇F (at most R each, 20 of them).
     fn cap(&mut self, l: &[u32], field: &FieldInput) {
         let c = self.positions.len() as u32;
-        let mut x = l.iter().map(|&v| self.positions[v as usize]).sum::<Vec3>() / l.len() as f32;
-        for _ in 0..20 {
-            let (f, _) = skeletal_field(field, x.to_array());
-            let g = Vec3::from_array(f.grad);
-            let step = -f.value / g.length_squared().max(self.g_min * self.g_min) * g;
-            x += step.clamp_length_max(self.rest);
-            if step.length() < 1e-4 * self.rest {
-                break;
-            }
-        }
+        let centre = l.iter().map(|&v| self.positions[v as usize]).sum::<Vec3>() / l.len() as f32;
+        let x = self.project(field, centre);
         self.positions.push(x);
         for k in 0..l.len() {
             // The loop runs u → v on the kept side, so the cap uses v → u.

@@ -41,7 +41,7 @@ fn split_and_collapse_change_v_e_f_by_one_three_two() {
     let mut last: Option<(u32, u32)> = None;
     for _ in 0..400 {
         let before = counts(&net);
-        let after = match last.filter(|_| rng() % 3 != 0) {
+        let after = match last.filter(|_| !rng().is_multiple_of(3)) {
             Some((a, m)) => {
                 last = None;
                 if net.collapse(a, m) {

@@ -1,0 +1,208 @@
+//! Implicit-surface benches (issue "Skeletal implicit surfaces"): the
+//! kernels `implicit_field`, `particle_update` and `network_update` on the
+//! 100-primitive blobby molecule at 10⁴, 10⁵ and 10⁶ samples, CPU and GPU
+//! in one run, and the animated network's frame rate (one frame = the
+//! default 4 transport + 8 relaxation iterations with remeshing and
+//! surgery, and the manifold check) at 10⁴ and 10⁵ triangles.
+//!
+//! Throughput: elements (points, particles, vertices) per second; the GPU
+//! figures include the upload and the read-back (`gpu_end_to_end`).
+//! `CHISEL_BENCH_QUICK=1` (and `cargo test`): 10³ samples, frames at 10³.
+
+use std::time::Duration;
+
+use chisel::gpu::{Backend, Gpu};
+use chisel::implicit::field::{FieldInput, implicit_field};
+use chisel::implicit::scene::EXAMPLES;
+use chisel::implicit::{Scene, grid};
+use chisel::particles::animate::start_network;
+use chisel::particles::network::{NetworkInput, NetworkParams, network_update};
+use chisel::particles::wh::{StepInput, UpdateParams, particle_update, sigma_for_spacing};
+use chisel::particles::{CellList, NetworkOptions, Particles, WhOptions};
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
+
+#[path = "common/mod.rs"]
+mod bench_common;
+use bench_common::quick;
+
+fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
+    let mut g = c.benchmark_group(name);
+    if quick() {
+        g.sample_size(10)
+            .warm_up_time(Duration::from_millis(20))
+            .measurement_time(Duration::from_millis(60));
+    } else {
+        g.sample_size(10)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(2));
+    }
+    g
+}
+
+fn molecule() -> Scene {
+    Scene::from_toml_str(
+        EXAMPLES.iter().find(|e| e.0 == "molecule").unwrap().1,
+        "molecule",
+    )
+    .unwrap()
+}
+
+fn sizes() -> Vec<usize> {
+    if quick() {
+        vec![1_000]
+    } else {
+        vec![10_000, 100_000, 1_000_000]
+    }
+}
+
+/// The spacing that puts about `n` samples on the molecule's surface.
+fn spacing_for(scene: &Scene, n: usize) -> f64 {
+    let s = grid::marching_cubes(&scene.pose(0.5), 0.05, Backend::Cpu).unwrap();
+    let area: f64 = s.groups.iter().map(|g| g.area).sum();
+    (2.0 * area / (3f64.sqrt() * n as f64)).sqrt()
+}
+
+fn gpu() -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(g) => {
+            eprintln!("adapter: {}", g.describe());
+            Some(g)
+        }
+        Err(e) => {
+            eprintln!("no adapter, GPU benches skipped: {e}");
+            None
+        }
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let scene = molecule();
+    let pose = scene.pose(0.5);
+    let field = FieldInput::new(&pose).unwrap();
+    let gpu = gpu();
+    let mut backends: Vec<(&'static str, Backend<'_>)> = vec![("cpu", Backend::Cpu)];
+    if let Some(g) = &gpu {
+        // Upload, dispatch and read-back each time.
+        backends.push(("gpu_end_to_end", Backend::Gpu(g)));
+    }
+    for n in sizes() {
+        let r = spacing_for(&scene, n);
+        let opts = WhOptions::default();
+        let sh = sigma_for_spacing(r, &opts);
+        let particles = Particles::on_surface(&pose, sh, Backend::Cpu).unwrap();
+        let positions = particles.positions();
+        let cells = CellList::build(&positions, 3.3 * sh as f32, 0.5 * sh as f32).unwrap();
+        let flat = cells.flat();
+        let points: Vec<[f32; 4]> = particles.points.clone();
+        let count = points.len() as u64;
+        {
+            let mut g = group(c, "implicit_field");
+            g.throughput(Throughput::Elements(count));
+            for &(name, b) in &backends {
+                g.bench_function(BenchmarkId::new(name, count), |bench| {
+                    bench.iter(|| implicit_field(&field, &points, b).unwrap())
+                });
+            }
+        }
+        {
+            let u = UpdateParams {
+                nx: cells.dims.x,
+                ny: cells.dims.y,
+                nz: cells.dims.z,
+                n_particles: points.len() as u32,
+                n_cells: (cells.starts.len() - 1) as u32,
+                dt: 0.25 / 6.0,
+                delta: 0.0,
+                kappa: 0.5,
+                alpha: 6.0,
+                e_hat: 4.8,
+                rho_sigma: 15.0,
+                beta_sigma: (6.0 / sh) as f32,
+                sigma_lo: 0.1 * sh as f32,
+                sigma_hi: 2.0 * sh as f32,
+                g_min2: 1e-8,
+                adapt: 1,
+            };
+            let input = StepInput {
+                params: u,
+                cells: &flat,
+                positions: &points,
+            };
+            let mut g = group(c, "particle_update");
+            g.throughput(Throughput::Elements(count));
+            for &(name, b) in &backends {
+                g.bench_function(BenchmarkId::new(name, count), |bench| {
+                    bench.iter(|| particle_update(&field, &input, b).unwrap())
+                });
+            }
+        }
+        {
+            let net = start_network(&scene, r, NetworkOptions::default(), Backend::Cpu).unwrap();
+            let (offsets, springs) = net.springs();
+            let pos: Vec<[f32; 4]> = net.positions.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
+            let input = NetworkInput {
+                params: NetworkParams {
+                    n_vertices: pos.len() as u32,
+                    dt: 0.2,
+                    delta: 0.0,
+                    kappa: 0.5,
+                    rho: 1.0,
+                    g_min2: 1e-8,
+                    step_max: 0.5 * r as f32,
+                },
+                offsets: &offsets,
+                springs: &springs,
+                positions: &pos,
+            };
+            let mut g = group(c, "network_update");
+            g.throughput(Throughput::Elements(pos.len() as u64));
+            for &(name, b) in &backends {
+                g.bench_function(BenchmarkId::new(name, pos.len()), |bench| {
+                    bench.iter(|| network_update(&field, &input, b).unwrap())
+                });
+            }
+        }
+    }
+    // Frames of the animated network (moving scene, remeshing, surgery, check).
+    let frame_sizes: &[usize] = if quick() {
+        &[1_000]
+    } else {
+        &[10_000, 100_000]
+    };
+    let mut g = group(c, "network_frame");
+    for &triangles in frame_sizes {
+        let r = spacing_for(&scene, triangles / 2);
+        let net = start_network(&scene, r, NetworkOptions::default(), Backend::Cpu).unwrap();
+        g.throughput(Throughput::Elements(1));
+        g.bench_function(BenchmarkId::new("cpu", net.triangles.len()), |bench| {
+            bench.iter_batched(
+                || net.clone(),
+                |mut net| {
+                    let opts = net.opts;
+                    for k in 0..opts.transport + opts.relax {
+                        let t = 0.5
+                            + 0.01 * f64::from(k.min(opts.transport)) / f64::from(opts.transport);
+                        let f = FieldInput::new(&scene.pose(t)).unwrap();
+                        let delta = if k < opts.transport {
+                            0.01 / opts.transport as f32
+                        } else {
+                            0.0
+                        };
+                        net.iterate(&f, delta, Backend::Cpu).unwrap();
+                        net.surgery(&f);
+                    }
+                    net.check().unwrap();
+                    net
+                },
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    benches(&mut c);
+    c.final_summary();
+}

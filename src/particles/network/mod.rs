@@ -608,7 +608,8 @@ impl Network {
     /// other (opposite mean normals, centres within 4R) are **bridged** by a
     /// strip (χ − 2, the merge the seed leaves open), every other loop is
     /// **capped** by a fan around a new centre vertex (a neck cut: χ + 2 for
-    /// the two caps, the seed's step 3). A surgery is kept only when it
+    /// the two caps, the seed's step 3) when the field between any two cap
+    /// centres leaves the inside somewhere. A surgery is kept only when it
     /// changes the components or their genus and leaves a closed,
     /// consistently oriented manifold; otherwise the mesh stays and the
     /// marked vertices are moved onto the surface by Newton steps.
@@ -859,10 +860,26 @@ impl Network {
             }
             out.bridges += 1;
         }
+        let mut centres = Vec::new();
         for (i, l) in loops.iter().enumerate() {
             if !used[i] {
                 self.cap(l, field);
+                centres.push(*self.positions.last().expect("the cap's centre"));
                 out.caps += 1;
+            }
+        }
+        // A cut must follow the field: between any two cap centres the
+        // segment leaves the inside somewhere (else a thin neck that still
+        // exists, say a bond the network lags behind, would be cut).
+        for (i, a) in centres.iter().enumerate() {
+            for b in &centres[i + 1..] {
+                let joined = (1..16).all(|k| {
+                    let x = a.lerp(*b, k as f32 / 16.0);
+                    skeletal_field(field, x.to_array()).0.value > 0.0
+                });
+                if joined {
+                    return None;
+                }
             }
         }
         // Drop vertices no triangle uses any more.

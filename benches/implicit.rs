@@ -55,11 +55,17 @@ fn sizes() -> Vec<usize> {
     }
 }
 
-/// The spacing that puts about `n` samples on the molecule's surface.
-fn spacing_for(scene: &Scene, n: usize) -> f64 {
-    let s = grid::marching_cubes(&scene.pose(0.5), 0.05, Backend::Cpu).unwrap();
+/// The hexagonal spacing of `n` particles on the surface at `t`, and the
+/// marching-cubes lattice spacing whose mesh has about `n` vertices there.
+fn spacings_for(scene: &Scene, t: f64, n: usize) -> (f64, f64) {
+    let h0 = 0.05;
+    let s = grid::marching_cubes(&scene.pose(t), h0, Backend::Cpu).unwrap();
     let area: f64 = s.groups.iter().map(|g| g.area).sum();
-    (2.0 * area / (3f64.sqrt() * n as f64)).sqrt()
+    let count = s.mesh.positions.len() as f64;
+    (
+        (2.0 * area / (3f64.sqrt() * n as f64)).sqrt(),
+        h0 * (count / n as f64).sqrt(),
+    )
 }
 
 fn gpu() -> Option<Gpu> {
@@ -86,10 +92,11 @@ fn benches(c: &mut Criterion) {
         backends.push(("gpu_end_to_end", Backend::Gpu(g)));
     }
     for n in sizes() {
-        let r = spacing_for(&scene, n);
+        let (r, h) = spacings_for(&scene, 0.5, n);
         let opts = WhOptions::default();
         let sh = sigma_for_spacing(r, &opts);
-        let particles = Particles::on_surface(&pose, sh, Backend::Cpu).unwrap();
+        let mc = grid::marching_cubes(&pose, h, Backend::Cpu).unwrap();
+        let particles = Particles::new(&mc.mesh.positions, sh as f32);
         let positions = particles.positions();
         let cells = CellList::build(&positions, 3.3 * sh as f32, 0.5 * sh as f32).unwrap();
         let flat = cells.flat();
@@ -137,7 +144,9 @@ fn benches(c: &mut Criterion) {
             }
         }
         {
-            let net = start_network(&scene, r, NetworkOptions::default(), Backend::Cpu).unwrap();
+            let (_, h) = spacings_for(&scene, 0.0, n);
+            let net = start_network(&scene, h, NetworkOptions::default(), Backend::Cpu).unwrap();
+            let r = h;
             let (offsets, springs) = net.springs();
             let pos: Vec<[f32; 4]> = net.positions.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
             let input = NetworkInput {
@@ -171,8 +180,8 @@ fn benches(c: &mut Criterion) {
     };
     let mut g = group(c, "network_frame");
     for &triangles in frame_sizes {
-        let r = spacing_for(&scene, triangles / 2);
-        let net = start_network(&scene, r, NetworkOptions::default(), Backend::Cpu).unwrap();
+        let (_, h) = spacings_for(&scene, 0.0, triangles / 2);
+        let net = start_network(&scene, h, NetworkOptions::default(), Backend::Cpu).unwrap();
         g.throughput(Throughput::Elements(1));
         g.bench_function(BenchmarkId::new("cpu", net.triangles.len()), |bench| {
             bench.iter_batched(

@@ -142,14 +142,36 @@ fn spring_energy_falls_under_the_step_bound_and_not_beyond() {
     );
 }
 
-/// Animates `name` with the network at edge length `r` over `frames` and
-/// checks every frame; returns the topology events' times.
-fn animate_checked(name: &str, r: f64, frames: u32) -> Vec<(f64, usize)> {
+/// Animates `name` with the network at edge length `r` over `frames` on
+/// the CPU and checks every frame; returns the topology events' (time,
+/// components, reseed).
+fn animate_checked(name: &str, r: f64, frames: u32, guard: bool) -> Vec<(f64, usize, bool)> {
+    animate_on(name, r, frames, guard, Backend::Cpu).0
+}
+
+/// Topology events (time, components, reseed) and each frame's sorted
+/// genus list (one entry per component).
+type Animated = (Vec<(f64, usize, bool)>, Vec<Vec<i64>>);
+
+/// [`animate_checked`] on `backend`, also returning each frame's genus
+/// lists.
+fn animate_on(
+    name: &str,
+    r: f64,
+    frames: u32,
+    guard: bool,
+    backend: Backend<'_>,
+) -> Animated {
     let s = scene(name);
     let times = animate::frame_times(&s, frames);
-    let net = start_network(&s, r, NetworkOptions::default(), Backend::Cpu).unwrap();
+    let opts = NetworkOptions {
+        guard,
+        ..NetworkOptions::default()
+    };
+    let net = start_network(&s, r, opts, backend).unwrap();
     let mut events = Vec::new();
-    animate::network(&s, &times, net, Backend::Cpu, |net, t, steps| {
+    let mut per_frame = Vec::new();
+    animate::network(&s, &times, net, backend, |net, t, steps| {
         let mesh = net.mesh();
         let topo = net.check().unwrap_or_else(|e| panic!("{name} t={t}: {e}"));
         assert!(
@@ -162,16 +184,22 @@ fn animate_checked(name: &str, r: f64, frames: u32) -> Vec<(f64, usize)> {
         let mut want: Vec<i64> = reference.groups.iter().filter_map(|g| g.genus).collect();
         want.sort_unstable();
         assert_eq!(genus, want, "{name} t={t}: components/genus vs the field's");
-        events.extend(steps.events.iter().map(|e| (e.time, e.components)));
+        events.extend(
+            steps
+                .events
+                .iter()
+                .map(|e| (e.time, e.components, e.reseed)),
+        );
+        per_frame.push(genus);
         Ok(())
     })
     .unwrap();
-    events
+    (events, per_frame)
 }
 
 #[test]
 fn dumbbell_breaks_at_the_analytic_distance() {
-    let events = animate_checked("dumbbell", 0.1, 5);
+    let events = animate_checked("dumbbell", 0.1, 5, false);
     let split = events.iter().find(|e| e.1 == 2).expect("a split event");
     let distance = 2.0 * (1.0 + 0.4 * split.0);
     assert!(
@@ -182,7 +210,7 @@ fn dumbbell_breaks_at_the_analytic_distance() {
 
 #[test]
 fn reverse_dumbbell_merges_at_the_analytic_distance() {
-    let events = animate_checked("dumbbell_merge", 0.1, 5);
+    let events = animate_checked("dumbbell_merge", 0.1, 5, false);
     let merge = events.iter().find(|e| e.1 == 1).expect("a merge event");
     let distance = 2.0 * (1.4 - 0.4 * merge.0);
     assert!(
@@ -193,6 +221,35 @@ fn reverse_dumbbell_merges_at_the_analytic_distance() {
 
 #[test]
 fn torus_and_finger_keep_their_topology() {
-    assert!(animate_checked("torus", 0.1, 4).is_empty());
-    assert!(animate_checked("finger", 0.1, 4).is_empty());
+    assert!(animate_checked("torus", 0.1, 4, false).is_empty());
+    assert!(animate_checked("finger", 0.1, 4, false).is_empty());
+}
+
+/// The molecule's tunnels open and close where the local surgery alone
+/// does not follow them; with the guard every frame holds, and what the
+/// guard did is reported as reseed events at frame times.
+#[test]
+fn molecule_frames_hold_with_the_guard() {
+    let s = scene("molecule");
+    let times = animate::frame_times(&s, 3);
+    let events = animate_checked("molecule", 0.15, 3, true);
+    for e in events.iter().filter(|e| e.2) {
+        assert!(times.contains(&e.0), "a reseed between frames: {e:?}");
+    }
+}
+
+/// The five examples on the GPU (lavapipe in CI) and the CPU: the same
+/// components and genus every frame, each checked against the field as in
+/// [`animate_checked`] (the local surgery alone except on the molecule).
+#[test]
+fn cpu_and_gpu_networks_have_the_same_topology_every_frame() {
+    let Some(gpu) = common::gpu() else {
+        return;
+    };
+    for name in ["dumbbell", "dumbbell_merge", "torus", "finger", "molecule"] {
+        let guard = name == "molecule";
+        let cpu = animate_on(name, 0.15, 3, guard, Backend::Cpu).1;
+        let gpu = animate_on(name, 0.15, 3, guard, Backend::Gpu(gpu)).1;
+        assert_eq!(cpu, gpu, "{name}: per-frame genus lists, CPU vs GPU");
+    }
 }

@@ -211,13 +211,17 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         Frames::Network(f) => {
             let last = f.last().expect("at least one frame");
             let events: usize = f.iter().map(|x| x.steps.events.len()).sum();
+            let reseeds = (f.iter().flat_map(|x| &x.steps.events))
+                .filter(|e| e.reseed)
+                .count();
             format!(
-                "{} frames, {} triangles in the last ({} components, genus {:?}, {} topology events, Hausdorff {:.2e}); wrote {}",
+                "{} frames, {} triangles in the last ({} components, genus {:?}, {} topology events of which {} reseeds, Hausdorff {:.2e}); wrote {}",
                 f.len(),
                 last.triangles,
                 last.components,
                 last.genus,
                 events,
+                reseeds,
                 last.hausdorff,
                 args.output.display()
             )

@@ -14,7 +14,7 @@ use crate::foundation::union_find::UnionFind;
 use crate::gpu::Backend;
 use crate::implicit::field::FieldInput;
 use crate::implicit::field::cpu::skeletal_field;
-use crate::implicit::{Scene, grid};
+use crate::implicit::{Pose, Scene, grid};
 use crate::mesh::ScalarField;
 use crate::mesh::collapse::collapse_short_edges;
 use crate::{Result, TriMesh};
@@ -298,7 +298,7 @@ impl Quality {
     }
 }
 
-/// A topology change the network's surgery made.
+/// A topology change: the network's surgery, or a reseed by the guard.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Event {
     /// Scene time at the end of the iteration that made it.
@@ -306,6 +306,10 @@ pub struct Event {
     /// Fans closing loops (two per cut neck) and strips joining loops.
     pub caps: u32,
     pub bridges: u32,
+    /// Whether the guard rebuilt the network from the field (its topology
+    /// or self-intersections disagreed after the local surgery; see
+    /// [`NetworkOptions::guard`]).
+    pub reseed: bool,
     /// Components and Σ genus after it.
     pub components: usize,
     pub genus: i64,
@@ -324,19 +328,80 @@ pub struct NetworkSteps {
     pub events: Vec<Event>,
 }
 
-/// The start network of `scene` at t = 0: marching cubes at lattice spacing
-/// R, edges shorter than 0.3 R collapsed.
+/// The start network of `scene` at t = 0 ([`seed_network`]).
 pub fn start_network(
     scene: &Scene,
     r: f64,
     opts: NetworkOptions,
     backend: Backend<'_>,
 ) -> Result<Network> {
-    let pose = scene.pose(0.0);
-    let field = FieldInput::new(&pose)?;
-    let mc = grid::marching_cubes(&pose, r, backend)?;
+    seed_network(&scene.pose(0.0), r, opts, backend)
+}
+
+/// A network on `pose`: marching cubes at lattice spacing R, edges shorter
+/// than 0.3 R collapsed.
+pub fn seed_network(
+    pose: &Pose,
+    r: f64,
+    opts: NetworkOptions,
+    backend: Backend<'_>,
+) -> Result<Network> {
+    let field = FieldInput::new(pose)?;
+    let mc = grid::marching_cubes(pose, r, backend)?;
     let start = collapse_short_edges(&mc.mesh, 0.3 * r as f32).mesh;
     Network::new(&start, r, opts, &field)
+}
+
+/// Whether the network's components, genus and self-intersections agree
+/// with the field of `pose` (marching cubes at spacing R/2).
+fn topology_holds(net: &Network, pose: &Pose, backend: Backend<'_>) -> Result<bool> {
+    let mesh = net.mesh();
+    let topo = crate::mesh::Topology::of(&mesh);
+    let mut genus: Vec<i64> = topo.components.iter().filter_map(|c| c.genus).collect();
+    genus.sort_unstable();
+    let field = grid::marching_cubes(pose, f64::from(net.rest) / 2.0, backend)?;
+    let mut expected: Vec<i64> = field.groups.iter().filter_map(|g| g.genus).collect();
+    expected.sort_unstable();
+    Ok(topo.components.len() == field.groups.len()
+        && genus == expected
+        && crate::mesh::intersect::self_intersections(&mesh)
+            .pairs
+            .is_empty())
+}
+
+/// The guard after the frame at `t`: rebuilds `net` from the field (and
+/// relaxes it) when [`topology_holds`] fails.
+fn guard(
+    net: &mut Network,
+    scene: &Scene,
+    t: f64,
+    backend: Backend<'_>,
+    steps: &mut NetworkSteps,
+) -> Result<()> {
+    let pose = scene.pose(t);
+    if !net.opts.guard || topology_holds(net, &pose, backend)? {
+        return Ok(());
+    }
+    *net = seed_network(&pose, f64::from(net.rest), net.opts, backend)?;
+    // Relaxed without surgery: the seed has the field's topology at t.
+    let field = FieldInput::new(&pose)?;
+    for _ in 0..net.opts.start_iterations {
+        let it = net.iterate(&field, 0.0, backend)?;
+        steps.iterations += 1;
+        steps.splits += it.splits;
+        steps.collapses += it.collapses;
+        steps.residual = it.residual;
+    }
+    let topo = net.check()?;
+    steps.events.push(Event {
+        time: t,
+        caps: 0,
+        bridges: 0,
+        reseed: true,
+        components: topo.components.len(),
+        genus: topo.components.iter().filter_map(|c| c.genus).sum(),
+    });
+    Ok(())
 }
 
 /// One iteration and the surgery after it, with the scene at `t0` moving
@@ -366,6 +431,7 @@ fn network_step(
             time: t1,
             caps: s.caps,
             bridges: s.bridges,
+            reseed: false,
             components: t.components.len(),
             genus: t.components.iter().filter_map(|c| c.genus).sum(),
         });
@@ -375,8 +441,9 @@ fn network_step(
 
 /// Runs the network over `times`: frame 0 relaxes the start mesh, every
 /// later frame transports it (scene time advancing in steps that move the
-/// surface by at most R/8 at the vertices) and relaxes it at the frame's time;
-/// `on_frame` gets the network after each frame.
+/// surface by at most R/8 at the vertices) and relaxes it at the frame's time,
+/// then the guard checks it ([`NetworkOptions::guard`]); `on_frame` gets the
+/// network after each frame.
 pub fn network(
     scene: &Scene,
     times: &[f64],
@@ -416,6 +483,7 @@ pub fn network(
                 }
             }
         }
+        guard(&mut net, scene, t, backend, &mut steps)?;
         prev = Some(t);
         on_frame(&net, t, &steps)?;
     }

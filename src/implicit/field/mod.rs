@@ -20,8 +20,9 @@
 //!
 //! **Culling.** With n primitives, τ = ε_f32·I/(2n): a primitive whose
 //! |w·e| stays below τ beyond radius r_s (blobby: r_s = √(ln(|w b|/τ)/a);
-//! Wyvill, metaball: their radius) is listed only in the cells its support
-//! box touches, so the dropped sum stays below half an ulp of I. A point
+//! Wyvill, metaball: their radius) is listed only in the cells that its
+//! support (the points within r_s of a skeleton piece) reaches, so the
+//! dropped sum stays below half an ulp of I. A point
 //! outside the grid has F = 0. Both backends sum a cell's primitives in
 //! ascending id.
 
@@ -110,8 +111,8 @@ impl FieldInput {
         let mut kinds = Vec::with_capacity(n);
         let mut piece_ends = Vec::with_capacity(n);
         let mut pieces: Vec<[f32; 4]> = Vec::new();
-        // Support boxes per primitive: (primitive, min, max).
-        let mut boxes: Vec<(u32, DVec3, DVec3)> = Vec::new();
+        // Support capsules per piece.
+        let mut supports: Vec<Support> = Vec::new();
         for (i, (p, r)) in pose.primitives.iter().zip(&pose.rates).enumerate() {
             let [p0, p1] = p.influence.params();
             let inv_r2 = match p.influence {
@@ -131,8 +132,12 @@ impl FieldInput {
                 pieces.push(row(r.points[ia], 0.0));
                 pieces.push(row(r.points[ib], 0.0));
                 if let Some(s2) = reach2 {
-                    let rs = DVec3::splat(s2.sqrt());
-                    boxes.push((i as u32, a.min(b) - rs, a.max(b) + rs));
+                    supports.push(Support {
+                        prim: i as u32,
+                        a,
+                        b,
+                        radius: s2.sqrt(),
+                    });
                 }
             }
             piece_ends.push(
@@ -143,7 +148,7 @@ impl FieldInput {
         }
         let piece_base = skeleton.len() as u32;
         skeleton.extend(pieces);
-        let (grid_origin, inv_cell, dims, cells) = cull_grid(&boxes)?;
+        let (grid_origin, inv_cell, dims, cells) = cull_grid(&supports)?;
         let mut table = kinds;
         table.extend(piece_ends);
         let cell_base = table.len() as u32;
@@ -193,49 +198,84 @@ impl FieldInput {
     }
 }
 
-/// A uniform grid over the support boxes, with the ascending ids of the
-/// primitives whose boxes touch each cell: (origin, 1/cell, dims, lists).
-fn cull_grid(boxes: &[(u32, DVec3, DVec3)]) -> Result<(Vec3, f32, UVec3, Vec<Vec<u32>>)> {
-    if boxes.is_empty() {
+/// Where one skeleton piece of a primitive may matter: the points within
+/// `radius` of the segment `a`–`b`.
+struct Support {
+    prim: u32,
+    a: DVec3,
+    b: DVec3,
+    radius: f64,
+}
+
+impl Support {
+    /// Distance from `x` to the segment.
+    fn distance(&self, x: DVec3) -> f64 {
+        let ab = self.b - self.a;
+        let l2 = ab.length_squared();
+        let u = if l2 > 0.0 {
+            ((x - self.a).dot(ab) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (x - (self.a + u * ab)).length()
+    }
+}
+
+/// A uniform grid over the supports, with the ascending ids of the
+/// primitives whose support capsules may reach into each cell: (origin,
+/// 1/cell, dims, lists).
+///
+/// Cells are a quarter of the median support radius, at most `MAX_CELLS`.
+/// A cell lists a primitive when one of its capsules comes within half a
+/// cell diagonal (plus a hundredth of a cell, for f32 lookups near a face)
+/// of the cell's centre: every cell a capsule touches, and fewer than its
+/// bounding box would give (a sphere fills half its box).
+fn cull_grid(supports: &[Support]) -> Result<(Vec3, f32, UVec3, Vec<Vec<u32>>)> {
+    if supports.is_empty() {
         return Ok((Vec3::ZERO, 1.0, UVec3::ONE, vec![Vec::new()]));
     }
-    let lo = boxes.iter().fold(DVec3::INFINITY, |m, b| m.min(b.1));
-    let hi = boxes.iter().fold(DVec3::NEG_INFINITY, |m, b| m.max(b.2));
+    let lo = supports.iter().fold(DVec3::INFINITY, |m, s| {
+        m.min(s.a.min(s.b) - DVec3::splat(s.radius))
+    });
+    let hi = supports.iter().fold(DVec3::NEG_INFINITY, |m, s| {
+        m.max(s.a.max(s.b) + DVec3::splat(s.radius))
+    });
     let extent = (hi - lo).max(DVec3::splat(1e-9));
-    // Cells about half the median support radius, at most MAX_CELLS.
-    let mut radii: Vec<f64> = boxes
-        .iter()
-        .map(|b| (b.2 - b.1).min_element() / 2.0)
-        .collect();
+    let mut radii: Vec<f64> = supports.iter().map(|s| s.radius).collect();
     radii.sort_by(f64::total_cmp);
-    let mut cell = (radii[radii.len() / 2] / 2.0).max(extent.max_element() / 256.0);
+    let mut cell = (radii[radii.len() / 2] / 4.0).max(extent.max_element() / 256.0);
     let count = |c: f64| (extent / c).ceil().max(DVec3::ONE);
     while count(cell).element_product() > MAX_CELLS as f64 {
         cell *= 1.25;
     }
-    // The origin and 1/cell the kernel sees, in f32; boxes are widened by a
-    // hundredth of a cell so that f32 cell lookups near a face stay covered.
+    // The origin and 1/cell the kernel sees, in f32.
     let origin = lo.as_vec3();
     let inv_cell = (1.0 / cell) as f32;
+    let step = 1.0 / f64::from(inv_cell);
     let dims = count(cell).as_uvec3();
     let n_cells = (dims.x * dims.y * dims.z) as usize;
     let mut cells = vec![Vec::new(); n_cells];
     let mut entries = 0usize;
-    let margin = DVec3::splat(cell / 100.0);
+    let slack = step * (0.5 * 3f64.sqrt() + 0.01);
     let to_cell = |p: DVec3| {
-        ((p - origin.as_dvec3()) * f64::from(inv_cell))
+        ((p - origin.as_dvec3()) / step)
             .floor()
             .clamp(DVec3::ZERO, (dims - 1).as_dvec3())
             .as_uvec3()
     };
-    for &(i, a, b) in boxes {
-        let (c0, c1) = (to_cell(a - margin), to_cell(b + margin));
+    for s in supports {
+        let r = DVec3::splat(s.radius + slack);
+        let (c0, c1) = (to_cell(s.a.min(s.b) - r), to_cell(s.a.max(s.b) + r));
         for z in c0.z..=c1.z {
             for y in c0.y..=c1.y {
                 for x in c0.x..=c1.x {
+                    let centre = origin.as_dvec3() + (UVec3::new(x, y, z).as_dvec3() + 0.5) * step;
+                    if s.distance(centre) > s.radius + slack {
+                        continue;
+                    }
                     let list: &mut Vec<u32> = &mut cells[(x + dims.x * (y + dims.y * z)) as usize];
-                    if list.last() != Some(&i) {
-                        list.push(i);
+                    if list.last() != Some(&s.prim) {
+                        list.push(s.prim);
                         entries += 1;
                     }
                 }

@@ -28,6 +28,7 @@ pub use surgery::{SURGERY_COOLDOWN, Surgery};
 use std::collections::{HashMap, HashSet};
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::StepOutput;
 use crate::gpu::Backend;
@@ -107,6 +108,11 @@ pub struct NetworkOptions {
     pub relax: u32,
     /// Iterations relaxing the start mesh at frame 0.
     pub start_iterations: u32,
+    /// The topology guard: after each frame, compare the network's
+    /// components and genus with marching cubes of the field at spacing R/2
+    /// and test it for self-intersections; on a mismatch rebuild it from the
+    /// field (a reported `reseed` event). On (true).
+    pub guard: bool,
 }
 
 impl NetworkOptions {
@@ -152,8 +158,17 @@ impl Default for NetworkOptions {
             transport: 4,
             relax: 8,
             start_iterations: 40,
+            guard: true,
         }
     }
+}
+
+/// Whether triangle `t` faces against the field's outward normal −∇F at
+/// its centre.
+fn faces_against(positions: &[Vec3], field: &FieldInput, t: &[u32; 3]) -> bool {
+    let [p, q, r] = t.map(|v| positions[v as usize]);
+    let (f, _) = skeletal_field(field, ((p + q + r) / 3.0).to_array());
+    (q - p).cross(r - p).dot(-Vec3::from_array(f.grad)) <= 0.0
 }
 
 fn key(a: u32, b: u32) -> (u32, u32) {
@@ -392,14 +407,17 @@ impl Network {
     /// three passes. Returns the vertices moved.
     fn repair_folds(&mut self, field: &FieldInput) -> u32 {
         let mut moved = 0;
+        // Whether each triangle faces against −∇F at its centre; after the
+        // first pass only triangles with a moved vertex are evaluated again.
+        let mut against: Vec<bool> = (self.triangles.par_iter())
+            .map(|t| faces_against(&self.positions, field, t))
+            .collect();
         for _ in 0..3 {
             let mut bad = vec![false; self.positions.len()];
             let mut angle = vec![0.0f32; self.positions.len()];
-            for t in &self.triangles {
+            for (t, &wrong) in self.triangles.iter().zip(&against) {
                 let [p, q, r] = t.map(|v| self.positions[v as usize]);
-                let n = (q - p).cross(r - p);
-                let (f, _) = skeletal_field(field, ((p + q + r) / 3.0).to_array());
-                if n.dot(-Vec3::from_array(f.grad)) <= 0.0 {
+                if wrong {
                     for &v in t {
                         bad[v as usize] = true;
                     }
@@ -426,9 +444,15 @@ impl Network {
                 break;
             }
             moved += fix.len() as u32;
+            let mut touched = vec![false; self.positions.len()];
             for (v, p) in fix {
                 self.positions[v] = p;
+                touched[v] = true;
             }
+            let positions = &self.positions;
+            (self.triangles.par_iter().zip(&mut against))
+                .filter(|(t, _)| t.iter().any(|&v| touched[v as usize]))
+                .for_each(|(t, wrong)| *wrong = faces_against(positions, field, t));
         }
         moved
     }

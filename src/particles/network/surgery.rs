@@ -5,6 +5,7 @@
 use std::collections::{HashMap, HashSet};
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::{Network, key};
 use crate::implicit::field::FieldInput;
@@ -69,7 +70,7 @@ impl Network {
             return Surgery::default();
         }
         let half = 0.5 * self.rest;
-        let samples: Vec<(f32, Vec3)> = (self.positions.iter())
+        let samples: Vec<(f32, Vec3)> = (self.positions.par_iter())
             .map(|p| {
                 let (f, _) = skeletal_field(field, p.to_array());
                 (f.value, Vec3::from_array(f.grad))

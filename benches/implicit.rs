@@ -17,7 +17,7 @@ use chisel::implicit::scene::EXAMPLES;
 use chisel::implicit::{Scene, grid};
 use chisel::particles::animate::start_network;
 use chisel::particles::network::{NetworkInput, NetworkParams, network_update};
-use chisel::particles::wh::{StepInput, UpdateParams, particle_update, sigma_for_spacing};
+use chisel::particles::wh::{Sampler, StepInput, UpdateParams, particle_update, sigma_for_spacing};
 use chisel::particles::{CellList, NetworkOptions, Particles, WhOptions};
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
 
@@ -39,12 +39,8 @@ fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
     g
 }
 
-fn molecule() -> Scene {
-    Scene::from_toml_str(
-        EXAMPLES.iter().find(|e| e.0 == "molecule").unwrap().1,
-        "molecule",
-    )
-    .unwrap()
+fn example(name: &str) -> Scene {
+    Scene::from_toml_str(EXAMPLES.iter().find(|e| e.0 == name).unwrap().1, name).unwrap()
 }
 
 fn sizes() -> Vec<usize> {
@@ -82,7 +78,7 @@ fn gpu() -> Option<Gpu> {
 }
 
 fn benches(c: &mut Criterion) {
-    let scene = molecule();
+    let scene = example("molecule");
     let pose = scene.pose(0.5);
     let field = FieldInput::new(&pose).unwrap();
     let gpu = gpu();
@@ -172,6 +168,7 @@ fn benches(c: &mut Criterion) {
             }
         }
     }
+    converge(c);
     // Frames of the animated network (moving scene, remeshing, surgery, check).
     let frame_sizes: &[usize] = if quick() {
         &[1_000]
@@ -207,6 +204,38 @@ fn benches(c: &mut Criterion) {
             )
         });
     }
+    g.finish();
+}
+
+/// Witkin–Heckbert relaxation to the stopping rule (residual ≤ 1e-4 of the
+/// diagonal, energy change ≤ 1e-6 per step) of about 5,000 particles on the
+/// dumbbell at t = 0, from its marching-cubes vertices; the iterations are
+/// printed once.
+fn converge(c: &mut Criterion) {
+    let n = if quick() { 500 } else { 5_000 };
+    let scene = example("dumbbell");
+    let pose = scene.pose(0.0);
+    let field = FieldInput::new(&pose).unwrap();
+    let opts = WhOptions::default();
+    let sh = sigma_for_spacing(spacings_for(&scene, 0.0, n).0, &opts);
+    let start = Particles::on_surface(&pose, sh, Backend::Cpu).unwrap();
+    let run = || {
+        let mut s = Sampler::new(start.clone(), sh, opts, &field).unwrap();
+        (
+            s.relax(&field, 3000, Backend::Cpu).unwrap(),
+            s.particles.len(),
+        )
+    };
+    let (r, count) = run();
+    eprintln!(
+        "particles_converge: {} → {count} particles, {} + {} iterations, converged {}",
+        start.len(),
+        r.adapt_iterations,
+        r.settle_iterations,
+        r.converged
+    );
+    let mut g = group(c, "particles_converge");
+    g.bench_function(BenchmarkId::new("cpu", count), |bench| bench.iter(run));
     g.finish();
 }
 

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //!  ⑤ application   cli, render
-//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms implicit particles
+//!  ④ rooms         vertex_normals reduce exclusive_scan mc hull_scan hull polyhedron cut tissue dms implicit particles blobby
 //!  ③ GPU, parity   gpu (context, Backend, kernel specs, pass builder, buffers), parity (Tolerance, comparators)
 //!  ② host data     mesh volume voxel io phantom
 //!  ① foundation    foundation (union-find, boxes and forest, exact geometry, files), error
@@ -26,6 +26,7 @@
 //! Every kernel is reachable through [`Backend::Cpu`] and [`Backend::Gpu`];
 //! `tests/parity/` proves they agree.
 
+pub mod blobby;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod cut;

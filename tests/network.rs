@@ -155,13 +155,7 @@ type Animated = (Vec<(f64, usize, bool)>, Vec<Vec<i64>>);
 
 /// [`animate_checked`] on `backend`, also returning each frame's genus
 /// lists.
-fn animate_on(
-    name: &str,
-    r: f64,
-    frames: u32,
-    guard: bool,
-    backend: Backend<'_>,
-) -> Animated {
+fn animate_on(name: &str, r: f64, frames: u32, guard: bool, backend: Backend<'_>) -> Animated {
     let s = scene(name);
     let times = animate::frame_times(&s, frames);
     let opts = NetworkOptions {

@@ -264,6 +264,26 @@ fn params_sample(kernel: Kernel) -> Sample {
             vec![("n_points", 0xC1)],
         ),
         Kernel::ParticleUpdate => particle_params_sample(),
+        Kernel::BlobbyEnergy => {
+            let f = |v: u32| f32::from_bits(v);
+            let p = chisel::blobby::energy::EnergyParams {
+                n_points: 0xF1,
+                n_prims: 0xF2,
+                iso: f(0x3F20_0001),
+                inv_m: f(0x3F20_0002),
+                alpha: f(0x3F20_0003),
+                g_min2: f(0x3F20_0004),
+            };
+            let fields = vec![
+                ("n_points", 0xF1),
+                ("n_prims", 0xF2),
+                ("iso", 0x3F20_0001),
+                ("inv_m", 0x3F20_0002),
+                ("alpha", 0x3F20_0003),
+                ("g_min2", 0x3F20_0004),
+            ];
+            (encase_bytes(&p), fields)
+        }
         Kernel::NetworkUpdate => {
             let f = |v: u32| f32::from_bits(v);
             let p = chisel::particles::network::NetworkParams {
@@ -390,6 +410,12 @@ fn mirrors_use_their_kernels_constants() {
     for k in [Kernel::McClassify, Kernel::McVertices, Kernel::McTriangles] {
         assert_eq!(spec(k).wg_size, mc::mirror::WG_SIZE);
     }
+    let blobby = spec(Kernel::BlobbyEnergy);
+    assert_eq!(blobby.wg_size as usize, chisel::blobby::energy::WG_SIZE);
+    assert_eq!(
+        blobby.const_u32("POINTS_PER_INVOCATION").unwrap() as usize,
+        chisel::blobby::energy::POINTS_PER_INVOCATION
+    );
 }
 
 /// `Params` layout of every kernel: naga's offsets against the bytes encase

@@ -98,6 +98,8 @@ registry! {
     ParticleUpdate => "particle_update",
     /// Particle spring network: eq. 13 springs over CSR rows, projected by eq. 8, Euler step.
     NetworkUpdate => "network_update",
+    /// Blobby fit: energy and gradient over range points × primitives, per workgroup.
+    BlobbyEnergy => "blobby_energy",
 }
 
 registry! {

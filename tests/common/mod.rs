@@ -228,3 +228,17 @@ pub fn random_carvings() -> Vec<chisel::voxel::DigitalObject> {
         })
         .collect()
 }
+
+/// `m` points of the unit sphere on a Fibonacci lattice (each its own
+/// outward normal).
+pub fn fibonacci_sphere(m: usize) -> Vec<glam::DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..m)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / m as f64;
+            let r = (1.0 - z * z).sqrt();
+            let t = golden * i as f64;
+            glam::DVec3::new(r * t.cos(), r * t.sin(), z)
+        })
+        .collect()
+}

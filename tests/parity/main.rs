@@ -10,6 +10,7 @@ mod common;
 mod mc_kernels;
 mod mc_surface;
 
+mod blobby_energy;
 mod bounds_reduce;
 mod dms_basis;
 mod dms_surface;

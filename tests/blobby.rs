@@ -2,11 +2,16 @@
 //! kernel's CPU mirror: its analytic gradient against central differences
 //! of an f64 oracle (synthetic and the fran_cut scan), a split that leaves
 //! every term unchanged, and β·E_shrink rejecting the degenerate minimiser
-//! (a → 0, b → T, the primitive at infinity).
+//! (a → 0, b → T, the primitive at infinity). The fit: a two-blob surface
+//! recovered, E never rising from one stage to the next, the fran_cut
+//! scan fitted, and the model file read back by the implicit room.
 
 use chisel::Backend;
 use chisel::blobby::energy::{EnergyInput, energy};
+use chisel::blobby::fit::{FitOptions, fit, split_apart};
 use chisel::blobby::{Blob, Model, RangePoints, Weights};
+use chisel::implicit::field::{FieldInput, implicit_field};
+use chisel::implicit::{Scene, grid};
 use glam::DVec3;
 
 mod common;
@@ -268,4 +273,152 @@ fn bad_models_and_points_are_errors() {
     assert!(RangePoints::new(vec![DVec3::ZERO], vec![DVec3::ZERO]).is_err());
     assert!(RangePoints::new(vec![DVec3::ZERO; 2], vec![DVec3::Z]).is_err());
     assert!(RangePoints::new(Vec::new(), Vec::new()).is_err());
+}
+
+/// The fitter's split: the unmoved children leave E unchanged; the moved
+/// ones sit on the principal axis of the parent's points, symmetric about
+/// its centre.
+#[test]
+fn the_fitters_split_leaves_the_energy_unchanged() {
+    let points = sphere_points(1000);
+    let m = model();
+    let before = energy(&m, &points, WEIGHTS, Backend::Cpu).unwrap().total;
+    for k in 0..m.blobs.len() {
+        let (neutral, apart) = split_apart(&m, k, &points);
+        let after = energy(&neutral, &points, WEIGHTS, Backend::Cpu)
+            .unwrap()
+            .total;
+        assert!(
+            (after - before).abs() <= 1e-6 * before,
+            "split {k}: {before} → {after}"
+        );
+        let (c0, c1) = (apart.blobs[k].centre, apart.blobs[k + 1].centre);
+        assert!(((c0 + c1) / 2.0 - m.blobs[k].centre).length() < 1e-12);
+        assert!((c1 - c0).length() > 0.0);
+    }
+}
+
+/// Range points on the surface of `model`: marching-cubes vertices with
+/// the field's outward normals −∇V/|∇V|.
+fn surface_points(model: &Model, h: f64) -> RangePoints {
+    let scene = Scene::from_toml_str(&model.to_scene_toml("test"), "model").unwrap();
+    let s = grid::marching_cubes(&scene.pose(0.0), h, Backend::Cpu).unwrap();
+    let p: Vec<DVec3> = s.mesh.positions.iter().map(|v| v.as_dvec3()).collect();
+    let n: Vec<DVec3> = p.iter().map(|x| -model.gradient(*x).normalize()).collect();
+    RangePoints::new(p, n).unwrap()
+}
+
+/// RMS and max of |V − T|/|∇V| (first-order distance to the surface) over
+/// the points, relative to their bounding-box diagonal.
+fn distances(model: &Model, points: &RangePoints) -> (f64, f64) {
+    let (lo, hi) = (points.positions.iter())
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(*p), hi.max(*p))
+        });
+    let diag = (hi - lo).length();
+    let d: Vec<f64> = (points.positions.iter())
+        .map(|x| (model.value(*x) - model.iso).abs() / model.gradient(*x).length() / diag)
+        .collect();
+    let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+    (rms, d.iter().copied().fold(0.0, f64::max))
+}
+
+#[test]
+fn fit_recovers_a_two_blob_surface() {
+    let truth = Model {
+        iso: 0.5,
+        blobs: vec![
+            Blob {
+                centre: DVec3::new(-0.6, 0.0, 0.0),
+                a: 2.0,
+                b: 1.0,
+            },
+            Blob {
+                centre: DVec3::new(0.7, 0.2, 0.0),
+                a: 3.0,
+                b: 0.9,
+            },
+        ],
+    };
+    let points = surface_points(&truth, 0.08);
+    let opts = FitOptions {
+        primitives: 2,
+        ..FitOptions::default()
+    };
+    let result = fit(&points, &opts, Backend::Cpu, |_| {}).unwrap();
+    let stages = &result.stages;
+    assert_eq!(stages.len(), 2);
+    assert!(
+        stages[1].terms.total <= stages[0].terms.total,
+        "E rose: {stages:?}"
+    );
+    let (rms, max) = distances(&result.model, &points);
+    assert!(
+        rms < 2e-3 && max < 1e-2,
+        "rms {rms}, max {max} of the diagonal"
+    );
+}
+
+#[test]
+fn fit_follows_the_fran_scan_and_never_raises_the_energy() {
+    let Some(mesh) = common::real_mesh("fran_cut.vtk") else {
+        return;
+    };
+    let mut points = RangePoints::from_mesh(&mesh).unwrap();
+    // fran_cut is wound into the head (data README): turned outward.
+    assert!(points.orient_outward());
+    assert!(!points.orient_outward(), "a second call leaves them");
+    let opts = FitOptions {
+        primitives: 8,
+        ..FitOptions::default()
+    };
+    let result = fit(&points, &opts, Backend::Cpu, |_| {}).unwrap();
+    assert_eq!(result.model.blobs.len(), 8);
+    for w in result.stages.windows(2) {
+        assert!(
+            w[1].terms.total <= w[0].terms.total,
+            "E rose from {} to {} primitives: {} → {}",
+            w[0].primitives,
+            w[1].primitives,
+            w[0].terms.total,
+            w[1].terms.total
+        );
+    }
+    let (rms, max) = distances(&result.model, &points);
+    eprintln!(
+        "fran_cut, 8 primitives: {:?}; rms {rms}, max {max}",
+        result.stages.last()
+    );
+    assert!(rms < 0.05, "rms {rms} of the diagonal");
+}
+
+/// The model file is a scene of the implicit room: its field at random
+/// points equals V − T.
+#[test]
+fn the_model_file_is_a_scene_with_the_same_field() {
+    let m = model();
+    let text = m.to_scene_toml("fitted by a test\nsecond line");
+    assert!(
+        text.starts_with("# fitted by a test\n# second line\n"),
+        "{text}"
+    );
+    let scene = Scene::from_toml_str(&text, "model.toml").unwrap();
+    let input = FieldInput::new(&scene.pose(0.0)).unwrap();
+    let mut rng = common::xorshift(9);
+    let mut u = move || (rng() >> 11) as f64 / (1u64 << 53) as f64 * 3.0 - 1.5;
+    let xs: Vec<DVec3> = (0..500).map(|_| DVec3::new(u(), u(), u())).collect();
+    let pts: Vec<[f32; 4]> = xs
+        .iter()
+        .map(|x| [x.x as f32, x.y as f32, x.z as f32, 0.0])
+        .collect();
+    let samples = implicit_field(&input, &pts, Backend::Cpu).unwrap();
+    for ((x, p), s) in xs.iter().zip(&pts).zip(&samples) {
+        let xf = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+        let want = m.value(xf) - m.iso;
+        assert!(
+            (f64::from(s.value) - want).abs() <= 1e-5,
+            "{x}: {} vs {want}",
+            s.value
+        );
+    }
 }

@@ -25,6 +25,7 @@
 //! eq. 21's a^{−3/2}|b| measures. Design notes: `docs/design/blobby.md`.
 
 pub mod energy;
+pub mod fit;
 
 use glam::DVec3;
 
@@ -84,6 +85,28 @@ impl Model {
         };
         out.blobs[k] = half;
         out.blobs.insert(k + 1, half);
+        out
+    }
+}
+
+impl Model {
+    /// The model as a scene file of the implicit room (`chisel implicit`
+    /// reads it): the iso value, the sum blend and one point primitive with
+    /// a blobby influence per blob; numbers in Rust's shortest round-trip
+    /// form, so reading it back gives the same f64 values.
+    pub fn to_scene_toml(&self, comment: &str) -> String {
+        let mut out = String::new();
+        for line in comment.lines() {
+            out.push_str(&format!("# {line}\n"));
+        }
+        out.push_str(&format!("iso = {:?}\nblend = \"sum\"\n", self.iso));
+        for b in &self.blobs {
+            let c = b.centre;
+            out.push_str(&format!(
+                "[[primitive]]\nskeleton = {{ point = [{:?}, {:?}, {:?}] }}\ninfluence = {{ blobby = {{ a = {:?}, b = {:?} }} }}\n",
+                c.x, c.y, c.z, b.a, b.b
+            ));
+        }
         out
     }
 }
@@ -154,6 +177,24 @@ impl RangePoints {
             })
             .unzip();
         RangePoints::new(positions, normals)
+    }
+
+    /// Turns every normal around when most of them point towards the
+    /// points' centroid: a scan of one side of an object (a face) or a
+    /// closed surface then has outward normals whatever its winding.
+    /// Returns whether the normals were turned.
+    pub fn orient_outward(&mut self) -> bool {
+        let centre = self.positions.iter().sum::<DVec3>() / self.len() as f64;
+        let inward = (self.positions.iter().zip(&self.normals))
+            .filter(|(x, n)| (**x - centre).dot(**n) < 0.0)
+            .count();
+        let turn = 2 * inward > self.len();
+        if turn {
+            for n in &mut self.normals {
+                *n = -*n;
+            }
+        }
+        turn
     }
 
     /// Number of points M.

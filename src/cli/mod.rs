@@ -7,6 +7,7 @@
 //! writes it atomically.
 
 mod bench;
+mod blobby;
 mod convert;
 mod cut;
 mod demo;
@@ -224,6 +225,8 @@ enum Command {
     Spline(spline::Args),
     /// Skeletal implicit scene sampled over its time span by Witkin–Heckbert particles.
     Implicit(implicit::Args),
+    /// Blobby models: `blobby fit` fits one to a range scan (a scene `implicit` reads).
+    Blobby(blobby::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
     /// Lossless polyhedron of a voxel object: nested convex shells, .cells, --verify.
@@ -334,6 +337,7 @@ pub fn main() -> ExitCode {
         Command::Relax(a) => relax::run(&cli.global, a),
         Command::Spline(a) => spline::run(&cli.global, a),
         Command::Implicit(a) => implicit::run(&cli.global, a),
+        Command::Blobby(a) => blobby::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
         Command::Polyhedrize(a) => polyhedrize::run(&cli.global, a),
         Command::Scan(a) => scan::run(&cli.global, a),

@@ -9,6 +9,7 @@ mod common;
 mod support;
 
 mod bench;
+mod blobby;
 mod convert;
 mod cross_command;
 mod cut;

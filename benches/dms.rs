@@ -16,8 +16,6 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use std::time::Duration;
-
 use chisel::TriMesh;
 use chisel::dms::basis::{BasisInput, BasisRows, cpu as basis_cpu, gpu as basis_gpu};
 use chisel::dms::fit::ControlMap;
@@ -26,27 +24,13 @@ use chisel::dms::surface::{SurfaceInput, cpu as surface_cpu, gpu as surface_gpu}
 use chisel::dms::{
     Domain, Fit, Projection, SplineOptions, knot_clouds, lattice, parametrise, spline,
 };
-use chisel::gpu::{Backend, Gpu, GpuArray};
-use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
+use chisel::gpu::{Backend, GpuArray};
+use criterion::{BenchmarkId, Criterion, Throughput};
 use glam::{DVec2, Vec3};
 
 #[path = "common/mod.rs"]
 mod bench_common;
-use bench_common::quick;
-
-fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
-    let mut g = c.benchmark_group(name);
-    if quick() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(20))
-            .measurement_time(Duration::from_millis(60));
-    } else {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(300))
-            .measurement_time(Duration::from_secs(2));
-    }
-    g
-}
+use bench_common::{group, quick};
 
 /// A `cols × rows` grid disk on a half cylinder of radius 1 (a face-like
 /// open surface), vertices jittered inside.
@@ -100,16 +84,7 @@ fn prepare(mesh: &TriMesh, n: u32) -> (Domain, BasisInput) {
 }
 
 fn main() {
-    let gpu = match Gpu::new() {
-        Ok(g) => {
-            eprintln!("adapter: {}", g.describe());
-            Some(g)
-        }
-        Err(e) => {
-            eprintln!("no adapter, GPU benches skipped: {e}");
-            None
-        }
-    };
+    let gpu = bench_common::gpu();
     let mut c = Criterion::default().configure_from_args();
     for (name, mesh, ns) in cases() {
         for n in ns {

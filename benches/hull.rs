@@ -30,15 +30,11 @@ mod bench_common;
 use bench_common::quick;
 
 fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
-    let mut g = c.benchmark_group(name);
+    let mut g = bench_common::group(c, name);
     if quick() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(20))
-            .measurement_time(Duration::from_millis(100));
+        g.measurement_time(Duration::from_millis(100));
     } else {
-        g.sample_size(20)
-            .warm_up_time(Duration::from_millis(300))
-            .measurement_time(Duration::from_secs(2));
+        g.sample_size(20);
     }
     g
 }

@@ -9,9 +9,7 @@
 //! figures include the upload and the read-back (`gpu_end_to_end`).
 //! `CHISEL_BENCH_QUICK=1` (and `cargo test`): 10³ samples, frames at 10³.
 
-use std::time::Duration;
-
-use chisel::gpu::{Backend, Gpu};
+use chisel::gpu::Backend;
 use chisel::implicit::field::{FieldInput, implicit_field};
 use chisel::implicit::scene::EXAMPLES;
 use chisel::implicit::{Scene, grid};
@@ -19,25 +17,11 @@ use chisel::particles::animate::start_network;
 use chisel::particles::network::{NetworkInput, NetworkParams, network_update};
 use chisel::particles::wh::{Sampler, StepInput, UpdateParams, particle_update, sigma_for_spacing};
 use chisel::particles::{CellList, NetworkOptions, Particles, WhOptions};
-use criterion::{BenchmarkGroup, BenchmarkId, Criterion, Throughput, measurement::WallTime};
+use criterion::{BenchmarkId, Criterion, Throughput};
 
 #[path = "common/mod.rs"]
 mod bench_common;
-use bench_common::quick;
-
-fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
-    let mut g = c.benchmark_group(name);
-    if quick() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(20))
-            .measurement_time(Duration::from_millis(60));
-    } else {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(300))
-            .measurement_time(Duration::from_secs(2));
-    }
-    g
-}
+use bench_common::{group, quick};
 
 fn example(name: &str) -> Scene {
     Scene::from_toml_str(EXAMPLES.iter().find(|e| e.0 == name).unwrap().1, name).unwrap()
@@ -64,24 +48,11 @@ fn spacings_for(scene: &Scene, t: f64, n: usize) -> (f64, f64) {
     )
 }
 
-fn gpu() -> Option<Gpu> {
-    match Gpu::new() {
-        Ok(g) => {
-            eprintln!("adapter: {}", g.describe());
-            Some(g)
-        }
-        Err(e) => {
-            eprintln!("no adapter, GPU benches skipped: {e}");
-            None
-        }
-    }
-}
-
 fn benches(c: &mut Criterion) {
     let scene = example("molecule");
     let pose = scene.pose(0.5);
     let field = FieldInput::new(&pose).unwrap();
-    let gpu = gpu();
+    let gpu = bench_common::gpu();
     let mut backends: Vec<(&'static str, Backend<'_>)> = vec![("cpu", Backend::Cpu)];
     if let Some(g) = &gpu {
         // Upload, dispatch and read-back each time.

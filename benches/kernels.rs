@@ -33,12 +33,8 @@ fn sizes() -> Vec<usize> {
 }
 
 fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
-    let mut g = c.benchmark_group(name);
-    if quick() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(20))
-            .measurement_time(Duration::from_millis(60));
-    } else {
+    let mut g = bench_common::group(c, name);
+    if !quick() {
         g.sample_size(20)
             .warm_up_time(Duration::from_millis(500))
             .measurement_time(Duration::from_secs(3));
@@ -192,16 +188,7 @@ fn bench_exclusive_scan(c: &mut Criterion, gpu: Option<&Gpu>) {
 }
 
 fn main() {
-    let gpu = match Gpu::new() {
-        Ok(g) => {
-            eprintln!("adapter: {}", g.describe());
-            Some(g)
-        }
-        Err(e) => {
-            eprintln!("no adapter, GPU benches skipped: {e}");
-            None
-        }
-    };
+    let gpu = bench_common::gpu();
     let mut c = Criterion::default().configure_from_args();
     bench_vertex_normals(&mut c, gpu.as_ref());
     bench_bounds_reduce(&mut c, gpu.as_ref());

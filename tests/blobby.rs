@@ -422,3 +422,57 @@ fn the_model_file_is_a_scene_with_the_same_field() {
         );
     }
 }
+
+/// The CPU fast path (`energy::fast`, what `Backend::Cpu` runs) gives the
+/// mirror's rows within the parity bound: primitive counts on and off the
+/// vector width, a partial last workgroup, the fran_cut scan; and fails it
+/// with one primitive dropped (negative control).
+#[test]
+fn fast_path_equals_the_mirror() {
+    use chisel::blobby::energy::{cpu, fast};
+    let mut cases = vec![(sphere_points(2500), model())];
+    let mut big = model();
+    for i in 0..37 {
+        let t = i as f64 * 0.37;
+        big.blobs.push(Blob {
+            centre: DVec3::new(t.cos(), t.sin(), (0.3 * t).cos()) * 0.8,
+            a: 2.0 + (i % 5) as f64,
+            b: if i % 7 == 0 { -0.2 } else { 0.4 },
+        });
+    }
+    cases.push((sphere_points(1500), big));
+    if let Some(mesh) = common::real_mesh("fran_cut.vtk") {
+        let mut points = RangePoints::from_mesh(&mesh).unwrap();
+        points.orient_outward();
+        let c = points.positions.iter().sum::<DVec3>() / points.len() as f64;
+        let m = Model {
+            iso: 0.5,
+            blobs: (0..20)
+                .map(|i| Blob {
+                    centre: c + 0.02
+                        * DVec3::new((i as f64).cos(), (i as f64).sin(), 0.1 * i as f64 - 1.0),
+                    a: 400.0 + 30.0 * i as f64,
+                    b: 0.3,
+                })
+                .collect(),
+        };
+        cases.push((points, m));
+    }
+    for (k, (points, m)) in cases.iter().enumerate() {
+        let input = EnergyInput::new(m, points, WEIGHTS).unwrap();
+        let tol = cpu::tolerances(&input);
+        let want = cpu::blobby_energy(&input);
+        let got = fast::blobby_energy(&input);
+        assert!(
+            cpu::accepts(&tol, &want, &got),
+            "case {k}: fast path differs"
+        );
+        let mut fewer = m.clone();
+        fewer.blobs[0].b = 0.0;
+        let other = fast::blobby_energy(&EnergyInput::new(&fewer, points, WEIGHTS).unwrap());
+        assert!(
+            !cpu::accepts(&tol, &want, &other),
+            "case {k}: a dropped primitive passed"
+        );
+    }
+}

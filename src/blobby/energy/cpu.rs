@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::{BLOCK, EnergyInput, POINTS_PER_INVOCATION, WG_SIZE};
+use super::{BLOCK, EnergyInput, EnergyParams, POINTS_PER_INVOCATION, WG_SIZE};
 
 type V3 = [f32; 3];
 
@@ -32,11 +32,11 @@ fn tree_sum<const Q: usize>(sh: &mut [[f32; Q]]) -> [f32; Q] {
 }
 
 /// One point's position, λ_V and λ_G (zeros past the end) and its e_j/M.
-struct PointState {
-    x: V3,
-    lv: f32,
-    lg: V3,
-    energy: f32,
+pub(super) struct PointState {
+    pub(super) x: V3,
+    pub(super) lv: f32,
+    pub(super) lg: V3,
+    pub(super) energy: f32,
 }
 
 fn point_state(input: &EnergyInput, ix: usize) -> PointState {
@@ -63,6 +63,12 @@ fn point_state(input: &EnergyInput, ix: usize) -> PointState {
         let f = -2.0 * ca[3] * e;
         g = [g[0] + f * d[0], g[1] + f * d[1], g[2] + f * d[2]];
     }
+    point_terms(u, x, n, v, g)
+}
+
+/// A point's e_j/M and adjoints from V and ∇V at it (the kernel's lines
+/// after its loop over primitives; the fast path shares them).
+pub(super) fn point_terms(u: &EnergyParams, x: [f32; 4], n: V3, v: f32, g: V3) -> PointState {
     let g2 = dot(g, g);
     let (en, dn) = if g2 > u.g_min2 {
         let len = g2.sqrt();

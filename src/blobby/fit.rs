@@ -137,12 +137,7 @@ pub fn worst_primitive(model: &Model, points: &RangePoints, weights: Weights) ->
 /// The start: one primitive at the points' centroid with V = 2T there and
 /// V = T at their RMS distance from it.
 pub fn start(points: &RangePoints, iso: f64) -> Model {
-    let m = points.len() as f64;
-    let centre = points.positions.iter().sum::<DVec3>() / m;
-    let r2 = (points.positions.iter())
-        .map(|p| (*p - centre).length_squared())
-        .sum::<f64>()
-        / m;
+    let (centre, r2) = points.centroid_spread();
     Model {
         iso,
         blobs: vec![Blob {
@@ -441,12 +436,7 @@ struct Frame {
 impl Frame {
     /// The frame of `points` and the points in it.
     fn of(points: &RangePoints) -> (Frame, RangePoints) {
-        let m = points.len() as f64;
-        let centre = points.positions.iter().sum::<DVec3>() / m;
-        let r2 = (points.positions.iter())
-            .map(|p| (*p - centre).length_squared())
-            .sum::<f64>()
-            / m;
+        let (centre, r2) = points.centroid_spread();
         let scale = if r2 > 0.0 { r2.sqrt() } else { 1.0 };
         let local = RangePoints {
             positions: (points.positions.iter())

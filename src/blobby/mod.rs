@@ -184,7 +184,7 @@ impl RangePoints {
     /// closed surface then has outward normals whatever its winding.
     /// Returns whether the normals were turned.
     pub fn orient_outward(&mut self) -> bool {
-        let centre = self.positions.iter().sum::<DVec3>() / self.len() as f64;
+        let (centre, _) = self.centroid_spread();
         let inward = (self.positions.iter().zip(&self.normals))
             .filter(|(x, n)| (**x - centre).dot(**n) < 0.0)
             .count();
@@ -195,6 +195,26 @@ impl RangePoints {
             }
         }
         turn
+    }
+
+    /// The points' centroid and their mean squared distance from it.
+    pub fn centroid_spread(&self) -> (DVec3, f64) {
+        let m = self.len() as f64;
+        let centre = self.positions.iter().sum::<DVec3>() / m;
+        let r2 = (self.positions.iter())
+            .map(|p| (*p - centre).length_squared())
+            .sum::<f64>()
+            / m;
+        (centre, r2)
+    }
+
+    /// The diagonal of the points' bounding box.
+    pub fn diagonal(&self) -> f64 {
+        let (lo, hi) = (self.positions.iter())
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        (hi - lo).length()
     }
 
     /// Number of points M.

@@ -185,11 +185,7 @@ fn run_fit(global: &Global, args: &FitArgs) -> anyhow::Result<()> {
     let t2 = Instant::now();
     let scene = Scene::from_toml_str(&text, &args.output.display().to_string())?;
     let pose = scene.pose(0.0);
-    let (lo, hi) = (points.positions.iter()).fold(
-        (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let diagonal = (hi - lo).length();
+    let diagonal = points.diagonal();
     let spacing = diagonal / 100.0;
     let mut surface = grid::marching_cubes(&pose, spacing, backend)?.mesh;
     let to_surface = DistanceGrid::new(&surface);

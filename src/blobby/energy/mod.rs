@@ -76,11 +76,7 @@ impl EnergyInput {
                 "finite, with a > 0",
             ));
         }
-        let (lo, hi) = (points.positions.iter())
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(*p), hi.max(*p))
-            });
-        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let diagonal = points.diagonal().max(f64::MIN_POSITIVE);
         let g_min = G_MIN * model.iso.abs() / diagonal;
         let row = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         Ok(EnergyInput {

@@ -253,12 +253,63 @@ pub enum Refusal {
         iterations: u32,
         residual: f64,
     },
+    /// Rays from the fusion centre that do not cross a mesh exactly once:
+    /// the mesh is not star-shaped about the centre (or the centre is
+    /// outside it, or the mesh is open there).
+    #[error(
+        "mesh {mesh} is not star-shaped about H = ({:.6}, {:.6}, {:.6}): {failing} of {rays} rays \
+         from H cross its surface other than once ({}); choose another --center, or fuse \
+         closed meshes that are star-shaped about a common point",
+        center[0], center[1], center[2],
+        rays_text(examples)
+    )]
+    NotStarShaped {
+        mesh: &'static str,
+        center: [f64; 3],
+        failing: usize,
+        rays: usize,
+        /// The first failing rays: unit direction and hit count.
+        examples: Vec<([f32; 3], u32)>,
+    },
+    /// Subtraction where B reaches out of A along some rays (ρ_B ≥ ρ_A).
+    #[error(
+        "subtraction needs B inside A along every ray from H (ρ_B < ρ_A): in {failing} of {rays} \
+         directions B reaches A's surface or beyond (first: {})",
+        directions_text(examples)
+    )]
+    SubtractionReachesOut {
+        failing: usize,
+        rays: usize,
+        /// The first failing rays' unit directions.
+        examples: Vec<[f32; 3]>,
+    },
+    /// No point was found in A ∩ B from which both meshes are star-shaped.
+    #[error("no fusion centre found: {0}; give one with --center")]
+    NoStarCenter(String),
     /// A spring network with no springs on free nodes and no damping: no
     /// time step is stable.
     #[error(
         "the network has neither springs on free nodes nor damping: no stable Δt exists; give --dt"
     )]
     NoStableStep,
+}
+
+/// "first: direction (x, y, z) with k hits, …" for a refusal's examples.
+fn rays_text(examples: &[([f32; 3], u32)]) -> String {
+    let list: Vec<String> = examples
+        .iter()
+        .map(|(d, n)| format!("({:.4}, {:.4}, {:.4}) with {n} hit(s)", d[0], d[1], d[2]))
+        .collect();
+    format!("first: {}", list.join(", "))
+}
+
+/// "(x, y, z), …" for a refusal's example directions.
+fn directions_text(examples: &[[f32; 3]]) -> String {
+    let list: Vec<String> = examples
+        .iter()
+        .map(|d| format!("({:.4}, {:.4}, {:.4})", d[0], d[1], d[2]))
+        .collect();
+    list.join(", ")
 }
 
 /// Library result type.

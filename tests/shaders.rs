@@ -306,6 +306,24 @@ fn params_sample(kernel: Kernel) -> Sample {
             ];
             (encase_bytes(&p), fields)
         }
+        Kernel::RayCast => {
+            let f = |v: u32| f32::from_bits(v);
+            let p = chisel::ray_cast::gpu::Params {
+                n_rays: 0xD1,
+                n_nodes: 0xD2,
+                origin_x: f(0x3F30_0001),
+                origin_y: f(0x3F30_0002),
+                origin_z: f(0x3F30_0003),
+            };
+            let fields = vec![
+                ("n_rays", 0xD1),
+                ("n_nodes", 0xD2),
+                ("origin_x", 0x3F30_0001),
+                ("origin_y", 0x3F30_0002),
+                ("origin_z", 0x3F30_0003),
+            ];
+            (encase_bytes(&p), fields)
+        }
         #[expect(unreachable_patterns, reason = "fails loudly when a kernel is added")]
         other => panic!(
             "{}: add its `Params` sample to tests/shaders.rs::params_sample",

@@ -100,6 +100,8 @@ registry! {
     NetworkUpdate => "network_update",
     /// Blobby fit: energy and gradient over range points × primitives, per workgroup.
     BlobbyEnergy => "blobby_energy",
+    /// Rays from one origin through a linear BVH: nearest and farthest hit and the hit count.
+    RayCast => "ray_cast",
 }
 
 registry! {

@@ -9,6 +9,7 @@ pub mod collapse;
 pub mod csr;
 pub mod distance;
 pub mod icosphere;
+pub mod inside;
 pub mod intersect;
 pub mod orient;
 pub mod topology;
@@ -16,6 +17,7 @@ pub mod topology;
 pub use collapse::{Collapsed, collapse_short_edges};
 pub use csr::Csr;
 pub use icosphere::{icosphere_sag, unit_icosphere};
+pub use inside::{Side, point_side};
 pub use intersect::{SelfIntersections, intersections_of_first, self_intersections};
 pub use orient::{orient_consistently, orient_outward};
 pub use topology::{Component, Orientation, Topology};
@@ -118,6 +120,23 @@ impl TriMesh {
             positions: &self.positions,
             triangles: &self.triangles,
         }
+    }
+
+    /// Signed enclosed volume in f64: Σ (a − r)·((b − r) × (c − r))/6 over
+    /// the triangles, about the bounding box's centre `r` (which keeps the
+    /// terms small); positive for a closed surface wound outward.
+    pub fn signed_volume(&self) -> f64 {
+        let Some((lo, hi)) = self.bounds() else {
+            return 0.0;
+        };
+        let r = ((lo + hi) * 0.5).as_dvec3();
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize].as_dvec3() - r);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
     }
 
     /// Reverses the winding of every triangle (flips all normals).

@@ -23,6 +23,7 @@ mod mc_vertices;
 mod network_update;
 mod particle_update;
 mod range_reduce;
+mod ray_cast;
 mod spring_chebyshev;
 mod spring_step;
 mod tissue_reduce_max;

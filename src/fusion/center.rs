@@ -1,0 +1,118 @@
+//! Finding a fusion centre H: a point of A ∩ B from which both meshes are
+//! star-shaped.
+//!
+//! A closed mesh is star-shaped about x (every ray from x crosses it once)
+//! exactly when x lies in its *kernel*: behind the plane of every face. So
+//! a common centre is a point behind every face plane of A and of B, and
+//! the deepest one solves a linear programme in (x, s):
+//!
+//! maximise s subject to n̂_f · x + s ≤ n̂_f · a_f for every face f,
+//!
+//! n̂_f the unit outward normal and a_f a corner (Chebyshev centre of the
+//! two kernels' intersection; crate `microlp`). s > 0 gives H with
+//! clearance s from every face plane; s ≤ 0 proves that no centre exists
+//! (the kernels do not meet, or only in a flat piece), and the refusal says
+//! by how much. The fusion then checks every ray it casts from H.
+
+use glam::DVec3;
+use microlp::{ComparisonOp, OptimizationDirection, Problem};
+
+use crate::mesh::TriMesh;
+use crate::{Error, Refusal, Result};
+
+/// What the search found.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Found {
+    pub center: [f64; 3],
+    /// Least distance from H to a face plane of A or B.
+    pub clearance: f64,
+    /// Face planes in the programme.
+    pub planes: usize,
+}
+
+/// Volume centroid of a closed mesh (signed tetrahedra about its box centre).
+pub fn volume_centroid(mesh: &TriMesh) -> Option<DVec3> {
+    let (lo, hi) = mesh.bounds()?;
+    let r = ((lo + hi) * 0.5).as_dvec3();
+    let (mut v, mut m) = (0.0, DVec3::ZERO);
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3() - r);
+        let w = a.dot(b.cross(c)) / 6.0;
+        v += w;
+        m += w * (a + b + c) / 4.0;
+    }
+    (v.abs() > 0.0).then(|| r + m / v)
+}
+
+/// The deepest common point of A's and B's kernels (see the module docs).
+///
+/// Errors: a refusal when the meshes' boxes do not overlap or the kernels
+/// do not meet; the solver's failure as an internal error.
+pub fn find_center(a: &TriMesh, b: &TriMesh) -> Result<Found> {
+    let (Some((alo, ahi)), Some((blo, bhi))) = (a.bounds(), b.bounds()) else {
+        return Err(Refusal::NoStarCenter("a mesh is empty".into()).into());
+    };
+    let (lo, hi) = (alo.max(blo).as_dvec3(), ahi.min(bhi).as_dvec3());
+    if lo.cmpgt(hi).any() {
+        return Err(Refusal::NoStarCenter(
+            "the bounding boxes of A and B do not overlap, so A ∩ B is empty".into(),
+        )
+        .into());
+    }
+    // Coordinates about the overlap's centre in units of its diagonal.
+    let origin = (lo + hi) * 0.5;
+    let scale = (hi - lo).length().max(f64::MIN_POSITIVE);
+    let mut lp = Problem::new(OptimizationDirection::Maximize);
+    let half = (hi - lo) * 0.5 / scale;
+    let x = [0, 1, 2].map(|k| lp.add_var(0.0, (-half[k], half[k])));
+    let s = lp.add_var(1.0, (-1.0, 1.0));
+    let mut planes = 0;
+    for mesh in [a, b] {
+        let outward = if mesh.signed_volume() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        for t in &mesh.triangles {
+            let [p, q, r] = t.map(|i| (mesh.positions[i as usize].as_dvec3() - origin) / scale);
+            let n = (q - p).cross(r - p) * outward;
+            let len = n.length();
+            if len.is_nan() || len <= 0.0 {
+                continue;
+            }
+            let n = n / len;
+            lp.add_constraint(
+                [(x[0], n.x), (x[1], n.y), (x[2], n.z), (s, 1.0)],
+                ComparisonOp::Le,
+                n.dot(p),
+            );
+            planes += 1;
+        }
+    }
+    let solved = lp.solve().map_err(|e| {
+        Error::Internal(format!("fusion centre: the linear programme failed: {e:?}"))
+    })?;
+    let solution = solved.solution().ok_or_else(|| {
+        Error::Internal("fusion centre: the linear programme was interrupted".into())
+    })?;
+    let depth = solution.var_value(s) * scale;
+    let h = origin
+        + DVec3::new(
+            solution.var_value(x[0]),
+            solution.var_value(x[1]),
+            solution.var_value(x[2]),
+        ) * scale;
+    if depth.is_nan() || depth <= 0.0 {
+        return Err(Refusal::NoStarCenter(format!(
+            "the kernels of A and B (the points from which each is star-shaped) do not meet: \
+             the best point, ({:.6}, {:.6}, {:.6}), lies {:.3e} units in front of a face plane",
+            h.x, h.y, h.z, -depth
+        ))
+        .into());
+    }
+    Ok(Found {
+        center: h.to_array(),
+        clearance: depth,
+        planes,
+    })
+}

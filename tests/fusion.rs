@@ -1,0 +1,388 @@
+//! Fusion, subtraction and morphing (SPEC §3.4, seed 001 §2) and their
+//! guarantees: vol(C) → vol(A) + vol(B) with order ≥ 1.8, A ∪ B ⊆ C by an
+//! exact point-in-mesh test, C closed, outward and free of
+//! self-intersections, concentric spheres fusing to ∛(r_A³ + r_B³), the
+//! morph's volume linear in t with C(0) on A and C(1) on B, and refusals
+//! that name the failing rays. Real data: star-shaped foot bones.
+
+use chisel::fusion::{FuseOptions, MorphOptions, RefineOptions, find_center, fuse, morph};
+use chisel::mesh::distance::DistanceGrid;
+use chisel::mesh::{Side, Topology, point_side, self_intersections};
+use chisel::ray_cast::{Bvh, ray_cast};
+use chisel::{Backend, Error, Refusal, TriMesh};
+use glam::Vec3;
+
+mod common;
+
+fn sphere(level: u32, r: f32, at: Vec3) -> TriMesh {
+    let mut m = common::icosphere(level);
+    for p in &mut m.positions {
+        *p = *p * r + at;
+    }
+    m
+}
+
+fn options(tolerance: f64) -> FuseOptions {
+    FuseOptions {
+        refine: RefineOptions {
+            tolerance: Some(tolerance),
+            ..RefineOptions::default()
+        },
+        ..FuseOptions::default()
+    }
+}
+
+/// C is a closed, outward, self-intersection-free genus-0 surface.
+fn assert_valid_surface(what: &str, c: &TriMesh) {
+    let topo = Topology::of(c);
+    assert!(
+        topo.closed && topo.is_manifold(),
+        "{what}: not a closed manifold"
+    );
+    assert!(
+        topo.consistently_oriented,
+        "{what}: not consistently oriented"
+    );
+    assert_eq!(topo.components.len(), 1, "{what}: components");
+    assert_eq!(topo.euler, 2, "{what}: genus");
+    assert!(c.signed_volume() > 0.0, "{what}: wound inward");
+    let crossing = self_intersections(c);
+    assert!(
+        crossing.pairs.is_empty(),
+        "{what}: {} crossing pairs",
+        crossing.pairs.len()
+    );
+    assert!(
+        crossing.degenerate.is_empty(),
+        "{what}: zero-area triangles"
+    );
+}
+
+/// No vertex of `m` lies outside `c`, by the general exact test.
+fn assert_contains(what: &str, c: &TriMesh, m: &TriMesh) {
+    for (i, p) in m.positions.iter().enumerate() {
+        let side = point_side(c, p.as_dvec3().to_array());
+        assert!(
+            matches!(side, Some(Side::Inside | Side::Surface)),
+            "{what}: vertex {i} at {p} is {side:?}"
+        );
+    }
+}
+
+#[test]
+fn concentric_spheres_fuse_to_the_cube_root_radius() {
+    // Same-shaped polyhedra about one centre: ρ_A = r_A·g(d), ρ_B = r_B·g(d),
+    // so C is exactly the shape scaled by R = ∛(r_A³ + r_B³).
+    let unit = sphere(3, 1.0, Vec3::ZERO);
+    let (ra, rb) = (1.0f32, 0.8f32);
+    let big = (ra.powi(3) + rb.powi(3)).cbrt();
+    let a = sphere(3, ra, Vec3::ZERO);
+    let b = sphere(3, rb, Vec3::ZERO);
+    let mut o = options(1e-4);
+    o.center = Some(Vec3::ZERO);
+    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    let bvh = Bvh::build(&unit).unwrap();
+    let dirs: Vec<[f32; 4]> = f
+        .mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let d = p.normalize();
+            [d.x, d.y, d.z, 0.0]
+        })
+        .collect();
+    let hits = ray_cast(&bvh, Vec3::ZERO, &dirs, Backend::Cpu).unwrap();
+    for (p, h) in f.mesh.positions.iter().zip(&hits) {
+        let expected = f64::from(h.far) * f64::from(big);
+        let got = f64::from(p.length());
+        assert!(
+            (got - expected).abs() < 2e-6,
+            "{p}: |p| {got} vs R·g(d) {expected}"
+        );
+    }
+    let expected = f64::from(big).powi(3) * unit.signed_volume();
+    assert!(
+        (f.mesh.signed_volume() - expected).abs() / expected < 2e-4,
+        "volume {} vs {expected}",
+        f.mesh.signed_volume()
+    );
+    assert_valid_surface("concentric", &f.mesh);
+}
+
+#[test]
+fn volume_converges_with_order_two() {
+    // Two overlapping spheres (82k triangles each); the centre is searched.
+    let a = sphere(6, 1.0, Vec3::ZERO);
+    let b = sphere(6, 0.7, Vec3::new(0.8, 0.1, 0.0));
+    let mut last: Option<(usize, f64)> = None;
+    let mut orders = Vec::new();
+    for tol in [4e-3, 1e-3, 2.5e-4] {
+        let f = fuse(&a, &b, &options(tol), Backend::Cpu).unwrap();
+        let r = &f.report;
+        let target = a.signed_volume() + b.signed_volume();
+        assert!((r.volumes.target - target).abs() < 1e-12 * target);
+        assert_eq!(r.outside, 0);
+        assert!(r.center_search.is_some());
+        let (n, err) = (r.triangles, r.volumes.relative_error);
+        if let Some((n0, e0)) = last {
+            // Error against the mean edge h ∝ N^(−1/2).
+            orders.push((e0 / err).ln() / (0.5 * (n as f64 / n0 as f64).ln()));
+        }
+        last = Some((n, err));
+        if (10_000..=20_000).contains(&n) {
+            assert!(err <= 1.5e-3, "{n} triangles: error {err:e}");
+        }
+    }
+    let (n, err) = last.unwrap();
+    assert!(err < 4e-4, "{n} triangles: error {err:e}");
+    assert!(
+        orders.iter().all(|&o| o >= 1.8),
+        "convergence orders {orders:?}"
+    );
+}
+
+#[test]
+fn fused_surface_is_closed_and_contains_both() {
+    let a = sphere(3, 1.0, Vec3::ZERO);
+    let b = sphere(3, 0.6, Vec3::new(0.9, 0.2, -0.1));
+    let f = fuse(&a, &b, &options(1e-3), Backend::Cpu).unwrap();
+    assert_valid_surface("two spheres", &f.mesh);
+    assert_contains("A in C", &f.mesh, &a);
+    assert_contains("B in C", &f.mesh, &b);
+    assert_eq!(f.report.outside, 0);
+}
+
+#[test]
+fn coarse_fusion_refines_until_both_inputs_are_inside() {
+    // A loose tolerance leaves chords that cut A's corners; the exact
+    // containment rounds refine there until no vertex is outside.
+    let a = sphere(2, 1.0, Vec3::ZERO);
+    let b = sphere(2, 0.5, Vec3::new(0.8, 0.0, 0.0));
+    let mut o = options(0.05);
+    o.refine.start_level = 0;
+    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    assert!(
+        f.report.containment_rounds > 0,
+        "no round was needed: weak test"
+    );
+    assert_eq!(f.report.outside, 0);
+    assert_contains("A in C", &f.mesh, &a);
+    assert_contains("B in C", &f.mesh, &b);
+    assert_valid_surface("coarse", &f.mesh);
+}
+
+#[test]
+fn subtraction_removes_the_volume_of_b() {
+    let a = sphere(5, 1.0, Vec3::ZERO);
+    let b = sphere(5, 0.5, Vec3::new(0.2, 0.1, 0.0));
+    let mut o = options(2e-4);
+    o.subtract = true;
+    o.center = Some(Vec3::new(0.1, 0.05, 0.0));
+    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    let target = a.signed_volume() - b.signed_volume();
+    assert!((f.report.volumes.target - target).abs() < 1e-12);
+    assert!(
+        f.report.volumes.relative_error < 1e-3,
+        "{:?}",
+        f.report.volumes
+    );
+    assert_valid_surface("subtraction", &f.mesh);
+    // C lies inside A.
+    assert_contains("C in A", &a, &f.mesh);
+}
+
+#[test]
+fn subtraction_refuses_where_b_reaches_out_of_a() {
+    let a = sphere(3, 1.0, Vec3::ZERO);
+    let b = sphere(3, 0.6, Vec3::new(0.6, 0.0, 0.0));
+    let mut o = options(1e-3);
+    o.subtract = true;
+    o.center = Some(Vec3::new(0.5, 0.0, 0.0));
+    match fuse(&a, &b, &o, Backend::Cpu) {
+        Err(Error::Refused(Refusal::SubtractionReachesOut {
+            failing, examples, ..
+        })) => {
+            assert!(failing > 0);
+            // Every example direction points to where B is beyond A: +x.
+            assert!(examples.iter().all(|d| d[0] > 0.0), "{examples:?}");
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+}
+
+#[test]
+fn non_star_shaped_mesh_is_refused_with_its_rays() {
+    // A is two spheres side by side; from inside the first, rays towards
+    // the second cross A three times.
+    let mut a = sphere(3, 0.5, Vec3::ZERO);
+    let second = sphere(3, 0.5, Vec3::new(2.0, 0.0, 0.0));
+    let n = a.positions.len() as u32;
+    a.positions.extend(&second.positions);
+    a.triangles
+        .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
+    let b = sphere(3, 0.4, Vec3::new(0.2, 0.0, 0.0));
+    let mut o = options(1e-3);
+    o.center = Some(Vec3::new(0.1, 0.0, 0.0));
+    match fuse(&a, &b, &o, Backend::Cpu) {
+        Err(Error::Refused(Refusal::NotStarShaped {
+            mesh,
+            failing,
+            examples,
+            ..
+        })) => {
+            assert_eq!(mesh, "A");
+            assert!(failing > 0);
+            assert!(
+                examples.iter().all(|(d, hits)| d[0] > 0.9 && *hits == 3),
+                "{examples:?}"
+            );
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    // And the centre search proves no centre exists.
+    assert!(matches!(
+        find_center(&a, &b),
+        Err(Error::Refused(Refusal::NoStarCenter(_)))
+    ));
+}
+
+#[test]
+fn centre_search_refuses_disjoint_meshes() {
+    let a = sphere(2, 1.0, Vec3::ZERO);
+    let b = sphere(2, 1.0, Vec3::new(3.0, 0.0, 0.0));
+    let err = find_center(&a, &b).unwrap_err().to_string();
+    assert!(err.contains("do not overlap"), "{err}");
+}
+
+#[test]
+fn morph_volume_is_linear_and_ends_on_a_and_b() {
+    let a = sphere(5, 1.0, Vec3::ZERO);
+    let mut b = sphere(5, 0.5, Vec3::new(0.3, 0.0, 0.0));
+    for p in &mut b.positions {
+        p.y *= 2.0; // an ellipsoid
+    }
+    let o = MorphOptions {
+        center: Some(Vec3::new(0.1, 0.0, 0.0)),
+        center_end: None,
+        frames: 5,
+        refine: RefineOptions {
+            tolerance: Some(2e-4),
+            ..RefineOptions::default()
+        },
+    };
+    let m = morph(&a, &b, &o, Backend::Cpu).unwrap();
+    assert_eq!(m.frames.len(), 5);
+    for f in &m.frames {
+        assert_eq!(f.triangles, m.frames[0].triangles, "one connectivity");
+        assert_valid_surface("morph frame", f);
+    }
+    for f in &m.report.frames {
+        assert!(
+            f.volumes.relative_error < 1e-3,
+            "t = {}: {:?}",
+            f.t,
+            f.volumes
+        );
+    }
+    // C(0) on A, C(1) on B: every vertex on the surface (f32 hits).
+    for (frame, target) in [(&m.frames[0], &a), (&m.frames[4], &b)] {
+        let grid = DistanceGrid::new(target);
+        let worst = frame
+            .positions
+            .iter()
+            .map(|p| grid.distance(*p))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-5, "vertex {worst} from its end mesh");
+    }
+}
+
+#[test]
+fn morph_with_a_moving_centre_keeps_volumes_linear() {
+    let a = sphere(4, 1.0, Vec3::ZERO);
+    let b = sphere(4, 0.8, Vec3::new(0.5, 0.0, 0.0));
+    let o = MorphOptions {
+        center: Some(Vec3::new(-0.2, 0.0, 0.0)),
+        center_end: Some(Vec3::new(0.6, 0.0, 0.0)),
+        frames: 4,
+        refine: RefineOptions {
+            tolerance: Some(5e-4),
+            ..RefineOptions::default()
+        },
+    };
+    let m = morph(&a, &b, &o, Backend::Cpu).unwrap();
+    let centers: Vec<f64> = m.report.frames.iter().map(|f| f.center[0]).collect();
+    assert!(
+        (centers[0] + 0.2).abs() < 1e-6 && (centers[3] - 0.6).abs() < 1e-6,
+        "{centers:?}"
+    );
+    for f in &m.report.frames {
+        assert!(
+            f.volumes.relative_error < 3e-3,
+            "t = {}: {:?}",
+            f.t,
+            f.volumes
+        );
+    }
+}
+
+#[test]
+fn cpu_and_gpu_fusions_are_the_same_mesh() {
+    let Some(gpu) = common::gpu() else { return };
+    let a = sphere(4, 1.0, Vec3::ZERO);
+    let b = sphere(4, 0.7, Vec3::new(0.7, 0.3, 0.0));
+    let cpu = fuse(&a, &b, &options(1e-3), Backend::Cpu).unwrap();
+    let gpu = fuse(&a, &b, &options(1e-3), Backend::Gpu(gpu)).unwrap();
+    // ray_cast is exact in triangle ids and counts, and its distances agree
+    // to the bit on a device without contraction: the same refinement.
+    assert_eq!(cpu.mesh.triangles, gpu.mesh.triangles);
+    let worst = cpu
+        .mesh
+        .positions
+        .iter()
+        .zip(&gpu.mesh.positions)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1e-5, "positions differ by {worst}");
+}
+
+/// The foot bones' components, largest first.
+fn foot_bones() -> Option<Vec<TriMesh>> {
+    let feet = common::real_mesh("fsu/footbones.ply")?;
+    let (labels, _) = chisel::foundation::vertex_components(feet.positions.len(), &feet.triangles);
+    let mut bones = chisel::mesh::split_by_label(&feet, &labels);
+    bones.sort_by_key(|b| std::cmp::Reverse(b.triangles.len()));
+    Some(bones)
+}
+
+#[test]
+fn star_shaped_foot_bones_fuse() {
+    let Some(bones) = foot_bones() else { return };
+    // Bones 4 and 6 (228 and 154 triangles) have kernels (points from which
+    // they are star-shaped); bone 6 is moved so that the kernels overlap.
+    let a = &bones[4];
+    let mut b = bones[6].clone();
+    let ha = Vec3::from(find_center(a, a).unwrap().center.map(|v| v as f32));
+    let hb = Vec3::from(find_center(&b, &b).unwrap().center.map(|v| v as f32));
+    for p in &mut b.positions {
+        *p += ha - hb + Vec3::new(0.02, 0.0, 0.0);
+    }
+    // Flat faces and sharp creases: the chord test refines along every
+    // crease, so a tolerance of 10⁻³ of the diagonal (56k triangles).
+    let (lo, hi) = a.bounds().unwrap();
+    let f = fuse(
+        a,
+        &b,
+        &options(1e-3 * f64::from((hi - lo).length())),
+        Backend::Cpu,
+    )
+    .unwrap();
+    let r = &f.report;
+    assert!(r.center_search.is_some_and(|c| c.clearance > 0.0));
+    assert!(r.volumes.relative_error < 1e-3, "{:?}", r.volumes);
+    assert_valid_surface("foot bones", &f.mesh);
+    assert_contains("A in C", &f.mesh, a);
+    assert_contains("B in C", &f.mesh, &b);
+    // The largest bone has no kernel: refused with the reason.
+    let err = find_center(&bones[0], &bones[0]).unwrap_err().to_string();
+    assert!(err.contains("kernels of A and B"), "{err}");
+}

@@ -80,7 +80,7 @@ fn concentric_spheres_fuse_to_the_cube_root_radius() {
     let b = sphere(3, rb, Vec3::ZERO);
     let mut o = options(1e-4);
     o.center = Some(Vec3::ZERO);
-    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    let f = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
     let bvh = Bvh::build(&unit).unwrap();
     let dirs: Vec<[f32; 4]> = f
         .mesh
@@ -117,7 +117,7 @@ fn volume_converges_with_order_two() {
     let mut last: Option<(usize, f64)> = None;
     let mut orders = Vec::new();
     for tol in [4e-3, 1e-3, 2.5e-4] {
-        let f = fuse(&a, &b, &options(tol), Backend::Cpu).unwrap();
+        let f = fuse(&a, &b, &options(tol), Backend::Cpu, |_| {}).unwrap();
         let r = &f.report;
         let target = a.signed_volume() + b.signed_volume();
         assert!((r.volumes.target - target).abs() < 1e-12 * target);
@@ -145,7 +145,7 @@ fn volume_converges_with_order_two() {
 fn fused_surface_is_closed_and_contains_both() {
     let a = sphere(3, 1.0, Vec3::ZERO);
     let b = sphere(3, 0.6, Vec3::new(0.9, 0.2, -0.1));
-    let f = fuse(&a, &b, &options(1e-3), Backend::Cpu).unwrap();
+    let f = fuse(&a, &b, &options(1e-3), Backend::Cpu, |_| {}).unwrap();
     assert_valid_surface("two spheres", &f.mesh);
     assert_contains("A in C", &f.mesh, &a);
     assert_contains("B in C", &f.mesh, &b);
@@ -160,7 +160,7 @@ fn coarse_fusion_refines_until_both_inputs_are_inside() {
     let b = sphere(2, 0.5, Vec3::new(0.8, 0.0, 0.0));
     let mut o = options(0.05);
     o.refine.start_level = 0;
-    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    let f = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
     assert!(
         f.report.containment_rounds > 0,
         "no round was needed: weak test"
@@ -178,7 +178,7 @@ fn subtraction_removes_the_volume_of_b() {
     let mut o = options(2e-4);
     o.subtract = true;
     o.center = Some(Vec3::new(0.1, 0.05, 0.0));
-    let f = fuse(&a, &b, &o, Backend::Cpu).unwrap();
+    let f = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
     let target = a.signed_volume() - b.signed_volume();
     assert!((f.report.volumes.target - target).abs() < 1e-12);
     assert!(
@@ -198,7 +198,7 @@ fn subtraction_refuses_where_b_reaches_out_of_a() {
     let mut o = options(1e-3);
     o.subtract = true;
     o.center = Some(Vec3::new(0.5, 0.0, 0.0));
-    match fuse(&a, &b, &o, Backend::Cpu) {
+    match fuse(&a, &b, &o, Backend::Cpu, |_| {}) {
         Err(Error::Refused(Refusal::SubtractionReachesOut {
             failing, examples, ..
         })) => {
@@ -223,7 +223,7 @@ fn non_star_shaped_mesh_is_refused_with_its_rays() {
     let b = sphere(3, 0.4, Vec3::new(0.2, 0.0, 0.0));
     let mut o = options(1e-3);
     o.center = Some(Vec3::new(0.1, 0.0, 0.0));
-    match fuse(&a, &b, &o, Backend::Cpu) {
+    match fuse(&a, &b, &o, Backend::Cpu, |_| {}) {
         Err(Error::Refused(Refusal::NotStarShaped {
             mesh,
             failing,
@@ -270,7 +270,7 @@ fn morph_volume_is_linear_and_ends_on_a_and_b() {
             ..RefineOptions::default()
         },
     };
-    let m = morph(&a, &b, &o, Backend::Cpu).unwrap();
+    let m = morph(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
     assert_eq!(m.frames.len(), 5);
     for f in &m.frames {
         assert_eq!(f.triangles, m.frames[0].triangles, "one connectivity");
@@ -309,7 +309,7 @@ fn morph_with_a_moving_centre_keeps_volumes_linear() {
             ..RefineOptions::default()
         },
     };
-    let m = morph(&a, &b, &o, Backend::Cpu).unwrap();
+    let m = morph(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
     let centers: Vec<f64> = m.report.frames.iter().map(|f| f.center[0]).collect();
     assert!(
         (centers[0] + 0.2).abs() < 1e-6 && (centers[3] - 0.6).abs() < 1e-6,
@@ -330,8 +330,8 @@ fn cpu_and_gpu_fusions_are_the_same_mesh() {
     let Some(gpu) = common::gpu() else { return };
     let a = sphere(4, 1.0, Vec3::ZERO);
     let b = sphere(4, 0.7, Vec3::new(0.7, 0.3, 0.0));
-    let cpu = fuse(&a, &b, &options(1e-3), Backend::Cpu).unwrap();
-    let gpu = fuse(&a, &b, &options(1e-3), Backend::Gpu(gpu)).unwrap();
+    let cpu = fuse(&a, &b, &options(1e-3), Backend::Cpu, |_| {}).unwrap();
+    let gpu = fuse(&a, &b, &options(1e-3), Backend::Gpu(gpu), |_| {}).unwrap();
     // ray_cast is exact in triangle ids and counts, and its distances agree
     // to the bit on a device without contraction: the same refinement.
     assert_eq!(cpu.mesh.triangles, gpu.mesh.triangles);
@@ -374,6 +374,7 @@ fn star_shaped_foot_bones_fuse() {
         &b,
         &options(1e-3 * f64::from((hi - lo).length())),
         Backend::Cpu,
+        |_| {},
     )
     .unwrap();
     let r = &f.report;

@@ -16,6 +16,35 @@ pub struct Args {
     /// Meshes: also write a shaded preview PNG of the result.
     #[arg(long)]
     preview: Option<PathBuf>,
+    /// Meshes: keep only the K-th connected component (0 = the most
+    /// triangles; ties by first triangle).
+    #[arg(long, value_name = "K")]
+    component: Option<usize>,
+    /// Meshes: move every vertex by `x,y,z`.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    translate: Option<Vec<f32>>,
+}
+
+/// `--component` and `--translate` applied to `m`.
+fn select_and_move(args: &Args, mut m: crate::TriMesh) -> anyhow::Result<crate::TriMesh> {
+    if let Some(k) = args.component {
+        let (labels, n) = crate::foundation::vertex_components(m.positions.len(), &m.triangles);
+        let mut parts = crate::mesh::split_by_label(&m, &labels);
+        anyhow::ensure!(
+            k < n,
+            "{}: --component {k}, but the mesh has {n} component(s)",
+            args.input.display()
+        );
+        // Stable: equal sizes keep the order of their first triangles.
+        parts.sort_by_key(|p| std::cmp::Reverse(p.triangles.len()));
+        m = parts.swap_remove(k);
+    }
+    if let Some(t) = super::vec3_arg("translate", args.translate.as_deref())? {
+        for p in &mut m.positions {
+            *p += t;
+        }
+    }
+    Ok(m)
 }
 
 /// An output-path check of one kind (mesh or volume).
@@ -24,6 +53,10 @@ type CheckOutput = fn(&std::path::Path) -> crate::Result<()>;
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     match (is_volume(&args.input), is_volume(&args.output)) {
         (true, true) => {
+            anyhow::ensure!(
+                args.component.is_none() && args.translate.is_none(),
+                "--component and --translate work on meshes"
+            );
             anyhow::ensure!(
                 args.preview.is_none(),
                 "--preview draws meshes; use `chisel mc --preview` for a volume's surface"
@@ -44,7 +77,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             if let Some(path) = &args.preview {
                 crate::foundation::fs::check_png_output(path)?;
             }
-            let m = crate::io::read_mesh(&args.input)?;
+            let m = select_and_move(args, crate::io::read_mesh(&args.input)?)?;
             if !m.scalars.is_empty() && !crate::io::mesh_format_carries_scalars(&args.output) {
                 global.note(format!(
                     "note: {} cannot store per-vertex scalars; dropped: {}",

@@ -11,10 +11,12 @@ mod blobby;
 mod convert;
 mod cut;
 mod demo;
+mod fuse;
 mod hull;
 mod implicit;
 mod info;
 mod mc;
+mod morph;
 mod phantom;
 mod polyhedrize;
 mod relax;
@@ -227,6 +229,10 @@ enum Command {
     Implicit(implicit::Args),
     /// Blobby models: `blobby fit` fits one to a range scan (a scene `implicit` reads).
     Blobby(blobby::Args),
+    /// Fuse two closed star-shaped meshes into one of their summed volume (or subtract B from A).
+    Fuse(fuse::Args),
+    /// Morph A into B (volume linear in t) as frames with one connectivity.
+    Morph(morph::Args),
     /// Exact convex hull of a voxel object: cell list, eq. 8.2 storage, ZKH classes.
     Hull(hull::Args),
     /// Lossless polyhedron of a voxel object: nested convex shells, .cells, --verify.
@@ -338,6 +344,8 @@ pub fn main() -> ExitCode {
         Command::Spline(a) => spline::run(&cli.global, a),
         Command::Implicit(a) => implicit::run(&cli.global, a),
         Command::Blobby(a) => blobby::run(&cli.global, a),
+        Command::Fuse(a) => fuse::run(&cli.global, a),
+        Command::Morph(a) => morph::run(&cli.global, a),
         Command::Hull(a) => hull::run(&cli.global, a),
         Command::Polyhedrize(a) => polyhedrize::run(&cli.global, a),
         Command::Scan(a) => scan::run(&cli.global, a),

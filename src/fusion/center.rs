@@ -65,7 +65,9 @@ pub fn find_center(a: &TriMesh, b: &TriMesh) -> Result<Found> {
     let mut lp = Problem::new(OptimizationDirection::Maximize);
     let half = (hi - lo) * 0.5 / scale;
     let x = [0, 1, 2].map(|k| lp.add_var(0.0, (-half[k], half[k])));
-    let s = lp.add_var(1.0, (-1.0, 1.0));
+    // s is free below (a point far in front of some plane is still a
+    // feasible, if useless, answer) and at most the overlap's diagonal.
+    let s = lp.add_var(1.0, (f64::NEG_INFINITY, 1.0));
     let mut planes = 0;
     for mesh in [a, b] {
         let outward = if mesh.signed_volume() < 0.0 {

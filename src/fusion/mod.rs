@@ -152,6 +152,7 @@ fn refine(
     max_triangles: usize,
     mut extra: HashSet<Edge>,
     passes: &mut Vec<Pass>,
+    on_pass: &mut dyn FnMut(&Pass),
 ) -> Result<()> {
     loop {
         let directions = sphere.evaluate_midpoints(project)?;
@@ -178,12 +179,14 @@ fn refine(
             ));
         }
         sphere.refine(marked)?;
-        passes.push(Pass {
+        let pass = Pass {
             triangles: sphere.tris.len(),
             directions,
             marked: n_marked,
             max_deviation,
-        });
+        };
+        on_pass(&pass);
+        passes.push(pass);
     }
 }
 
@@ -212,7 +215,8 @@ fn volumes(a: f64, b: f64, c: f64, target: f64) -> Volumes {
     }
 }
 
-/// Fuses (or subtracts) closed meshes `a` and `b` (see the module docs).
+/// Fuses (or subtracts) closed meshes `a` and `b` (see the module docs);
+/// `on_pass` sees each refinement pass (for progress).
 ///
 /// Errors: a refusal when H is not given and none is found, when a ray from
 /// H does not cross A or B exactly once (with the failing directions), or,
@@ -223,6 +227,7 @@ pub fn fuse(
     b: &TriMesh,
     options: &FuseOptions,
     backend: Backend<'_>,
+    mut on_pass: impl FnMut(&Pass),
 ) -> Result<Fused> {
     let tol = tolerance(&options.refine, a, b)?;
     let (bvh_a, bvh_b) = rayon::join(|| Bvh::build(a), || Bvh::build(b));
@@ -259,6 +264,7 @@ pub fn fuse(
         max,
         HashSet::new(),
         &mut passes,
+        &mut on_pass,
     )?;
 
     let (mut rounds, mut outside) = (0, 0);
@@ -288,7 +294,15 @@ pub fn fuse(
             if extra.is_empty() {
                 break;
             }
-            refine(&mut sphere, &mut radial, tol, max, extra, &mut passes)?;
+            refine(
+                &mut sphere,
+                &mut radial,
+                tol,
+                max,
+                extra,
+                &mut passes,
+                &mut on_pass,
+            )?;
         }
     }
 
@@ -352,7 +366,8 @@ pub struct Morph {
 }
 
 /// Morphs `a` into `b` (eq. 8) over `options.frames` frames with one mesh
-/// connectivity, refined until every frame is within the tolerance.
+/// connectivity, refined until every frame is within the tolerance;
+/// `on_pass` sees each refinement pass.
 ///
 /// Errors: as [`fuse`]; fewer than 2 frames.
 pub fn morph(
@@ -360,6 +375,7 @@ pub fn morph(
     b: &TriMesh,
     options: &MorphOptions,
     backend: Backend<'_>,
+    mut on_pass: impl FnMut(&Pass),
 ) -> Result<Morph> {
     if options.frames < 2 {
         return Err(Error::param("frames", options.frames, "at least 2"));
@@ -409,6 +425,7 @@ pub fn morph(
         options.refine.max_triangles,
         HashSet::new(),
         &mut passes,
+        &mut on_pass,
     )?;
     let (va, vb) = (a.signed_volume().abs(), b.signed_volume().abs());
     let meshes: Vec<TriMesh> = (0..sphere.n_frames()).map(|k| sphere.mesh(k)).collect();

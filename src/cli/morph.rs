@@ -145,7 +145,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 height: 256,
                 views: vec![View::Iso],
                 title: Some(format!(
-                    "chisel morph: {} → {} ({} frames, {} triangles each)",
+                    "chisel morph: {} to {} ({} frames, {} triangles each)",
                     super::file_name(&args.a),
                     super::file_name(&args.b),
                     n,

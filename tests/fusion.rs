@@ -172,6 +172,62 @@ fn coarse_fusion_refines_until_both_inputs_are_inside() {
 }
 
 #[test]
+fn edges_across_a_crease_are_split_down_to_the_floor() {
+    // A cube (90° creases) and a small ball inside it: every edge of C
+    // whose ends see two different cube faces is at most
+    // CREASE_CHORD_OF_TOLERANCE (8) tolerances long. The chord test alone
+    // leaves such edges up to 11.5 tolerances long (a crease near one end
+    // barely moves the midpoint).
+    let cube = common::cube();
+    let ball = sphere(2, 0.2, Vec3::splat(0.5));
+    let tol = 2e-3;
+    let mut o = options(tol);
+    o.center = Some(Vec3::splat(0.5));
+    let f = fuse(&cube, &ball, &o, Backend::Cpu, |_| {}).unwrap();
+    let bvh = Bvh::build(&cube).unwrap();
+    let h = Vec3::splat(0.5);
+    let dirs: Vec<[f32; 4]> = f
+        .mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let d = *p - h;
+            [d.x, d.y, d.z, 0.0]
+        })
+        .collect();
+    let hits = ray_cast(&bvh, h, &dirs, Backend::Cpu).unwrap();
+    let normal = |t: u32| {
+        let [a, b, c] = cube.triangles[t as usize].map(|v| cube.positions[v as usize]);
+        (b - a).cross(c - a).normalize()
+    };
+    let floor = chisel::fusion::CREASE_CHORD_OF_TOLERANCE * tol;
+    let mut across = 0;
+    for t in &f.mesh.triangles {
+        for k in 0..3 {
+            let (u, v) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if normal(hits[u].near_tri).dot(normal(hits[v].near_tri)) < 0.5 {
+                across += 1;
+                let chord = f64::from((f.mesh.positions[u] - f.mesh.positions[v]).length());
+                assert!(
+                    chord <= floor * (1.0 + 1e-6),
+                    "edge {u}–{v}: chord {chord} across a crease"
+                );
+            }
+        }
+    }
+    assert!(
+        across > 100,
+        "only {across} edges across the cube's creases"
+    );
+    assert_valid_surface("cube and ball", &f.mesh);
+    assert!(
+        f.report.volumes.relative_error < 1e-2,
+        "{:?}",
+        f.report.volumes
+    );
+}
+
+#[test]
 fn subtraction_removes_the_volume_of_b() {
     let a = sphere(5, 1.0, Vec3::ZERO);
     let b = sphere(5, 0.5, Vec3::new(0.2, 0.1, 0.0));

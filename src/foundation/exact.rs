@@ -1,7 +1,9 @@
 //! Exact integer geometry: points and vectors with `i64` coordinates,
 //! products in `i128` where their range needs it. No epsilons: callers
 //! bound their coordinates (each room states its `MAX_COORD`) so that every
-//! expression here is exact.
+//! expression here is exact. And the exact orientation signs of f64 points
+//! ([`orient3d_sign`], [`orient2d_sign`]: Shewchuk's adaptive predicates)
+//! that the float-mesh tests (self-intersection, point in mesh) decide by.
 
 /// A point or vector in 3-D.
 pub type P3 = [i64; 3];
@@ -97,4 +99,27 @@ mod tests {
         assert_eq!(gcd(0, 0), 0);
         assert_eq!([4, -6, 10].iter().fold(0, |g, &c| gcd(g, c)), 2);
     }
+}
+
+/// Exact sign of the orientation of `d` against the plane of `abc` on f64
+/// coordinates (Shewchuk's adaptive `orient3d`, crate `robust`): 1 when `d`
+/// lies in front of `abc` (on the side of its right-hand normal), −1
+/// behind, 0 on the plane.
+pub fn orient3d_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
+    let c3 = |v: [f64; 3]| robust::Coord3D {
+        x: v[0],
+        y: v[1],
+        z: v[2],
+    };
+    // Shewchuk's value is positive when d lies below (behind) abc.
+    let v = robust::orient3d(c3(a), c3(b), c3(c), c3(d));
+    (v < 0.0) as i8 - (v > 0.0) as i8
+}
+
+/// Exact sign of the orientation of `abc` in the plane on f64 coordinates
+/// (`orient2d`): 1 counter-clockwise, −1 clockwise, 0 collinear.
+pub fn orient2d_sign(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
+    let c2 = |v: [f64; 2]| robust::Coord { x: v[0], y: v[1] };
+    let v = robust::orient2d(c2(a), c2(b), c2(c));
+    (v > 0.0) as i8 - (v < 0.0) as i8
 }

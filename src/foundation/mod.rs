@@ -6,7 +6,7 @@
 //! - [`aabb`], [`forest`]: axis-aligned boxes and the bounding-box B+ forest,
 //!   the crate's spatial index (cutting, self-intersection, marching cubes);
 //! - [`exact`]: exact integer geometry (i64 vectors with i128 products, gcd,
-//!   orientation);
+//!   orientation) and exact orientation signs of f64 points;
 //! - [`fs`]: atomic file writes and output path checks.
 
 pub mod aabb;

@@ -10,25 +10,11 @@
 //! [`crate::mesh::point_side`] decides instead.
 
 use rayon::prelude::*;
-use robust::Coord3D;
 
+use crate::foundation::exact::orient3d_sign as o3;
 use crate::mesh::{Side, TriMesh, point_side};
 use crate::ray_cast::RayCaster;
 use crate::{Error, Result};
-
-fn c3(v: [f64; 3]) -> Coord3D<f64> {
-    Coord3D {
-        x: v[0],
-        y: v[1],
-        z: v[2],
-    }
-}
-
-/// Sign of the volume of `(a, b, c, d)`: 1 when `d` is in front of `abc`.
-fn o3(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
-    let v = robust::orient3d(c3(a), c3(b), c3(c), c3(d));
-    (v < 0.0) as i8 - (v > 0.0) as i8
-}
 
 /// A point of A or B outside C, with the triangle of C its ray from H hits
 /// (`u32::MAX` when the general test decided).

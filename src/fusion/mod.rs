@@ -12,7 +12,9 @@
 //! C is built on a sphere of directions about H ([`sphere`]): an icosphere
 //! refined by newest-vertex bisection, each vertex M projected to
 //! M′ = H + ρ(d)·d (eq. 6), until every edge's projected midpoint lies
-//! within the tolerance of its chord. The rays are the GPU workload (kernel
+//! within the tolerance of its chord and no edge longer than
+//! [`CREASE_CHORD_OF_TOLERANCE`] tolerances straddles a crease (its end
+//! rays cross faces of A, or of B, more than [`CREASE_DEGREES`] apart). The rays are the GPU workload (kernel
 //! `ray_cast`, room [`crate::ray_cast`]); every ray is checked to cross its
 //! mesh once, so a mesh that is not star-shaped about H is refused with the
 //! failing directions instead of being fused wrongly. A fusion then checks
@@ -40,7 +42,7 @@ use crate::ray_cast::{Bvh, RayCaster};
 use crate::{Error, Result};
 pub use center::{Found, find_center};
 pub use radial::{Frame, Law, Radial};
-pub use sphere::{Edge, Pass, Project, Sphere};
+pub use sphere::{Edge, Pass, Project, Projected, Sphere};
 
 /// Default start icosphere level (320 triangles).
 pub const START_LEVEL: u32 = 2;
@@ -48,6 +50,11 @@ pub const START_LEVEL: u32 = 2;
 pub const TOLERANCE_OF_DIAGONAL: f64 = 2.5e-4;
 /// Default cap on C's triangles.
 pub const MAX_TRIANGLES: usize = 1 << 23;
+/// A triangle straddles a crease where the faces its corners' rays cross
+/// (of A, or of B) differ by more than this angle (degrees).
+pub const CREASE_DEGREES: f32 = 30.0;
+/// Crease splits stop at chords this many tolerances long.
+pub const CREASE_CHORD_OF_TOLERANCE: f64 = 8.0;
 /// Most containment rounds (each refines around the vertices outside).
 pub const CONTAINMENT_ROUNDS: usize = 8;
 
@@ -159,10 +166,14 @@ fn refine(
         let edges = sphere.edges();
         let deviations: Vec<f64> = edges.par_iter().map(|&e| sphere.deviation(e)).collect();
         let max_deviation = deviations.iter().copied().fold(0.0, f64::max);
+        let cos_max = CREASE_DEGREES.to_radians().cos();
+        let floor = CREASE_CHORD_OF_TOLERANCE * tol;
         let mut marked: HashSet<Edge> = edges
             .iter()
             .zip(&deviations)
-            .filter(|(_, d)| **d > tol)
+            .filter(|&(&e, &d)| {
+                d > tol || (sphere.straddles_crease(e, cos_max) && sphere.chord(e) > floor)
+            })
             .map(|(e, _)| *e)
             .collect();
         let n_marked = marked.len();
@@ -188,6 +199,23 @@ fn refine(
         on_pass(&pass);
         passes.push(pass);
     }
+}
+
+/// Both meshes' hierarchies, built side by side.
+fn bvhs(a: &TriMesh, b: &TriMesh) -> Result<(Bvh, Bvh)> {
+    let (bvh_a, bvh_b) = rayon::join(|| Bvh::build(a), || Bvh::build(b));
+    Ok((bvh_a?, bvh_b?))
+}
+
+/// The given centre, or the searched one with the search's result.
+fn center_of(a: &TriMesh, b: &TriMesh, given: Option<Vec3>) -> Result<(Vec3, Option<Found>)> {
+    Ok(match given {
+        Some(c) => (c, None),
+        None => {
+            let found = find_center(a, b)?;
+            (glam::DVec3::from(found.center).as_vec3(), Some(found))
+        }
+    })
 }
 
 /// The vertices that some triangle of `m` uses.
@@ -230,27 +258,20 @@ pub fn fuse(
     mut on_pass: impl FnMut(&Pass),
 ) -> Result<Fused> {
     let tol = tolerance(&options.refine, a, b)?;
-    let (bvh_a, bvh_b) = rayon::join(|| Bvh::build(a), || Bvh::build(b));
-    let (bvh_a, bvh_b) = (bvh_a?, bvh_b?);
+    let (bvh_a, bvh_b) = bvhs(a, b)?;
     let (ca, cb) = (
         RayCaster::new(&bvh_a, backend)?,
         RayCaster::new(&bvh_b, backend)?,
     );
-    let (center, center_search) = match options.center {
-        Some(c) => (c, None),
-        None => {
-            let found = find_center(a, b)?;
-            (glam::DVec3::from(found.center).as_vec3(), Some(found))
-        }
-    };
+    let (center, center_search) = center_of(a, b, options.center)?;
     let law = if options.subtract {
         Law::Difference
     } else {
         Law::Sum
     };
     let mut radial = Radial {
-        a: &ca,
-        b: &cb,
+        a: (a, &ca),
+        b: (b, &cb),
         frames: vec![Frame { center, law }],
         rays: 0,
     };
@@ -381,19 +402,12 @@ pub fn morph(
         return Err(Error::param("frames", options.frames, "at least 2"));
     }
     let tol = tolerance(&options.refine, a, b)?;
-    let (bvh_a, bvh_b) = rayon::join(|| Bvh::build(a), || Bvh::build(b));
-    let (bvh_a, bvh_b) = (bvh_a?, bvh_b?);
+    let (bvh_a, bvh_b) = bvhs(a, b)?;
     let (ca, cb) = (
         RayCaster::new(&bvh_a, backend)?,
         RayCaster::new(&bvh_b, backend)?,
     );
-    let (start, center_search) = match options.center {
-        Some(c) => (c, None),
-        None => {
-            let found = find_center(a, b)?;
-            (glam::DVec3::from(found.center).as_vec3(), Some(found))
-        }
-    };
+    let (start, center_search) = center_of(a, b, options.center)?;
     let end = options.center_end.unwrap_or(start);
     let last = (options.frames - 1) as f64;
     let frames: Vec<Frame> = (0..options.frames)
@@ -411,8 +425,8 @@ pub fn morph(
         })
         .collect();
     let mut radial = Radial {
-        a: &ca,
-        b: &cb,
+        a: (a, &ca),
+        b: (b, &cb),
         frames,
         rays: 0,
     };

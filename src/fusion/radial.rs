@@ -5,9 +5,10 @@
 //! A is not star-shaped about H along d (or H is outside A, or A is open
 //! there); every such ray is collected and the projection refused.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
-use super::sphere::Project;
+use super::sphere::{Project, Projected};
+use crate::mesh::TriMesh;
 use crate::ray_cast::{RayCaster, RayHit};
 use crate::{Refusal, Result};
 
@@ -49,8 +50,10 @@ const EXAMPLES: usize = 8;
 /// of each distinct centre against A and B.
 #[derive(Debug)]
 pub struct Radial<'a> {
-    pub a: &'a RayCaster<'a>,
-    pub b: &'a RayCaster<'a>,
+    /// A with its caster.
+    pub a: (&'a TriMesh, &'a RayCaster<'a>),
+    /// B with its caster.
+    pub b: (&'a TriMesh, &'a RayCaster<'a>),
     pub frames: Vec<Frame>,
     /// Rays cast so far (both meshes).
     pub rays: usize,
@@ -81,30 +84,63 @@ fn radii(mesh: &'static str, center: Vec3, dirs: &[[f32; 4]], hits: &[RayHit]) -
         .collect())
 }
 
+/// Unit normal of triangle `t` of `m` (0 for a zero-area one).
+fn face_normal(m: &TriMesh, t: u32) -> Vec3 {
+    let [a, b, c] = m.triangles[t as usize].map(|v| m.positions[v as usize]);
+    (b - a).cross(c - a).normalize_or_zero()
+}
+
+/// One centre's rays: ρ_A, ρ_B and the normals of the faces crossed.
+struct Radii {
+    center: Vec3,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    faces: Vec<[Vec3; 2]>,
+}
+
 impl Radial<'_> {
-    /// ρ_A and ρ_B along `dirs` from `center`.
-    pub fn radii(&mut self, center: Vec3, dirs: &[[f32; 4]]) -> Result<(Vec<f64>, Vec<f64>)> {
-        let ha = self.a.cast(center, dirs)?;
-        let hb = self.b.cast(center, dirs)?;
+    /// ρ_A and ρ_B along `dirs` from `center`, with the faces crossed.
+    fn radii(&mut self, center: Vec3, dirs: &[[f32; 4]]) -> Result<Radii> {
+        let ha = self.a.1.cast(center, dirs)?;
+        let hb = self.b.1.cast(center, dirs)?;
         self.rays += ha.len() + hb.len();
-        Ok((
+        let (ra, rb) = (
             radii("A", center, dirs, &ha)?,
             radii("B", center, dirs, &hb)?,
-        ))
+        );
+        let faces = ha
+            .iter()
+            .zip(&hb)
+            .map(|(x, y)| {
+                [
+                    face_normal(self.a.0, x.near_tri),
+                    face_normal(self.b.0, y.near_tri),
+                ]
+            })
+            .collect();
+        Ok(Radii {
+            center,
+            a: ra,
+            b: rb,
+            faces,
+        })
     }
 }
 
 impl Project for Radial<'_> {
-    fn project(&mut self, dirs: &[[f32; 4]]) -> Result<Vec<Vec<DVec3>>> {
-        let mut out = Vec::with_capacity(self.frames.len());
-        let mut cached: Option<(Vec3, Vec<f64>, Vec<f64>)> = None;
+    fn project(&mut self, dirs: &[[f32; 4]]) -> Result<Projected> {
+        let mut out = Projected::default();
+        let mut cached: Option<Radii> = None;
         for k in 0..self.frames.len() {
             let Frame { center, law } = self.frames[k];
-            if cached.as_ref().is_none_or(|c| c.0 != center) {
-                let (ra, rb) = self.radii(center, dirs)?;
-                cached = Some((center, ra, rb));
+            if cached.as_ref().is_none_or(|c| c.center != center) {
+                let r = self.radii(center, dirs)?;
+                if k == 0 {
+                    out.faces = r.faces.clone();
+                }
+                cached = Some(r);
             }
-            let (_, ra, rb) = cached.as_ref().expect("cached above");
+            let Radii { a: ra, b: rb, .. } = cached.as_ref().expect("cached above");
             let h = center.as_dvec3();
             let mut points = Vec::with_capacity(dirs.len());
             let mut failing = Vec::new();
@@ -130,7 +166,7 @@ impl Project for Radial<'_> {
                 }
                 .into());
             }
-            out.push(points);
+            out.points.push(points);
         }
         Ok(out)
     }

@@ -22,9 +22,19 @@ use glam::{DVec3, Vec3};
 use crate::mesh::{TriMesh, unit_icosphere};
 use crate::{Error, Result};
 
-/// Projects unit directions: the points of every frame, `[frame][i]`.
+/// Projected directions: the points of every frame, `[frame][i]`, and per
+/// direction the unit normals of the faces of A and B its ray crossed (at
+/// the first frame's centre), which tell where a triangle straddles a
+/// crease.
+#[derive(Debug, Clone, Default)]
+pub struct Projected {
+    pub points: Vec<Vec<DVec3>>,
+    pub faces: Vec<[Vec3; 2]>,
+}
+
+/// Projects unit directions.
 pub trait Project {
-    fn project(&mut self, dirs: &[[f32; 4]]) -> Result<Vec<Vec<DVec3>>>;
+    fn project(&mut self, dirs: &[[f32; 4]]) -> Result<Projected>;
 }
 
 /// An edge key: its vertex ids, ascending.
@@ -55,6 +65,8 @@ pub struct Sphere {
     pub dirs: Vec<[f32; 4]>,
     /// Projected points `[frame][vertex]`.
     pub points: Vec<Vec<DVec3>>,
+    /// Per vertex, the normals of the faces of A and B its ray crossed.
+    pub faces: Vec<[Vec3; 2]>,
     /// Triangles `(apex, r0, r1)`, counter-clockwise from outside.
     pub tris: Vec<[u32; 3]>,
     /// Evaluated midpoint vertex of each edge judged so far.
@@ -78,7 +90,7 @@ impl Sphere {
     pub fn start(level: u32, project: &mut impl Project) -> Result<Sphere> {
         let (p, t) = unit_icosphere(level);
         let dirs: Vec<[f32; 4]> = p.iter().map(|v| unit(*v)).collect();
-        let points = project.project(&dirs)?;
+        let Projected { points, faces } = project.project(&dirs)?;
         let tris = t
             .iter()
             .map(|&[a, b, c]| {
@@ -93,6 +105,7 @@ impl Sphere {
         Ok(Sphere {
             dirs,
             points,
+            faces,
             tris,
             mids: HashMap::new(),
         })
@@ -120,12 +133,13 @@ impl Sphere {
             .iter()
             .map(|&(a, b)| unit(dir(self.dirs[a as usize]) + dir(self.dirs[b as usize])))
             .collect();
-        let points = project.project(&dirs)?;
+        let Projected { points, faces } = project.project(&dirs)?;
         let base = self.dirs.len() as u32;
         for (i, e) in new.iter().enumerate() {
             self.mids.insert(*e, base + i as u32);
         }
         self.dirs.extend_from_slice(&dirs);
+        self.faces.extend(faces);
         for (frame, p) in self.points.iter_mut().zip(points) {
             frame.extend(p);
         }
@@ -139,6 +153,22 @@ impl Sphere {
         self.points
             .iter()
             .map(|p| (p[m] - (p[e.0 as usize] + p[e.1 as usize]) * 0.5).length())
+            .fold(0.0, f64::max)
+    }
+
+    /// Whether edge `e` straddles a crease of A or B: its end rays crossed
+    /// faces of one mesh whose normals differ by more than the angle whose
+    /// cosine is `cos_max`.
+    pub fn straddles_crease(&self, e: Edge, cos_max: f32) -> bool {
+        let (fa, fb) = (self.faces[e.0 as usize], self.faces[e.1 as usize]);
+        fa[0].dot(fb[0]) < cos_max || fa[1].dot(fb[1]) < cos_max
+    }
+
+    /// Longest chord of edge `e` over the frames.
+    pub fn chord(&self, e: Edge) -> f64 {
+        self.points
+            .iter()
+            .map(|p| (p[e.0 as usize] - p[e.1 as usize]).length())
             .fold(0.0, f64::max)
     }
 

@@ -3,7 +3,7 @@
 //! A point is on the surface when it lies in a closed triangle (exact
 //! `orient3d` = 0, then `orient2d` in the triangle's dominant coordinate
 //! plane). Otherwise a segment from the point to a far point is crossed
-//! against every triangle with exact signs (crate `robust`): a crossing has
+//! against every triangle with exact signs (`foundation::exact`): a crossing has
 //! the segment's ends strictly on both sides of the triangle's plane and
 //! the line strictly inside all three edges. When a sign that decides a
 //! crossing is 0 (the segment grazes an edge, a vertex or a plane), the
@@ -12,7 +12,7 @@
 //! the cost is one pass over the triangles per point (a bounding-box
 //! filter first), meant for checks, not for bulk queries.
 
-use robust::{Coord, Coord3D};
+use crate::foundation::exact::{orient2d_sign as o2, orient3d_sign as o3};
 
 use super::TriMesh;
 
@@ -36,28 +36,6 @@ const DIRECTIONS: [[f64; 3]; 8] = [
     [-0.447_213_6, 0.547_722_6, -0.707_306_8],
     [0.662_251_7, -0.331_125_8, -0.671_654_3],
 ];
-
-fn c3(v: [f64; 3]) -> Coord3D<f64> {
-    Coord3D {
-        x: v[0],
-        y: v[1],
-        z: v[2],
-    }
-}
-
-/// Sign of the volume of `(a, b, c, d)`: 1 when `d` is in front of `abc`
-/// (right-hand normal), −1 behind, 0 coplanar.
-fn o3(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
-    // Shewchuk's value is positive when d lies behind abc.
-    let v = robust::orient3d(c3(a), c3(b), c3(c), c3(d));
-    (v < 0.0) as i8 - (v > 0.0) as i8
-}
-
-fn o2(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
-    let c2 = |v: [f64; 2]| Coord { x: v[0], y: v[1] };
-    let v = robust::orient2d(c2(a), c2(b), c2(c));
-    (v > 0.0) as i8 - (v < 0.0) as i8
-}
 
 /// Whether `p` (coplanar with triangle `t`) lies in the closed triangle.
 fn in_closed_triangle(t: [[f64; 3]; 3], p: [f64; 3]) -> bool {

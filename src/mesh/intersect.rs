@@ -19,9 +19,10 @@
 //! meets whose own boxes meet it too.
 
 use rayon::prelude::*;
-use robust::{Coord, Coord3D};
+use robust::Coord;
 
 use super::TriMesh;
+use crate::foundation::exact::orient3d_sign as o3;
 use crate::foundation::{Aabb, Forest};
 
 /// Result of [`self_intersections`].
@@ -82,18 +83,6 @@ pub fn intersections_of_first(mesh: &TriMesh, n: usize) -> SelfIntersections {
         .collect();
     pairs.par_sort_unstable();
     SelfIntersections { pairs, degenerate }
-}
-
-/// Sign of `orient3d`: 1 when `d` is in front of `abc` (right-hand normal),
-/// −1 behind, 0 on its plane.
-fn o3(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
-    let c3 = |v: [f64; 3]| Coord3D {
-        x: v[0],
-        y: v[1],
-        z: v[2],
-    };
-    // Shewchuk's value is positive when d lies below (behind) abc.
-    -sign(robust::orient3d(c3(a), c3(b), c3(c), c3(d)))
 }
 
 fn sign(v: f64) -> i8 {

@@ -75,6 +75,29 @@ pub fn orient2(a: P2, b: P2, c: P2) -> i128 {
     cross2(sub2(b, a), sub2(c, a))
 }
 
+/// Exact sign of the orientation of `d` against the plane of `abc` on f64
+/// coordinates (Shewchuk's adaptive `orient3d`, crate `robust`): 1 when `d`
+/// lies in front of `abc` (on the side of its right-hand normal), −1
+/// behind, 0 on the plane.
+pub fn orient3d_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
+    let c3 = |v: [f64; 3]| robust::Coord3D {
+        x: v[0],
+        y: v[1],
+        z: v[2],
+    };
+    // Shewchuk's value is positive when d lies below (behind) abc.
+    let v = robust::orient3d(c3(a), c3(b), c3(c), c3(d));
+    (v < 0.0) as i8 - (v > 0.0) as i8
+}
+
+/// Exact sign of the orientation of `abc` in the plane on f64 coordinates
+/// (`orient2d`): 1 counter-clockwise, −1 clockwise, 0 collinear.
+pub fn orient2d_sign(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
+    let c2 = |v: [f64; 2]| robust::Coord { x: v[0], y: v[1] };
+    let v = robust::orient2d(c2(a), c2(b), c2(c));
+    (v > 0.0) as i8 - (v < 0.0) as i8
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,27 +122,4 @@ mod tests {
         assert_eq!(gcd(0, 0), 0);
         assert_eq!([4, -6, 10].iter().fold(0, |g, &c| gcd(g, c)), 2);
     }
-}
-
-/// Exact sign of the orientation of `d` against the plane of `abc` on f64
-/// coordinates (Shewchuk's adaptive `orient3d`, crate `robust`): 1 when `d`
-/// lies in front of `abc` (on the side of its right-hand normal), −1
-/// behind, 0 on the plane.
-pub fn orient3d_sign(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> i8 {
-    let c3 = |v: [f64; 3]| robust::Coord3D {
-        x: v[0],
-        y: v[1],
-        z: v[2],
-    };
-    // Shewchuk's value is positive when d lies below (behind) abc.
-    let v = robust::orient3d(c3(a), c3(b), c3(c), c3(d));
-    (v < 0.0) as i8 - (v > 0.0) as i8
-}
-
-/// Exact sign of the orientation of `abc` in the plane on f64 coordinates
-/// (`orient2d`): 1 counter-clockwise, −1 clockwise, 0 collinear.
-pub fn orient2d_sign(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> i8 {
-    let c2 = |v: [f64; 2]| robust::Coord { x: v[0], y: v[1] };
-    let v = robust::orient2d(c2(a), c2(b), c2(c));
-    (v > 0.0) as i8 - (v < 0.0) as i8
 }

@@ -32,11 +32,11 @@ fn tree_sum<const Q: usize>(sh: &mut [[f32; Q]]) -> [f32; Q] {
 }
 
 /// One point's position, λ_V and λ_G (zeros past the end) and its e_j/M.
-pub(super) struct PointState {
-    pub(super) x: V3,
-    pub(super) lv: f32,
-    pub(super) lg: V3,
-    pub(super) energy: f32,
+struct PointState {
+    x: V3,
+    lv: f32,
+    lg: V3,
+    energy: f32,
 }
 
 fn point_state(input: &EnergyInput, ix: usize) -> PointState {
@@ -67,8 +67,8 @@ fn point_state(input: &EnergyInput, ix: usize) -> PointState {
 }
 
 /// A point's e_j/M and adjoints from V and ∇V at it (the kernel's lines
-/// after its loop over primitives; the fast path shares them).
-pub(super) fn point_terms(u: &EnergyParams, x: [f32; 4], n: V3, v: f32, g: V3) -> PointState {
+/// after its loop over primitives; the fast path runs them lane-wise).
+fn point_terms(u: &EnergyParams, x: [f32; 4], n: V3, v: f32, g: V3) -> PointState {
     let g2 = dot(g, g);
     let (en, dn) = if g2 > u.g_min2 {
         let len = g2.sqrt();

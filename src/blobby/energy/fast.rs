@@ -1,19 +1,19 @@
 //! Fast CPU path of `blobby_energy`, beside the mirror and tested equal to
 //! it within [`super::cpu::tolerances`]: the same rows (one per workgroup
-//! of [`BLOCK`] points), computed with the primitives in arrays that the
-//! compiler vectorises (AVX-512 or AVX2 when the CPU has them, through
-//! pulp's run-time dispatch; every function of the per-primitive loops is
-//! `#[inline(always)]`), e^x by a polynomial instead of libm, each
-//! e^{−a s} computed once per point and primitive (phase 2 reads it back),
-//! and the sums carried in f64 every 64 points (`SUB`), so they are closer to
-//! the exact sums than the kernel's f32 tree.
+//! of [`BLOCK`] points), computed with [`LANES`] points per vector step
+//! and the primitives in a scalar loop, so V and ∇V accumulate per lane
+//! without horizontal sums and the per-point terms vectorise too (AVX-512
+//! or AVX2 when the CPU has them, through pulp's run-time dispatch; every
+//! function of the loops is `#[inline(always)]`); e^x by a polynomial
+//! instead of libm, each e^{−a s} computed once per point and primitive
+//! (phase 2 reads it back), and the sums carried in f64 every 64 points
+//! (`SUB`), so they are closer to the exact sums than the kernel's f32 tree.
 
 use rayon::prelude::*;
 
-use super::cpu::point_terms;
 use super::{BLOCK, EnergyInput};
 
-/// Primitives per vector step (the arrays are padded to a multiple).
+/// Points per vector step.
 const LANES: usize = 16;
 /// Points whose f32 partial sums are added into f64 at a time.
 const SUB: usize = 64;
@@ -42,53 +42,9 @@ fn exp_neg(x: f32) -> f32 {
     p * f32::from_bits(e)
 }
 
-/// `v[k0..k0 + LANES]` as an array (one bounds check per step).
-#[inline(always)]
-fn lanes(v: &[f32], k0: usize) -> &[f32; LANES] {
-    v[k0..k0 + LANES].try_into().expect("padded to LANES")
-}
-
-/// The same, mutable.
-#[inline(always)]
-fn lanes_mut(v: &mut [f32], k0: usize) -> &mut [f32; LANES] {
-    (&mut v[k0..k0 + LANES])
-        .try_into()
-        .expect("padded to LANES")
-}
-
-/// The primitives as padded columns (padding: b = 0, a = 1, c = 0, so its
-/// terms vanish).
-struct Columns {
-    cx: Vec<f32>,
-    cy: Vec<f32>,
-    cz: Vec<f32>,
-    a: Vec<f32>,
-    b: Vec<f32>,
-}
-
-impl Columns {
-    fn of(input: &EnergyInput) -> Columns {
-        let n = input.params.n_prims as usize;
-        let padded = n.div_ceil(LANES) * LANES;
-        let col = |f: &dyn Fn(usize) -> f32, pad: f32| -> Vec<f32> {
-            (0..padded)
-                .map(|k| if k < n { f(k) } else { pad })
-                .collect()
-        };
-        Columns {
-            cx: col(&|k| input.prims[2 * k][0], 0.0),
-            cy: col(&|k| input.prims[2 * k][1], 0.0),
-            cz: col(&|k| input.prims[2 * k][2], 0.0),
-            a: col(&|k| input.prims[2 * k][3], 1.0),
-            b: col(&|k| input.prims[2 * k + 1][0], 0.0),
-        }
-    }
-}
-
 /// One workgroup's row, run under pulp's dispatch.
 struct Row<'a> {
     input: &'a EnergyInput,
-    cols: &'a Columns,
     w: usize,
 }
 
@@ -97,126 +53,141 @@ impl pulp::NullaryFnOnce for Row<'_> {
 
     #[inline(always)]
     fn call(self) -> Vec<f32> {
-        row(self.input, self.cols, self.w)
+        row(self.input, self.w)
     }
 }
 
+/// A row with `LANES` points per vector step and the primitives in a
+/// scalar loop: V and ∇V accumulate per lane (no horizontal sums), the
+/// per-point terms of the mirror's `point_terms` run lane-wise (the same operations,
+/// the branch on |∇V|² as a select), and the gradient per primitive
+/// accumulates per lane and is summed into f64 every [`SUB`] points. A
+/// partial last group repeats its last point with the adjoints masked to 0.
 #[inline(always)]
-fn row(input: &EnergyInput, cols: &Columns, w: usize) -> Vec<f32> {
+fn row(input: &EnergyInput, w: usize) -> Vec<f32> {
     let u = &input.params;
     let n = u.n_prims as usize;
-    let np = cols.a.len();
     let first = w * BLOCK;
     let last = (first + BLOCK).min(u.n_points as usize);
     let count = last - first;
-    // Phase 1: V, ∇V, e_j/M and the adjoints per point; e^{−as} kept.
-    let mut ex = vec![0.0f32; count * np];
-    let mut state = Vec::with_capacity(count);
+    let prims: Vec<[f32; 5]> = (0..n)
+        .map(|k| {
+            let c = input.prims[2 * k];
+            [c[0], c[1], c[2], c[3], input.prims[2 * k + 1][0]]
+        })
+        .collect();
     let mut energy = 0.0f64;
-    for j in 0..count {
-        let x = input.points[2 * (first + j)];
-        let nrm = input.points[2 * (first + j) + 1];
-        let e_row = &mut ex[j * np..(j + 1) * np];
+    let mut total = vec![0.0f64; 5 * n];
+    let mut acc = vec![[0.0f32; LANES]; 5 * n];
+    let mut ex = vec![[0.0f32; LANES]; n];
+    let groups = count.div_ceil(LANES);
+    for group in 0..groups {
+        let (mut px, mut py, mut pz) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+        let (mut nx, mut ny, mut nz) = ([0.0f32; LANES], [0.0f32; LANES], [0.0f32; LANES]);
+        let mut mask = [0.0f32; LANES];
+        for l in 0..LANES {
+            let j = group * LANES + l;
+            let at = first + j.min(count - 1);
+            let (x, nrm) = (input.points[2 * at], input.points[2 * at + 1]);
+            (px[l], py[l], pz[l]) = (x[0], x[1], x[2]);
+            (nx[l], ny[l], nz[l]) = (nrm[0], nrm[1], nrm[2]);
+            mask[l] = if j < count { 1.0 } else { 0.0 };
+        }
+        // Phase 1: V and ∇V per lane; e^{−as} kept.
         let (mut v, mut gx, mut gy, mut gz) = (
             [0.0f32; LANES],
             [0.0f32; LANES],
             [0.0f32; LANES],
             [0.0f32; LANES],
         );
-        for k0 in (0..np).step_by(LANES) {
-            let (cx, cy, cz) = (
-                lanes(&cols.cx, k0),
-                lanes(&cols.cy, k0),
-                lanes(&cols.cz, k0),
-            );
-            let (ca, cb) = (lanes(&cols.a, k0), lanes(&cols.b, k0));
-            let out = lanes_mut(e_row, k0);
+        for (p, out) in prims.iter().zip(ex.iter_mut()) {
+            let [cx, cy, cz, a, b] = *p;
             for l in 0..LANES {
-                let (dx, dy, dz) = (x[0] - cx[l], x[1] - cy[l], x[2] - cz[l]);
+                let (dx, dy, dz) = (px[l] - cx, py[l] - cy, pz[l] - cz);
                 let s = dx * dx + dy * dy + dz * dz;
-                let e1 = exp_neg(-ca[l] * s);
+                let e1 = exp_neg(-a * s);
                 out[l] = e1;
-                let e = cb[l] * e1;
-                let f = -2.0 * ca[l] * e;
+                let e = b * e1;
+                let f = -2.0 * a * e;
                 v[l] += e;
                 gx[l] += f * dx;
                 gy[l] += f * dy;
                 gz[l] += f * dz;
             }
         }
-        let v: f32 = v.iter().sum();
-        let g = [
-            gx.iter().sum::<f32>(),
-            gy.iter().sum::<f32>(),
-            gz.iter().sum::<f32>(),
-        ];
-        let p = point_terms(u, x, [nrm[0], nrm[1], nrm[2]], v, g);
-        energy += f64::from(p.energy);
-        state.push((p.x, p.lv, p.lg));
-    }
-    // Phase 2: the gradient per primitive, f32 over SUB points, then f64.
-    let mut total = vec![0.0f64; 5 * np];
-    let mut acc = vec![0.0f32; 5 * np];
-    for (j, &(x, lv, lg)) in state.iter().enumerate() {
-        let e_row = &ex[j * np..(j + 1) * np];
-        let (gcx, rest) = acc.split_at_mut(np);
-        let (gcy, rest) = rest.split_at_mut(np);
-        let (gcz, rest) = rest.split_at_mut(np);
-        let (ga, gb) = rest.split_at_mut(np);
-        for k0 in (0..np).step_by(LANES) {
-            let (cx, cy, cz) = (
-                lanes(&cols.cx, k0),
-                lanes(&cols.cy, k0),
-                lanes(&cols.cz, k0),
-            );
-            let (ca, cb, ce) = (lanes(&cols.a, k0), lanes(&cols.b, k0), lanes(e_row, k0));
-            let (ox, oy, oz) = (lanes_mut(gcx, k0), lanes_mut(gcy, k0), lanes_mut(gcz, k0));
-            let (oa, ob) = (lanes_mut(ga, k0), lanes_mut(gb, k0));
+        // The per-point terms, lane-wise (point_terms' operations).
+        let (mut lv, mut lgx, mut lgy, mut lgz) = (
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+            [0.0f32; LANES],
+        );
+        let mut e_lane = [0.0f32; LANES];
+        let wgt = u.alpha * u.inv_m;
+        for l in 0..LANES {
+            let g2 = gx[l] * gx[l] + gy[l] * gy[l] + gz[l] * gz[l];
+            let steep = g2 > u.g_min2;
+            let len = if steep { g2 } else { u.g_min2 }.sqrt();
+            let (hx, hy, hz) = (gx[l] / len, gy[l] / len, gz[l] / len);
+            let (rx, ry, rz) = (nx[l] + hx, ny[l] + hy, nz[l] + hz);
+            let en = rx * rx + ry * ry + rz * rz;
+            let gn = hx * nx[l] + hy * ny[l] + hz * nz[l];
+            let (dx, dy, dz) = if steep {
+                (
+                    2.0 * (nx[l] - hx * gn) / len,
+                    2.0 * (ny[l] - hy * gn) / len,
+                    2.0 * (nz[l] - hz * gn) / len,
+                )
+            } else {
+                (2.0 * rx / len, 2.0 * ry / len, 2.0 * rz / len)
+            };
+            let res = v[l] - u.iso;
+            lv[l] = 2.0 * res * u.inv_m * mask[l];
+            lgx[l] = wgt * dx * mask[l];
+            lgy[l] = wgt * dy * mask[l];
+            lgz[l] = wgt * dz * mask[l];
+            e_lane[l] = (res * res + u.alpha * en) * u.inv_m * mask[l];
+        }
+        energy += e_lane.iter().map(|&e| f64::from(e)).sum::<f64>();
+        // Phase 2: the gradient per primitive, per lane.
+        for (k, (p, ce)) in prims.iter().zip(&ex).enumerate() {
+            let [cx, cy, cz, a, b] = *p;
+            let [ox, oy, oz, oa, ob] = &mut acc[5 * k..5 * k + 5] else {
+                unreachable!("five rows per primitive")
+            };
             for l in 0..LANES {
-                let (dx, dy, dz) = (x[0] - cx[l], x[1] - cy[l], x[2] - cz[l]);
+                let (dx, dy, dz) = (px[l] - cx, py[l] - cy, pz[l] - cz);
                 let s = dx * dx + dy * dy + dz * dz;
-                let a = ca[l];
                 let e1 = ce[l];
-                let e = cb[l] * e1;
-                let ld = lg[0] * dx + lg[1] * dy + lg[2] * dz;
-                let m = lv - 2.0 * a * ld;
+                let e = b * e1;
+                let ld = lgx[l] * dx + lgy[l] * dy + lgz[l] * dz;
+                let m = lv[l] - 2.0 * a * ld;
                 let f = 2.0 * a * e;
-                ox[l] += f * (m * dx + lg[0]);
-                oy[l] += f * (m * dy + lg[1]);
-                oz[l] += f * (m * dz + lg[2]);
-                oa[l] += -s * e * lv - 2.0 * e * (1.0 - a * s) * ld;
+                ox[l] += f * (m * dx + lgx[l]);
+                oy[l] += f * (m * dy + lgy[l]);
+                oz[l] += f * (m * dz + lgz[l]);
+                oa[l] += -s * e * lv[l] - 2.0 * e * (1.0 - a * s) * ld;
                 ob[l] += e1 * m;
             }
         }
-        if (j + 1) % SUB == 0 || j + 1 == count {
+        if (group + 1) % (SUB / LANES) == 0 || group + 1 == groups {
             for (t, a) in total.iter_mut().zip(acc.iter_mut()) {
-                *t += f64::from(*a);
-                *a = 0.0;
+                *t += a.iter().map(|&x| f64::from(x)).sum::<f64>();
+                *a = [0.0; LANES];
             }
         }
     }
     let mut out = Vec::with_capacity(1 + 5 * n);
     out.push(energy as f32);
-    for k in 0..n {
-        for q in 0..5 {
-            out.push(total[q * np + k] as f32);
-        }
-    }
+    out.extend(total.iter().map(|&t| t as f32));
     out
 }
 
 /// The kernel's rows, fast: one rayon task per workgroup of points.
 pub fn blobby_energy(input: &EnergyInput) -> Vec<f32> {
-    let cols = Columns::of(input);
     let arch = pulp::Arch::new();
     (0..input.n_rows())
         .into_par_iter()
-        .flat_map_iter(|w| {
-            arch.dispatch(Row {
-                input,
-                cols: &cols,
-                w,
-            })
-        })
+        .flat_map_iter(|w| arch.dispatch(Row { input, w }))
         .collect()
 }

@@ -1,6 +1,6 @@
 //! Fast CPU path of `blobby_energy`, beside the mirror and tested equal to
 //! it within [`super::cpu::tolerances`]: the same rows (one per workgroup
-//! of [`BLOCK`] points), computed with [`LANES`] points per vector step
+//! of [`BLOCK`] points), computed with 16 points per vector step
 //! and the primitives in a scalar loop, so V and ∇V accumulate per lane
 //! without horizontal sums and the per-point terms vectorise too (AVX-512
 //! or AVX2 when the CPU has them, through pulp's run-time dispatch; every

@@ -206,14 +206,8 @@ fn run_fit(global: &Global, args: &FitArgs) -> anyhow::Result<()> {
         crate::io::write_mesh(p, &surface)?;
     }
     if let Some(path) = &args.preview {
-        let opened;
-        let g = match &gpu {
-            Some(g) => g,
-            None => {
-                opened = global.gpu()?;
-                &opened
-            }
-        };
+        let mut opened = None;
+        let g = global.preview_gpu(&gpu, &mut opened)?;
         let panels = [
             Panel {
                 mesh: &scan,

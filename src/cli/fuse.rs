@@ -205,17 +205,6 @@ fn failing_rays(e: &Error) -> Option<(Vec3, Vec<[f32; 3]>)> {
     }
 }
 
-fn preview_gpu<'g>(
-    global: &Global,
-    gpu: &'g Option<crate::Gpu>,
-    opened: &'g mut Option<crate::Gpu>,
-) -> anyhow::Result<&'g crate::Gpu> {
-    Ok(match gpu {
-        Some(g) => g,
-        None => opened.insert(global.gpu()?),
-    })
-}
-
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let facing = args.view.facing()?;
     let t0 = Instant::now();
@@ -248,7 +237,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                     .map_or(1.0, |(lo, hi)| (hi - lo).length());
                 let rays = needles(h, &dirs, 0.75 * diagonal);
                 let mut opened = None;
-                let g = preview_gpu(global, &gpu, &mut opened)?;
+                let g = global.preview_gpu(&gpu, &mut opened)?;
                 let image = crate::render::render_panels(
                     g,
                     &[Panel {
@@ -290,7 +279,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 .collect(),
         });
         let mut opened = None;
-        let g = preview_gpu(global, &gpu, &mut opened)?;
+        let g = global.preview_gpu(&gpu, &mut opened)?;
         let image = crate::render::render_panels(
             g,
             &[

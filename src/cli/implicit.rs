@@ -164,14 +164,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     bar.finish_and_clear();
     if let Some(path) = &args.preview {
-        let opened;
-        let g = match &gpu {
-            Some(g) => g,
-            None => {
-                opened = global.gpu()?;
-                &opened
-            }
-        };
+        let mut opened = None;
+        let g = global.preview_gpu(&gpu, &mut opened)?;
         let panels: Vec<Panel<'_>> = (sheet.iter())
             .map(|(mesh, t)| Panel {
                 mesh,

@@ -308,6 +308,20 @@ impl Global {
         })?)
     }
 
+    /// The GPU a preview renders on: the backend's (`gpu`) when the command
+    /// runs on one, else one opened into `opened` (the renderer needs a
+    /// device even for a CPU run).
+    fn preview_gpu<'g>(
+        &self,
+        gpu: &'g Option<Gpu>,
+        opened: &'g mut Option<Gpu>,
+    ) -> anyhow::Result<&'g Gpu> {
+        Ok(match gpu {
+            Some(g) => g,
+            None => opened.insert(self.gpu()?),
+        })
+    }
+
     /// A progress bar on stderr (hidden with `--quiet` or without a terminal).
     fn progress(&self, len: u64, what: &str) -> indicatif::ProgressBar {
         if self.quiet {

@@ -129,14 +129,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 scalars: None,
             })
             .collect();
-        let opened;
-        let g = match &gpu {
-            Some(g) => g,
-            None => {
-                opened = global.gpu()?;
-                &opened
-            }
-        };
+        let mut opened = None;
+        let g = global.preview_gpu(&gpu, &mut opened)?;
         let image = crate::render::render_panels(
             g,
             &panels,

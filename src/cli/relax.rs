@@ -695,14 +695,8 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     let title = job.plan.name.clone().unwrap_or_default();
     if args.preview.is_some() || args.bone_preview.is_some() {
-        let opened;
-        let preview_gpu = match &gpu {
-            Some(g) => g,
-            None => {
-                opened = global.gpu()?;
-                &opened
-            }
-        };
+        let mut opened = None;
+        let preview_gpu = global.preview_gpu(&gpu, &mut opened)?;
         if let Some(path) = &args.preview {
             let before = before_mesh(&job.skin);
             let mut meshes = vec![(&before, "before"), (&relaxed, "after")];

@@ -141,17 +141,6 @@ impl RefineProgress {
     }
 }
 
-/// The tolerance a run will use (for the progress bar's scale).
-pub(super) fn tolerance_of(shape: &ShapeArgs, a: &TriMesh, b: &TriMesh) -> f64 {
-    let diagonal = |m: &TriMesh| {
-        m.bounds()
-            .map_or(0.0, |(lo, hi)| f64::from((hi - lo).length()))
-    };
-    shape
-        .tolerance
-        .unwrap_or(crate::fusion::TOLERANCE_OF_DIAGONAL * diagonal(a).max(diagonal(b)))
-}
-
 /// The meshes as one, with a `mesh` scalar: its index in `parts`.
 fn together(parts: &[&TriMesh]) -> TriMesh {
     let mut m = TriMesh::default();
@@ -223,8 +212,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         subtract: args.subtract,
         refine: args.shape.refine(),
     };
-    let mut progress =
-        RefineProgress::new(global, "fuse: refine", tolerance_of(&args.shape, &a, &b));
+    let mut progress = RefineProgress::new(
+        global,
+        "fuse: refine",
+        args.shape.refine().tolerance_for(&a, &b)?,
+    );
     let t1 = Instant::now();
     let result = fuse(&a, &b, &options, backend, |p| progress.pass(p));
     progress.bar.finish_and_clear();

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::fuse::{RefineProgress, ShapeArgs, read_pair, tolerance_of};
+use super::fuse::{RefineProgress, ShapeArgs, read_pair};
 use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes};
 use crate::fusion::{MorphOptions, MorphReport, morph};
@@ -99,8 +99,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let read_s = t0.elapsed().as_secs_f64();
     let gpu = global.backend(&args.backend)?;
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
-    let mut progress =
-        RefineProgress::new(global, "morph: refine", tolerance_of(&args.shape, &a, &b));
+    let mut progress = RefineProgress::new(
+        global,
+        "morph: refine",
+        args.shape.refine().tolerance_for(&a, &b)?,
+    );
     let t1 = Instant::now();
     let result = morph(&a, &b, &options, backend, |p| progress.pass(p));
     progress.bar.finish_and_clear();

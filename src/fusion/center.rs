@@ -30,20 +30,6 @@ pub struct Found {
     pub planes: usize,
 }
 
-/// Volume centroid of a closed mesh (signed tetrahedra about its box centre).
-pub fn volume_centroid(mesh: &TriMesh) -> Option<DVec3> {
-    let (lo, hi) = mesh.bounds()?;
-    let r = ((lo + hi) * 0.5).as_dvec3();
-    let (mut v, mut m) = (0.0, DVec3::ZERO);
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3() - r);
-        let w = a.dot(b.cross(c)) / 6.0;
-        v += w;
-        m += w * (a + b + c) / 4.0;
-    }
-    (v.abs() > 0.0).then(|| r + m / v)
-}
-
 /// The deepest common point of A's and B's kernels (see the module docs).
 ///
 /// Errors: a refusal when the meshes' boxes do not overlap or the kernels

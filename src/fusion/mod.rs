@@ -81,6 +81,25 @@ impl Default for RefineOptions {
     }
 }
 
+impl RefineOptions {
+    /// The tolerance these options ask for with inputs `a` and `b`.
+    ///
+    /// Errors: a tolerance that is not a positive length.
+    pub fn tolerance_for(&self, a: &TriMesh, b: &TriMesh) -> Result<f64> {
+        let diagonal = |m: &TriMesh| {
+            m.bounds()
+                .map_or(0.0, |(lo, hi)| f64::from((hi - lo).length()))
+        };
+        let tol = self
+            .tolerance
+            .unwrap_or(TOLERANCE_OF_DIAGONAL * diagonal(a).max(diagonal(b)));
+        if !(tol.is_finite() && tol > 0.0) {
+            return Err(Error::param("tolerance", tol, "a positive length"));
+        }
+        Ok(tol)
+    }
+}
+
 /// Options of [`fuse`].
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct FuseOptions {
@@ -133,21 +152,6 @@ pub struct FusionReport {
 pub struct Fused {
     pub mesh: TriMesh,
     pub report: FusionReport,
-}
-
-/// The tolerance `options` asks for with inputs `a` and `b`.
-fn tolerance(options: &RefineOptions, a: &TriMesh, b: &TriMesh) -> Result<f64> {
-    let diagonal = |m: &TriMesh| {
-        m.bounds()
-            .map_or(0.0, |(lo, hi)| f64::from((hi - lo).length()))
-    };
-    let tol = options
-        .tolerance
-        .unwrap_or(TOLERANCE_OF_DIAGONAL * diagonal(a).max(diagonal(b)));
-    if !(tol.is_finite() && tol > 0.0) {
-        return Err(Error::param("tolerance", tol, "a positive length"));
-    }
-    Ok(tol)
 }
 
 /// Refines `sphere` until every edge's deviation is within `tol`; `extra`
@@ -257,7 +261,7 @@ pub fn fuse(
     backend: Backend<'_>,
     mut on_pass: impl FnMut(&Pass),
 ) -> Result<Fused> {
-    let tol = tolerance(&options.refine, a, b)?;
+    let tol = options.refine.tolerance_for(a, b)?;
     let (bvh_a, bvh_b) = bvhs(a, b)?;
     let (ca, cb) = (
         RayCaster::new(&bvh_a, backend)?,
@@ -401,7 +405,7 @@ pub fn morph(
     if options.frames < 2 {
         return Err(Error::param("frames", options.frames, "at least 2"));
     }
-    let tol = tolerance(&options.refine, a, b)?;
+    let tol = options.refine.tolerance_for(a, b)?;
     let (bvh_a, bvh_b) = bvhs(a, b)?;
     let (ca, cb) = (
         RayCaster::new(&bvh_a, backend)?,

@@ -306,7 +306,7 @@ fn params_sample(kernel: Kernel) -> Sample {
             ];
             (encase_bytes(&p), fields)
         }
-        Kernel::RayCast => {
+        Kernel::RayCast | Kernel::RayHits => {
             let f = |v: u32| f32::from_bits(v);
             let p = chisel::ray_cast::gpu::Params {
                 n_rays: 0xD1,

@@ -102,6 +102,8 @@ registry! {
     BlobbyEnergy => "blobby_energy",
     /// Rays from one origin through a linear BVH: nearest and farthest hit and the hit count.
     RayCast => "ray_cast",
+    /// Rays from one origin through a linear BVH: every hit (parameter, triangle) at scanned offsets.
+    RayHits => "ray_hits",
 }
 
 registry! {
@@ -140,6 +142,7 @@ const SHARED: &[(&str, &str)] = &[
         "block_scan",
         include_str!("../../kernels/shared/block_scan.wgsl"),
     ),
+    ("bvh_ray", include_str!("../../kernels/shared/bvh_ray.wgsl")),
 ];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`

@@ -1,10 +1,12 @@
-//! CPU mirror of `kernels/ray_cast.wgsl`: the same walk, the same f32
-//! operations in the same order, one ray at a time (rays in parallel).
+//! CPU mirror of `kernels/ray_cast.wgsl` and `kernels/ray_hits.wgsl`
+//! (their shared tests in `kernels/shared/bvh_ray.wgsl`): the same walk,
+//! the same f32 operations in the same order, one ray at a time (rays in
+//! parallel).
 
 use rayon::prelude::*;
 
 use super::bvh::{Bvh, Node};
-use super::{NO_TRIANGLE, RayHit};
+use super::{Hit, NO_TRIANGLE, RayHit};
 
 /// Per-ray constants of the watertight test (Woop, Benthin & Wald 2013):
 /// the axis `kz` of the direction's largest component, the shear that maps
@@ -120,11 +122,9 @@ impl Ray {
     }
 }
 
-/// Casts one ray from `origin` along `dir` (any length; distances are in
-/// units of its length) through `bvh`.
-pub fn cast(bvh: &Bvh, origin: [f32; 3], dir: [f32; 3]) -> RayHit {
-    let ray = Ray::new(origin, dir);
-    let mut out = RayHit::MISS;
+/// Walks `bvh` along `ray` and calls `visit(t, triangle id)` for every hit,
+/// in the kernels' order (boxes in preorder, triangles in leaf order).
+fn walk(bvh: &Bvh, ray: &Ray, mut visit: impl FnMut(f32, u32)) {
     let mut i = 0usize;
     while i < bvh.nodes.len() {
         let node = &bvh.nodes[i];
@@ -139,11 +139,18 @@ pub fn cast(bvh: &Bvh, origin: [f32; 3], dir: [f32; 3]) -> RayHit {
         for t in node.triangles() {
             let c = [0, 1, 2].map(|k| bvh.corners[3 * t + k]);
             if let Some(d) = ray.hit(c) {
-                out.add(d, c[0][3].to_bits());
+                visit(d, c[0][3].to_bits());
             }
         }
         i = node.escape as usize;
     }
+}
+
+/// Casts one ray from `origin` along `dir` (any length; distances are in
+/// units of its length) through `bvh`.
+pub fn cast(bvh: &Bvh, origin: [f32; 3], dir: [f32; 3]) -> RayHit {
+    let mut out = RayHit::MISS;
+    walk(bvh, &Ray::new(origin, dir), |t, tri| out.add(t, tri));
     out
 }
 
@@ -153,6 +160,55 @@ pub fn ray_cast(bvh: &Bvh, origin: [f32; 3], dirs: &[[f32; 4]]) -> Vec<RayHit> {
         .with_min_len(64)
         .map(|d| cast(bvh, origin, [d[0], d[1], d[2]]))
         .collect()
+}
+
+/// Mirror of `kernels/ray_hits.wgsl`: every hit of every ray of `dirs`
+/// from `origin`, ray `i`'s at `offsets[i] − offsets[0]…` in walk order
+/// (writes past a ray's slots dropped), and the count each walk found.
+pub fn ray_hits(
+    bvh: &Bvh,
+    origin: [f32; 3],
+    dirs: &[[f32; 4]],
+    offsets: &[u32],
+) -> (Vec<Hit>, Vec<u32>) {
+    assert_eq!(
+        offsets.len(),
+        dirs.len() + 1,
+        "one offset per ray and the end"
+    );
+    let base = offsets[0];
+    let total = (offsets[dirs.len()] - base) as usize;
+    let mut hits = vec![
+        Hit {
+            t: 0.0,
+            tri: NO_TRIANGLE
+        };
+        total
+    ];
+    // Each ray writes only its own slots: split the output by the offsets.
+    let mut slices = Vec::with_capacity(dirs.len());
+    let mut rest = hits.as_mut_slice();
+    for w in offsets.windows(2) {
+        let (mine, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+        slices.push(mine);
+        rest = tail;
+    }
+    let counts = dirs
+        .par_iter()
+        .zip(slices)
+        .with_min_len(64)
+        .map(|(d, slots)| {
+            let mut count = 0usize;
+            walk(bvh, &Ray::new(origin, [d[0], d[1], d[2]]), |t, tri| {
+                if let Some(slot) = slots.get_mut(count) {
+                    *slot = Hit { t, tri };
+                }
+                count += 1;
+            });
+            count as u32
+        })
+        .collect();
+    (hits, counts)
 }
 
 impl RayHit {

@@ -24,6 +24,7 @@ mod network_update;
 mod particle_update;
 mod range_reduce;
 mod ray_cast;
+mod ray_hits;
 mod spring_chebyshev;
 mod spring_step;
 mod tissue_reduce_max;

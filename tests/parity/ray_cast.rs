@@ -45,7 +45,7 @@ fn gpu_hits(gpu: &Gpu, what: &str, bvh: &Bvh, origin: Vec3, dirs: &[[f32; 4]]) -
 }
 
 /// Whether `b` is within `ulps` units in the last place of `a`.
-fn close(a: f32, b: f32, ulps: u32) -> bool {
+pub(crate) fn close(a: f32, b: f32, ulps: u32) -> bool {
     a == b || (a.signum() == b.signum() && a.to_bits().abs_diff(b.to_bits()) <= ulps)
 }
 
@@ -63,7 +63,7 @@ fn compare(what: &str, want: &[RayHit], got: &[RayHit]) -> Result<(), String> {
     Ok(())
 }
 
-fn dirs_of(v: &[DVec3]) -> Vec<[f32; 4]> {
+pub(crate) fn dirs_of(v: &[DVec3]) -> Vec<[f32; 4]> {
     v.iter()
         .map(|d| {
             let d = d.as_vec3();

@@ -271,6 +271,36 @@ pub enum Refusal {
         /// The first failing rays: unit direction and hit count.
         examples: Vec<([f32; 3], u32)>,
     },
+    /// Rays from the fusion centre that cross a mesh an even number of
+    /// times: the centre is outside it, or the mesh is open there.
+    #[error(
+        "mesh {mesh} is not closed around H = ({:.6}, {:.6}, {:.6}): {failing} of {rays} rays \
+         from H cross its surface an even number of times ({}); H lies outside it, or it is open \
+         there",
+        center[0], center[1], center[2],
+        rays_text(examples)
+    )]
+    OpenAlongRays {
+        mesh: &'static str,
+        center: [f64; 3],
+        failing: usize,
+        rays: usize,
+        /// The first failing rays: unit direction and hit count.
+        examples: Vec<([f32; 3], u32)>,
+    },
+    /// A ∩ B falls into several pieces, where fusing a mesh that is not
+    /// star-shaped needs one (seed 001 §2.6.2).
+    #[error(
+        "fusing a mesh that is not star-shaped about H needs one connected A ∩ B (seed 001 \
+         §2.6.2): on a grid of cell {cell:.3e} it has {components} pieces ({points:?} grid \
+         points, largest first)"
+    )]
+    IntersectionNotConnected {
+        components: usize,
+        /// Grid points of the largest pieces.
+        points: Vec<usize>,
+        cell: f64,
+    },
     /// Subtraction where B reaches out of A along some rays (ρ_B ≥ ρ_A).
     #[error(
         "subtraction needs B inside A along every ray from H (ρ_B < ρ_A): in {failing} of {rays} \

@@ -3,7 +3,9 @@
 //! exact point-in-mesh test, C closed, outward and free of
 //! self-intersections, concentric spheres fusing to ∛(r_A³ + r_B³), the
 //! morph's volume linear in t with C(0) on A and C(1) on B, and refusals
-//! that name the failing rays. Real data: star-shaped foot bones.
+//! that name the failing rays. The layered fusion of a mesh that is not
+//! star-shaped (§2.6.2): its fills, its surface, its refusals. Real data:
+//! star-shaped foot bones, and the largest bone (no kernel) by layers.
 
 use chisel::fusion::{FuseOptions, MorphOptions, RefineOptions, find_center, fuse, morph};
 use chisel::mesh::distance::DistanceGrid;
@@ -267,7 +269,7 @@ fn subtraction_refuses_where_b_reaches_out_of_a() {
 }
 
 #[test]
-fn non_star_shaped_mesh_is_refused_with_its_rays() {
+fn subtraction_from_a_non_star_shaped_mesh_is_refused_with_its_rays() {
     // A is two spheres side by side; from inside the first, rays towards
     // the second cross A three times.
     let mut a = sphere(3, 0.5, Vec3::ZERO);
@@ -277,7 +279,9 @@ fn non_star_shaped_mesh_is_refused_with_its_rays() {
     a.triangles
         .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
     let b = sphere(3, 0.4, Vec3::new(0.2, 0.0, 0.0));
+    // (A fusion goes on by layers; a subtraction refuses.)
     let mut o = options(1e-3);
+    o.subtract = true;
     o.center = Some(Vec3::new(0.1, 0.0, 0.0));
     match fuse(&a, &b, &o, Backend::Cpu, |_| {}) {
         Err(Error::Refused(Refusal::NotStarShaped {
@@ -442,4 +446,200 @@ fn star_shaped_foot_bones_fuse() {
     // The largest bone has no kernel: refused with the reason.
     let err = find_center(&bones[0], &bones[0]).unwrap_err().to_string();
     assert!(err.contains("kernels of A and B"), "{err}");
+}
+
+/// A torus about the z axis: core radius `big`, tube radius `small`,
+/// outward.
+fn torus(big: f32, small: f32, nu: u32, nv: u32) -> TriMesh {
+    let mut m = TriMesh::default();
+    for i in 0..nu {
+        let u = i as f32 / nu as f32 * std::f32::consts::TAU;
+        for j in 0..nv {
+            let v = j as f32 / nv as f32 * std::f32::consts::TAU;
+            let r = big + small * v.cos();
+            m.positions
+                .push(Vec3::new(r * u.cos(), r * u.sin(), small * v.sin()));
+        }
+    }
+    let at = |i: u32, j: u32| (i % nu) * nv + (j % nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            m.triangles.push([a, b, c]);
+            m.triangles.push([a, c, d]);
+        }
+    }
+    m
+}
+
+/// The layered fusion's own checks on C: closed, outward, free of
+/// self-intersections, the volume within `rel`, B strictly inside and A's
+/// vertices outside C (where C's boundary is A's surface) at most
+/// `outside_cells` cells away, as the report says.
+fn assert_layered(
+    what: &str,
+    f: &chisel::fusion::Fused,
+    b: &TriMesh,
+    rel: f64,
+    outside_cells: f64,
+) {
+    let r = &f.report;
+    let l = r.layered.as_ref().expect("the layered method ran");
+    assert_eq!(r.method, "layered");
+    assert!(!r.star_shaped);
+    assert!(r.volumes.relative_error < rel, "{what}: {:?}", r.volumes);
+    let topo = Topology::of(&f.mesh);
+    assert!(
+        topo.closed && topo.is_manifold() && topo.consistently_oriented,
+        "{what}: surface"
+    );
+    assert!(f.mesh.signed_volume() > 0.0, "{what}: wound inward");
+    let crossing = self_intersections(&f.mesh);
+    assert!(
+        crossing.pairs.is_empty() && crossing.degenerate.is_empty(),
+        "{what}: crossings"
+    );
+    assert_contains(&format!("{what}: B in C"), &f.mesh, b);
+    assert!(
+        l.outside_distance <= outside_cells * l.cell,
+        "{what}: vertices {} cells outside",
+        l.outside_distance / l.cell
+    );
+    assert!(l.crossing_bracket <= 0.25 * l.cell, "{what}: {l:?}");
+}
+
+#[test]
+fn layers_of_a_fill_outward_in_order() {
+    use chisel::fusion::layered::intervals;
+    // Star-shaped A: eq. 5.
+    let c = intervals(&[2.0], 1.0);
+    assert_eq!(c.len(), 1);
+    assert!((c[0][1] - 9f64.cbrt()).abs() < 1e-12);
+    // A = [0, 1] ∪ [2, 3], B = [0, 0.5]: excess 0.125 fills [1, ∛1.125].
+    let c = intervals(&[1.0, 2.0, 3.0], 0.5);
+    assert_eq!(c.len(), 2, "{c:?}");
+    assert!((c[0][1] - 1.125f64.cbrt()).abs() < 1e-12);
+    assert_eq!(c[1], [2.0, 3.0]);
+    // A = [0, 1] ∪ [1.1, 1.2] ∪ [2, 3], B = [0, 1]: excess 1 fills the gap
+    // [1, 1.1] (0.331), merges, and the rest (0.669) goes past 1.2.
+    let c = intervals(&[1.0, 1.1, 1.2, 2.0, 3.0], 1.0);
+    assert_eq!(c.len(), 2, "{c:?}");
+    let end = (1.2f64.powi(3) + 1.0 - (1.331 - 1.0)).cbrt();
+    assert!((c[0][1] - end).abs() < 1e-12, "{c:?} vs {end}");
+    // B reaching past A's first layer into a second.
+    let c = intervals(&[1.0, 2.0, 3.0], 2.5);
+    let measure: f64 = c.iter().map(|[s, e]| e.powi(3) - s.powi(3)).sum();
+    assert!(
+        (measure - (1.0 + 27.0 - 8.0 + 2.5f64.powi(3))).abs() < 1e-9,
+        "{c:?}"
+    );
+}
+
+#[test]
+fn torus_fuses_with_a_sphere_by_layers() {
+    // Rays from a point in the torus's tube cross it three times towards
+    // the hole: not star-shaped, and its kernel is empty, so the centre is
+    // the sphere's kernel point inside the torus.
+    let a = torus(1.0, 0.35, 96, 32);
+    let b = sphere(4, 0.5, Vec3::new(1.0, 0.0, 0.0));
+    let o = FuseOptions {
+        cells: 96,
+        ..FuseOptions::default()
+    };
+    let f = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
+    assert_layered("torus", &f, &b, 2e-3, 0.25);
+    assert_eq!(Topology::of(&f.mesh).euler, 0, "a torus stays a torus");
+    let h = f.report.center;
+    assert!((h[0] - 1.0).abs() < 1e-3 && h[1].abs() < 1e-3, "{h:?}");
+    // The same on the GPU, coarser: the same mesh.
+    if let Some(gpu) = common::gpu() {
+        let o = FuseOptions {
+            cells: 40,
+            ..FuseOptions::default()
+        };
+        let cpu = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
+        let on_gpu = fuse(&a, &b, &o, Backend::Gpu(gpu), |_| {}).unwrap();
+        assert_eq!(cpu.mesh.triangles, on_gpu.mesh.triangles);
+        let worst = cpu
+            .mesh
+            .positions
+            .iter()
+            .zip(&on_gpu.mesh.positions)
+            .map(|(p, q)| p.distance(*q))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 1e-5, "positions differ by {worst}");
+    }
+}
+
+#[test]
+fn layered_fusion_refuses_what_the_seed_excludes() {
+    // A: two spheres side by side; from inside the first, rays towards the
+    // second cross A three times.
+    let mut a = sphere(3, 0.5, Vec3::ZERO);
+    let second = sphere(3, 0.5, Vec3::new(2.0, 0.0, 0.0));
+    let n = a.positions.len() as u32;
+    a.positions.extend(&second.positions);
+    a.triangles
+        .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
+    // B meeting both spheres: A ∩ B falls into two pieces.
+    let b = sphere(3, 0.8, Vec3::new(1.0, 0.0, 0.0));
+    let mut o = options(1e-3);
+    o.center = Some(Vec3::new(0.4, 0.0, 0.0));
+    match fuse(&a, &b, &o, Backend::Cpu, |_| {}) {
+        Err(Error::Refused(Refusal::IntersectionNotConnected { components, .. })) => {
+            assert_eq!(components, 2)
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    // H outside A (but inside B): every ray crosses A an even number of
+    // times.
+    o.center = Some(Vec3::new(1.0, 0.0, 0.0));
+    assert!(matches!(
+        fuse(&a, &b, &o, Backend::Cpu, |_| {}),
+        Err(Error::Refused(Refusal::OpenAlongRays { mesh: "A", .. }))
+    ));
+    // Neither star-shaped: B is A's mirror image.
+    let mirrored = TriMesh {
+        positions: a
+            .positions
+            .iter()
+            .map(|p| Vec3::new(1.0 - p.x, p.y, p.z))
+            .collect(),
+        triangles: a.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+        scalars: Vec::new(),
+    };
+    let mut o = options(1e-3);
+    o.center = Some(Vec3::new(0.2, 0.0, 0.0));
+    let small = sphere(3, 0.2, Vec3::new(0.2, 0.0, 0.0));
+    let err = fuse(&a, &mirrored, &o, Backend::Cpu, |_| {}).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            Error::Refused(Refusal::NotStarShaped { mesh: "B", .. })
+        ),
+        "{err}"
+    );
+    // B inside A's first sphere: one connected A ∩ B, fused by layers.
+    let f = fuse(&a, &small, &o, Backend::Cpu, |_| {}).unwrap();
+    assert_layered("two spheres", &f, &small, 2e-3, 0.25);
+    assert_eq!(Topology::of(&f.mesh).components.len(), 2);
+}
+
+#[test]
+fn foot_bone_without_a_kernel_fuses_by_layers() {
+    let Some(bones) = foot_bones() else { return };
+    // The largest bone has no kernel; bone 4 (which has one) is moved so
+    // that its kernel point sits at the middle of bone 0's box.
+    let a = &bones[0];
+    let (lo, hi) = a.bounds().unwrap();
+    let mut b = bones[4].clone();
+    let hb = Vec3::from(find_center(&b, &b).unwrap().center.map(|v| v as f32));
+    for p in &mut b.positions {
+        *p += (lo + hi) * 0.5 - hb;
+    }
+    let f = fuse(a, &b, &FuseOptions::default(), Backend::Cpu, |_| {}).unwrap();
+    assert!(f.report.center_search.is_some_and(|c| c.clearance > 0.0));
+    // Flat faces and sharp creases: corners of A up to a cell outside.
+    assert_layered("foot bones", &f, &b, 2e-3, 1.0);
+    assert_eq!(Topology::of(&f.mesh).euler, 2);
 }

@@ -1,6 +1,7 @@
 //! `chisel fuse A B -o C.ply`: the volume-preserving fusion (or, with
 //! `--subtract`, the subtraction) of two closed meshes star-shaped about a
-//! common centre (seed 001 §2, SPEC §3.4).
+//! common centre, or of one that is not with one that is (seed 001 §2,
+//! §2.6.2; SPEC §3.4).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -31,6 +32,10 @@ pub struct Args {
     /// every ray from the centre).
     #[arg(long)]
     subtract: bool,
+    /// Grid cells along C's longest side when one mesh is not star-shaped
+    /// about the centre (the layered fusion of seed 001 §2.6.2).
+    #[arg(long, default_value_t = crate::fusion::layered::CELLS)]
+    cells: usize,
     #[command(flatten)]
     backend: BackendChoice,
     /// The fused mesh (written atomically).
@@ -50,8 +55,9 @@ pub struct Args {
 #[derive(Debug, Clone, clap::Args)]
 pub struct ShapeArgs {
     /// The centre H `x,y,z`, a point of A ∩ B from which both are
-    /// star-shaped (default: the deepest common point of both meshes'
-    /// kernels, found by a linear programme).
+    /// star-shaped, or (fuse) at least one of them (default: the deepest
+    /// common point of both meshes' kernels, found by a linear programme,
+    /// else the deepest point of one kernel inside the other mesh).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     center: Option<Vec<f32>>,
     /// Largest distance of a projected edge midpoint from its chord, in the
@@ -184,9 +190,14 @@ fn needles(center: Vec3, dirs: &[[f32; 3]], length: f32) -> TriMesh {
 /// The failing rays of a refusal, if it is one with rays.
 fn failing_rays(e: &Error) -> Option<(Vec3, Vec<[f32; 3]>)> {
     match e {
-        Error::Refused(Refusal::NotStarShaped {
-            center, examples, ..
-        }) => Some((
+        Error::Refused(
+            Refusal::NotStarShaped {
+                center, examples, ..
+            }
+            | Refusal::OpenAlongRays {
+                center, examples, ..
+            },
+        ) => Some((
             glam::DVec3::from(*center).as_vec3(),
             examples.iter().map(|(d, _)| *d).collect(),
         )),
@@ -211,6 +222,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         center,
         subtract: args.subtract,
         refine: args.shape.refine(),
+        cells: args.cells,
     };
     let mut progress = RefineProgress::new(
         global,

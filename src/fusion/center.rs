@@ -13,11 +13,15 @@
 //! clearance s from every face plane; s ≤ 0 proves that no centre exists
 //! (the kernels do not meet, or only in a flat piece), and the refusal says
 //! by how much. The fusion then checks every ray it casts from H.
+//!
+//! Where one mesh has no kernel point in A ∩ B, a fusion can still go on
+//! (seed 001 §2.6.2, [`super::layered`]) from the deepest point of the
+//! other's kernel, if that lies inside the first ([`find_center_in`]).
 
 use glam::DVec3;
 use microlp::{ComparisonOp, OptimizationDirection, Problem};
 
-use crate::mesh::TriMesh;
+use crate::mesh::{Side, TriMesh, point_side};
 use crate::{Error, Refusal, Result};
 
 /// What the search found.
@@ -35,6 +39,56 @@ pub struct Found {
 /// Errors: a refusal when the meshes' boxes do not overlap or the kernels
 /// do not meet; the solver's failure as an internal error.
 pub fn find_center(a: &TriMesh, b: &TriMesh) -> Result<Found> {
+    let (h, depth, planes) = deepest(&[a, b], overlap(a, b)?)?;
+    if depth.is_nan() || depth <= 0.0 {
+        return Err(Refusal::NoStarCenter(format!(
+            "the kernels of A and B (the points from which each is star-shaped) do not meet: \
+             the best point, ({:.6}, {:.6}, {:.6}), lies {:.3e} units in front of a face plane",
+            h.x, h.y, h.z, -depth
+        ))
+        .into());
+    }
+    Ok(Found {
+        center: h.to_array(),
+        clearance: depth,
+        planes,
+    })
+}
+
+/// A centre for fusing `other`, which need not be star-shaped, with
+/// `star`: the deepest point of `star`'s kernel within the boxes' overlap,
+/// if it lies inside `other` (exact test). `names` name them in the
+/// refusal: `[star, other]`.
+///
+/// Errors: a refusal when the boxes do not overlap, `star`'s kernel is
+/// empty there, or its deepest point is not inside `other`.
+pub fn find_center_in(star: &TriMesh, other: &TriMesh, names: [&str; 2]) -> Result<Found> {
+    let (h, depth, planes) = deepest(&[star], overlap(star, other)?)?;
+    let [s, o] = names;
+    if depth.is_nan() || depth <= 0.0 {
+        return Err(Refusal::NoStarCenter(format!(
+            "neither mesh has a kernel point in A ∩ B: the best point of {s}'s kernel, \
+             ({:.6}, {:.6}, {:.6}), lies {:.3e} units in front of one of its face planes",
+            h.x, h.y, h.z, -depth
+        ))
+        .into());
+    }
+    if point_side(other, h.to_array()) != Some(Side::Inside) {
+        return Err(Refusal::NoStarCenter(format!(
+            "the deepest point of {s}'s kernel, ({:.6}, {:.6}, {:.6}), is not inside {o}",
+            h.x, h.y, h.z
+        ))
+        .into());
+    }
+    Ok(Found {
+        center: h.to_array(),
+        clearance: depth,
+        planes,
+    })
+}
+
+/// The overlap of the meshes' bounding boxes.
+fn overlap(a: &TriMesh, b: &TriMesh) -> Result<(DVec3, DVec3)> {
     let (Some((alo, ahi)), Some((blo, bhi))) = (a.bounds(), b.bounds()) else {
         return Err(Refusal::NoStarCenter("a mesh is empty".into()).into());
     };
@@ -45,17 +99,24 @@ pub fn find_center(a: &TriMesh, b: &TriMesh) -> Result<Found> {
         )
         .into());
     }
-    // Coordinates about the overlap's centre in units of its diagonal.
+    Ok((lo, hi))
+}
+
+/// The deepest point of the meshes' kernels within the box `(lo, hi)`:
+/// the point, its least distance to a face plane (≤ 0: the kernels do not
+/// meet there) and the planes in the programme.
+fn deepest(meshes: &[&TriMesh], (lo, hi): (DVec3, DVec3)) -> Result<(DVec3, f64, usize)> {
+    // Coordinates about the box's centre in units of its diagonal.
     let origin = (lo + hi) * 0.5;
     let scale = (hi - lo).length().max(f64::MIN_POSITIVE);
     let mut lp = Problem::new(OptimizationDirection::Maximize);
     let half = (hi - lo) * 0.5 / scale;
     let x = [0, 1, 2].map(|k| lp.add_var(0.0, (-half[k], half[k])));
     // s is free below (a point far in front of some plane is still a
-    // feasible, if useless, answer) and at most the overlap's diagonal.
+    // feasible, if useless, answer) and at most the box's diagonal.
     let s = lp.add_var(1.0, (f64::NEG_INFINITY, 1.0));
     let mut planes = 0;
-    for mesh in [a, b] {
+    for mesh in meshes {
         let outward = if mesh.signed_volume() < 0.0 {
             -1.0
         } else {
@@ -90,17 +151,5 @@ pub fn find_center(a: &TriMesh, b: &TriMesh) -> Result<Found> {
             solution.var_value(x[1]),
             solution.var_value(x[2]),
         ) * scale;
-    if depth.is_nan() || depth <= 0.0 {
-        return Err(Refusal::NoStarCenter(format!(
-            "the kernels of A and B (the points from which each is star-shaped) do not meet: \
-             the best point, ({:.6}, {:.6}, {:.6}), lies {:.3e} units in front of a face plane",
-            h.x, h.y, h.z, -depth
-        ))
-        .into());
-    }
-    Ok(Found {
-        center: h.to_array(),
-        clearance: depth,
-        planes,
-    })
+    Ok((h, depth, planes))
 }

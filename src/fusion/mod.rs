@@ -28,6 +28,7 @@
 
 pub mod center;
 pub mod contain;
+pub mod layered;
 pub mod radial;
 pub mod sphere;
 
@@ -39,8 +40,9 @@ use rayon::prelude::*;
 use crate::gpu::Backend;
 use crate::mesh::TriMesh;
 use crate::ray_cast::{Bvh, RayCaster};
-use crate::{Error, Result};
-pub use center::{Found, find_center};
+use crate::{Error, Refusal, Result};
+pub use center::{Found, find_center, find_center_in};
+pub use layered::LayeredReport;
 pub use radial::{Frame, Law, Radial};
 pub use sphere::{Edge, Pass, Project, Projected, Sphere};
 
@@ -101,13 +103,28 @@ impl RefineOptions {
 }
 
 /// Options of [`fuse`].
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FuseOptions {
-    /// H; `None`: searched ([`find_center`]).
+    /// H; `None`: searched ([`find_center`], or [`find_center_in`] when
+    /// one mesh has no kernel point in A ∩ B).
     pub center: Option<Vec3>,
     /// ρ_A³ − ρ_B³ instead of ρ_A³ + ρ_B³.
     pub subtract: bool,
     pub refine: RefineOptions,
+    /// Grid cells along C's longest box side when a mesh is not
+    /// star-shaped about H ([`layered`]).
+    pub cells: usize,
+}
+
+impl Default for FuseOptions {
+    fn default() -> Self {
+        FuseOptions {
+            center: None,
+            subtract: false,
+            refine: RefineOptions::default(),
+            cells: layered::CELLS,
+        }
+    }
 }
 
 /// Volumes and the relative error of C's against the target.
@@ -127,6 +144,9 @@ pub struct Volumes {
 pub struct FusionReport {
     /// "fuse" or "subtract".
     pub operation: &'static str,
+    /// "radial" (both meshes star-shaped about H: the refined sphere) or
+    /// "layered" (one is not: the grid of [`layered`]).
+    pub method: &'static str,
     pub center: [f64; 3],
     /// The search's result when H was not given.
     pub center_search: Option<Found>,
@@ -141,8 +161,11 @@ pub struct FusionReport {
     /// Vertices of A and B outside C at the end (0 unless the rounds ran
     /// out; a fusion does not refuse on it, the report says it).
     pub outside: usize,
-    /// Every ray crossed A and B exactly once (a refusal otherwise).
+    /// Every ray crossed A and B exactly once (else the layered method ran,
+    /// or a refusal).
     pub star_shaped: bool,
+    /// The layered method's figures.
+    pub layered: Option<LayeredReport>,
     pub vertices: usize,
     pub triangles: usize,
 }
@@ -248,10 +271,15 @@ fn volumes(a: f64, b: f64, c: f64, target: f64) -> Volumes {
 }
 
 /// Fuses (or subtracts) closed meshes `a` and `b` (see the module docs);
-/// `on_pass` sees each refinement pass (for progress).
+/// `on_pass` sees each refinement pass (for progress). Where one mesh is
+/// not star-shaped about H (and H is searched for, or the rays from the
+/// given H show it), a fusion goes on by the layered method ([`layered`]);
+/// the report says which method ran.
 ///
 /// Errors: a refusal when H is not given and none is found, when a ray from
-/// H does not cross A or B exactly once (with the failing directions), or,
+/// H does not cross A or B exactly once and the layered method cannot
+/// serve (a subtraction, or neither mesh star-shaped; with the failing
+/// directions), when A ∩ B is not connected for the layered method, or,
 /// for a subtraction, when B reaches out of A; a limit when the tolerance
 /// needs more than `max_triangles`.
 pub fn fuse(
@@ -267,15 +295,102 @@ pub fn fuse(
         RayCaster::new(&bvh_a, backend)?,
         RayCaster::new(&bvh_b, backend)?,
     );
-    let (center, center_search) = center_of(a, b, options.center)?;
+    let (center, center_search, mut not_star) = match options.center {
+        Some(c) => (c, None, None),
+        None => match find_center(a, b) {
+            Ok(found) => (glam::DVec3::from(found.center).as_vec3(), Some(found), None),
+            Err(Error::Refused(Refusal::NoStarCenter(why))) if !options.subtract => {
+                // One mesh may have no kernel point in A ∩ B: §2.6.2 from
+                // the other's.
+                let found = find_center_in(b, a, ["B", "A"])
+                    .map(|f| (f, "A"))
+                    .or_else(|e| {
+                        find_center_in(a, b, ["A", "B"])
+                            .map(|f| (f, "B"))
+                            .map_err(|_| e)
+                    });
+                match found {
+                    Ok((f, which)) => (glam::DVec3::from(f.center).as_vec3(), Some(f), Some(which)),
+                    Err(Error::Refused(Refusal::NoStarCenter(other))) => {
+                        return Err(Refusal::NoStarCenter(format!("{why}; and {other}")).into());
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    if not_star.is_none() {
+        match fuse_radial(
+            (a, &ca),
+            (b, &cb),
+            center,
+            center_search,
+            options,
+            tol,
+            &mut on_pass,
+        ) {
+            Err(Error::Refused(Refusal::NotStarShaped { mesh, .. })) if !options.subtract => {
+                not_star = Some(mesh);
+            }
+            other => return other,
+        }
+    }
+    let ((n, cn), (s, cs), names) = if not_star == Some("B") {
+        ((b, &cb), (a, &ca), ["B", "A"])
+    } else {
+        ((a, &ca), (b, &cb), ["A", "B"])
+    };
+    let l = layered::fuse_layered(
+        (n, cn),
+        (s, cs),
+        names,
+        center,
+        options.cells,
+        backend,
+        &mut on_pass,
+    )?;
+    let (va, vb) = (a.signed_volume().abs(), b.signed_volume().abs());
+    let report = FusionReport {
+        operation: "fuse",
+        method: "layered",
+        center: center.as_dvec3().to_array(),
+        center_search,
+        tolerance: tol,
+        volumes: volumes(va, vb, l.mesh.signed_volume(), va + vb),
+        rays: l.rays,
+        passes: Vec::new(),
+        containment_rounds: 0,
+        outside: l.outside,
+        star_shaped: false,
+        layered: Some(l.report),
+        vertices: l.mesh.positions.len(),
+        triangles: l.mesh.triangles.len(),
+    };
+    Ok(Fused {
+        mesh: l.mesh,
+        report,
+    })
+}
+
+/// The radial method: both meshes star-shaped about `center`.
+fn fuse_radial(
+    a: (&TriMesh, &RayCaster<'_>),
+    b: (&TriMesh, &RayCaster<'_>),
+    center: Vec3,
+    center_search: Option<Found>,
+    options: &FuseOptions,
+    tol: f64,
+    on_pass: &mut dyn FnMut(&Pass),
+) -> Result<Fused> {
     let law = if options.subtract {
         Law::Difference
     } else {
         Law::Sum
     };
     let mut radial = Radial {
-        a: (a, &ca),
-        b: (b, &cb),
+        a,
+        b,
         frames: vec![Frame { center, law }],
         rays: 0,
     };
@@ -289,19 +404,19 @@ pub fn fuse(
         max,
         HashSet::new(),
         &mut passes,
-        &mut on_pass,
+        on_pass,
     )?;
 
     let (mut rounds, mut outside) = (0, 0);
     if !options.subtract {
-        let points: Vec<Vec3> = used_positions(a)
+        let points: Vec<Vec3> = used_positions(a.0)
             .into_iter()
-            .chain(used_positions(b))
+            .chain(used_positions(b.0))
             .collect();
         loop {
             let c = sphere.mesh(0);
             let bvh_c = Bvh::build(&c)?;
-            let cc = RayCaster::new(&bvh_c, backend)?;
+            let cc = RayCaster::new(&bvh_c, a.1.backend())?;
             let out = contain::outside(&c, &cc, center, &points)?;
             outside = out.len();
             if out.is_empty() || rounds == CONTAINMENT_ROUNDS {
@@ -326,16 +441,17 @@ pub fn fuse(
                 max,
                 extra,
                 &mut passes,
-                &mut on_pass,
+                on_pass,
             )?;
         }
     }
 
     let mesh = sphere.mesh(0);
-    let (va, vb) = (a.signed_volume().abs(), b.signed_volume().abs());
+    let (va, vb) = (a.0.signed_volume().abs(), b.0.signed_volume().abs());
     let target = if options.subtract { va - vb } else { va + vb };
     let report = FusionReport {
         operation: if options.subtract { "subtract" } else { "fuse" },
+        method: "radial",
         center: center.as_dvec3().to_array(),
         center_search,
         tolerance: tol,
@@ -345,6 +461,7 @@ pub fn fuse(
         containment_rounds: rounds,
         outside,
         star_shaped: true,
+        layered: None,
         vertices: mesh.positions.len(),
         triangles: mesh.triangles.len(),
     };

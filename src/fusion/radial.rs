@@ -44,7 +44,7 @@ pub struct Frame {
 }
 
 /// Most example rays a refusal lists.
-const EXAMPLES: usize = 8;
+pub(super) const EXAMPLES: usize = 8;
 
 /// Radial projection of directions onto C for each frame: casts the rays
 /// of each distinct centre against A and B.

@@ -121,6 +121,13 @@ impl<'a> RayCaster<'a> {
         self.bvh
     }
 
+    /// The backend it casts on.
+    pub fn backend(&self) -> Backend<'a> {
+        self.device
+            .as_ref()
+            .map_or(Backend::Cpu, |(g, _)| Backend::Gpu(g))
+    }
+
     /// Casts every direction of `dirs` (`[x, y, z, _]`) from `origin`.
     pub fn cast(&self, origin: Vec3, dirs: &[[f32; 4]]) -> Result<Vec<RayHit>> {
         match &self.device {

@@ -1,7 +1,8 @@
 //! `chisel fuse`: two star-shaped foot bones (cut out of footbones.ply by
 //! `convert --component`, one moved by `--translate`) fused with a report
-//! and a preview, on the CPU and the GPU; a subtraction; and a refusal of
-//! the whole foot, which is not star-shaped, with the failing rays drawn.
+//! and a preview, on the CPU and the GPU; a subtraction; a refusal of the
+//! whole foot, which is not star-shaped, with the failing rays drawn; and
+//! a bone without a kernel fused with another by layers.
 
 use std::path::Path;
 
@@ -137,13 +138,14 @@ fn subtraction_and_refusals() {
     let (va, vb) = (vol["a"].as_f64().unwrap(), vol["b"].as_f64().unwrap());
     assert!((vb / va - 0.125).abs() < 1e-4, "{vol}");
     assert!(vol["relative_error"].as_f64().unwrap() < 1e-3, "{vol}");
-    // The whole foot is not star-shaped about any point: refused with the
-    // rays, which the preview draws.
+    // The whole foot is not star-shaped about any point: a subtraction is
+    // refused with the rays, which the preview draws.
     let feet = common::data("fsu/footbones.ply").unwrap();
     let run = chisel(&[
         "fuse",
         path_str(&feet),
         &a,
+        "--subtract",
         "--center",
         "-0.1368,-0.0127,-1.4538",
         "-o",
@@ -161,11 +163,75 @@ fn subtraction_and_refusals() {
     );
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
     assert_clean_error(
-        &["fuse", path_str(&feet), &a, "-o", path_str(&out)],
+        &[
+            "fuse",
+            path_str(&feet),
+            &a,
+            "--subtract",
+            "-o",
+            path_str(&out),
+        ],
         "no fusion centre found",
     );
     assert_clean_error(
         &["fuse", &a, &b, "--center", "1,2", "-o", path_str(&out)],
         "--center takes x,y,z",
     );
+}
+
+#[test]
+fn bone_without_a_kernel_fuses_by_layers() {
+    let Some(feet) = common::data("fsu/footbones.ply") else {
+        return;
+    };
+    // Bone 0 has no kernel (no point from which it is star-shaped); bone 4
+    // has one, moved to the middle of bone 0's box: the centre is bone 4's
+    // kernel point, and the fusion goes on by layers.
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("bone0.ply"), tmp.path().join("bone4.ply"));
+    ok(&[
+        "convert",
+        path_str(&feet),
+        "--component",
+        "0",
+        "-o",
+        path_str(&a),
+    ]);
+    ok(&[
+        "convert",
+        path_str(&feet),
+        "--component",
+        "4",
+        "--translate",
+        "-3.640803,-0.5905228,0.9142076",
+        "-o",
+        path_str(&b),
+    ]);
+    let out = tmp.path().join("c.ply");
+    let png = tmp.path().join("c.png");
+    let v = ok_json(&[
+        "fuse",
+        path_str(&a),
+        path_str(&b),
+        "--cells",
+        "96",
+        "--backend",
+        "cpu",
+        "-o",
+        path_str(&out),
+        "--preview",
+        path_str(&png),
+        "--json",
+    ]);
+    assert_eq!(v["method"], "layered");
+    assert_eq!(v["star_shaped"], false);
+    assert_eq!(v["layered"]["not_star_shaped"], "A");
+    assert!(v["layered"]["grid_rays"].as_u64().unwrap() > 100_000);
+    let err = v["volumes"]["relative_error"].as_f64().unwrap();
+    assert!(err < 2e-3, "{}", v["volumes"]);
+    let c = chisel::io::read_mesh(&out).unwrap();
+    let topo = chisel::mesh::Topology::of(&c);
+    assert!(topo.closed && topo.consistently_oriented && topo.euler == 2);
+    assert_eq!(c.n_triangles() as u64, v["triangles"].as_u64().unwrap());
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
 }

@@ -4,7 +4,10 @@
 //! GPU in one run, throughput in rays per second, the GPU end to end
 //! (direction upload, dispatch, read-back; the BVH stays resident); and
 //! the fusion of two 82k-triangle spheres to a relative volume error of
-//! about 10⁻⁴ (tolerance 8·10⁻⁵), end to end on each backend.
+//! about 10⁻⁴ (tolerance 8·10⁻⁵), end to end on each backend. Kernel
+//! `ray_hits` (after `ray_cast`'s counts) lists every hit of 10⁶ rays
+//! through three nested 82k-triangle spheres; the layered fusion of a
+//! torus and a sphere on a 128-cell grid.
 //!
 //! `CHISEL_BENCH_QUICK=1` (and `cargo test`): a 1,280-triangle sphere,
 //! 10³ rays, a coarse fusion.
@@ -64,6 +67,30 @@ fn benches(c: &mut Criterion) {
         }
         g.finish();
     }
+    // ray_hits: three nested spheres, three hits per ray, listed (the
+    // counting walk of ray_cast, the host scan, the listing walk).
+    let level = levels[0];
+    let mut shells = TriMesh::default();
+    for r in [1.0, 1.5, 2.0] {
+        let s = sphere(level, r, Vec3::ZERO);
+        let n = shells.positions.len() as u32;
+        shells.positions.extend(&s.positions);
+        shells
+            .triangles
+            .extend(s.triangles.iter().map(|t| t.map(|v| v + n)));
+    }
+    let bvh = Bvh::build(&shells).unwrap();
+    let mut g = group(c, "ray_hits");
+    g.throughput(Throughput::Elements(n_rays as u64));
+    for &(name, b) in &backends {
+        let caster = RayCaster::new(&bvh, b).unwrap();
+        g.bench_function(
+            BenchmarkId::new(name, format!("{}tri", shells.n_triangles())),
+            |bench| bench.iter(|| caster.hits(origin, &dirs).unwrap()),
+        );
+    }
+    g.finish();
+
     let (level, tolerance) = if quick() { (3, 2e-3) } else { (6, 8e-5) };
     let a = sphere(level, 1.0, Vec3::ZERO);
     let b = sphere(level, 0.7, Vec3::new(0.8, 0.1, 0.0));
@@ -79,6 +106,24 @@ fn benches(c: &mut Criterion) {
         let id = BenchmarkId::new(name, format!("2x{}tri", a.n_triangles()));
         g.bench_function(id, |bench| {
             bench.iter(|| fuse(&a, &b, &options, backend, |_| {}).unwrap())
+        });
+    }
+    g.finish();
+
+    // The layered fusion (seed 001 §2.6.2): a torus (not star-shaped) and
+    // a sphere, on a grid of 128 cells along C's longest side.
+    let cells = if quick() { 24 } else { 128 };
+    let torus = common::torus(1.0, 0.35, 96, 32);
+    let ball = sphere(4, 0.5, Vec3::new(1.0, 0.0, 0.0));
+    let options = FuseOptions {
+        cells,
+        ..FuseOptions::default()
+    };
+    let mut g = group(c, "fusion_layered");
+    for &(name, backend) in &backends {
+        let id = BenchmarkId::new(name, format!("torus_sphere_{cells}cells"));
+        g.bench_function(id, |bench| {
+            bench.iter(|| fuse(&torus, &ball, &options, backend, |_| {}).unwrap())
         });
     }
     g.finish();

@@ -448,30 +448,6 @@ fn star_shaped_foot_bones_fuse() {
     assert!(err.contains("kernels of A and B"), "{err}");
 }
 
-/// A torus about the z axis: core radius `big`, tube radius `small`,
-/// outward.
-fn torus(big: f32, small: f32, nu: u32, nv: u32) -> TriMesh {
-    let mut m = TriMesh::default();
-    for i in 0..nu {
-        let u = i as f32 / nu as f32 * std::f32::consts::TAU;
-        for j in 0..nv {
-            let v = j as f32 / nv as f32 * std::f32::consts::TAU;
-            let r = big + small * v.cos();
-            m.positions
-                .push(Vec3::new(r * u.cos(), r * u.sin(), small * v.sin()));
-        }
-    }
-    let at = |i: u32, j: u32| (i % nu) * nv + (j % nv);
-    for i in 0..nu {
-        for j in 0..nv {
-            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-            m.triangles.push([a, b, c]);
-            m.triangles.push([a, c, d]);
-        }
-    }
-    m
-}
-
 /// The layered fusion's own checks on C: closed, outward, free of
 /// self-intersections, the volume within `rel`, B strictly inside and A's
 /// vertices outside C (where C's boundary is A's surface) at most
@@ -540,7 +516,7 @@ fn torus_fuses_with_a_sphere_by_layers() {
     // Rays from a point in the torus's tube cross it three times towards
     // the hole: not star-shaped, and its kernel is empty, so the centre is
     // the sphere's kernel point inside the torus.
-    let a = torus(1.0, 0.35, 96, 32);
+    let a = common::torus(1.0, 0.35, 96, 32);
     let b = sphere(4, 0.5, Vec3::new(1.0, 0.0, 0.0));
     let o = FuseOptions {
         cells: 96,

@@ -242,3 +242,27 @@ pub fn fibonacci_sphere(m: usize) -> Vec<glam::DVec3> {
         })
         .collect()
 }
+
+/// A torus about the z axis: core radius `big`, tube radius `small`,
+/// outward.
+pub fn torus(big: f32, small: f32, nu: u32, nv: u32) -> TriMesh {
+    let mut m = TriMesh::default();
+    for i in 0..nu {
+        let u = i as f32 / nu as f32 * std::f32::consts::TAU;
+        for j in 0..nv {
+            let v = j as f32 / nv as f32 * std::f32::consts::TAU;
+            let r = big + small * v.cos();
+            m.positions
+                .push(Vec3::new(r * u.cos(), r * u.sin(), small * v.sin()));
+        }
+    }
+    let at = |i: u32, j: u32| (i % nu) * nv + (j % nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            m.triangles.push([a, b, c]);
+            m.triangles.push([a, c, d]);
+        }
+    }
+    m
+}

@@ -141,6 +141,14 @@ pub enum Error {
     /// The device was lost (driver reset, crash, timeout).
     #[error("GPU device lost: {0}")]
     DeviceLost(String),
+    /// An output path that names an input of the same command (the same
+    /// path, or the same file through a link): refused before anything is
+    /// written, so inputs are never overwritten.
+    #[error(
+        "{output}: is the input {input} (the same file); outputs never overwrite inputs, \
+         choose another path"
+    )]
+    OutputIsInput { output: PathBuf, input: PathBuf },
     /// A host allocation of `bytes` for `what` failed (too large for this machine).
     #[error("not enough memory: {what} needs {bytes} bytes")]
     HostMemory { what: String, bytes: u64 },

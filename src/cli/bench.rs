@@ -176,7 +176,7 @@ fn check(args: &RelaxArgs) -> anyhow::Result<Option<(usize, usize)>> {
 fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
     let grid = check(args)?;
     let machine = Machine::now();
-    let skin = crate::io::read_mesh(&args.mesh)?;
+    let skin = crate::io::read_surface(&args.mesh)?;
     if let Some((c, r)) = grid
         && skin.n_vertices() != c * r
     {
@@ -188,7 +188,7 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         );
     }
     let bone = (args.bone_mesh.as_deref())
-        .map(crate::io::read_mesh)
+        .map(crate::io::read_surface)
         .transpose()?;
     let plan = args.plan.as_deref().map(Plan::from_path).transpose()?;
     if let Some(p) = &plan {
@@ -358,4 +358,19 @@ fn relax(global: &Global, args: &RelaxArgs) -> anyhow::Result<()> {
         networks,
     };
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        match &self.what {
+            What::Relax(r) => [
+                Some(r.mesh.as_path()),
+                r.bone_mesh.as_deref(),
+                r.plan.as_deref(),
+            ]
+            .into_iter()
+            .flatten()
+            .collect(),
+        }
+    }
 }

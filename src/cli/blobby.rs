@@ -143,7 +143,7 @@ fn run_fit(global: &Global, args: &FitArgs) -> anyhow::Result<()> {
         crate::foundation::fs::check_png_output(p)?;
     }
     args.report.check()?;
-    let scan = crate::io::read_mesh(&args.scan)?;
+    let scan = crate::io::read_surface(&args.scan)?;
     let mut points = RangePoints::from_mesh(&scan)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.scan.display()))?;
     let normals_turned = points.orient_outward();
@@ -281,4 +281,12 @@ fn run_fit(global: &Global, args: &FitArgs) -> anyhow::Result<()> {
         },
     };
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        match &self.what {
+            What::Fit(f) => vec![f.scan.as_path()],
+        }
+    }
 }

@@ -131,3 +131,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.input.as_path()]
+    }
+}

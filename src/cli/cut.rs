@@ -122,7 +122,7 @@ fn knives(args: &Args) -> anyhow::Result<Vec<Knife>> {
         radius: s[3],
     }));
     for path in &args.knife {
-        out.push(Knife::Mesh(crate::io::read_mesh(path)?));
+        out.push(Knife::Mesh(crate::io::read_surface(path)?));
     }
     anyhow::ensure!(
         !out.is_empty(),
@@ -167,7 +167,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         crate::foundation::fs::check_png_output(path)?;
     }
     args.report.check()?;
-    let mesh = crate::io::read_mesh(&args.mesh)?;
+    let mesh = crate::io::read_surface(&args.mesh)?;
     let knives = knives(args)?;
     let result = cut_sequence(&mesh, &knives, &CutOptions { cap: args.cap })?;
     super::clear_numbered_outputs(global, &args.output, "piece_")?;
@@ -265,4 +265,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         args.output.display()
     ));
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        std::iter::once(self.mesh.as_path())
+            .chain(self.knife.iter().map(|k| k.as_path()))
+            .collect()
+    }
 }

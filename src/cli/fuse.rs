@@ -119,7 +119,7 @@ struct Outputs<'a> {
 
 /// A and B read, with their names for captions.
 pub(super) fn read_pair(a: &Path, b: &Path) -> anyhow::Result<(TriMesh, TriMesh)> {
-    Ok((crate::io::read_mesh(a)?, crate::io::read_mesh(b)?))
+    Ok((crate::io::read_surface(a)?, crate::io::read_surface(b)?))
 }
 
 /// A progress bar over a refinement: the position follows the largest
@@ -352,4 +352,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         },
     };
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.a.as_path(), self.b.as_path()]
+    }
 }

@@ -64,10 +64,10 @@ pub enum OrderArg {
 #[derive(Debug, Clone, clap::Args)]
 pub struct SelectArgs {
     /// Object = samples ≥ T.
-    #[arg(long, conflicts_with = "label", required_unless_present = "label")]
+    #[arg(long, conflicts_with = "label", required_unless_present = "label", allow_hyphen_values = true, value_parser = super::level_f64)]
     level: Option<f64>,
     /// Object = samples equal to this label.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::level_f64)]
     label: Option<f64>,
     /// Which 6-connected component: `largest`, `all` or a 1-based index in file order.
     #[arg(long, default_value = "largest")]
@@ -336,4 +336,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         }
     ));
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.volume.as_path()]
+    }
 }

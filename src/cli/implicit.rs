@@ -245,3 +245,9 @@ fn sheet_frames(n: usize, k: usize) -> Vec<usize> {
     }
     (0..k).map(|i| i * (n - 1) / (k - 1)).collect()
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.scene.as_path()]
+    }
+}

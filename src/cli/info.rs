@@ -73,3 +73,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     chosen?;
     Ok(())
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        Vec::new()
+    }
+}

@@ -61,10 +61,10 @@ pub struct Args {
     /// Scalar or label volume.
     volume: PathBuf,
     /// Iso level: samples ≥ level are inside.
-    #[arg(long, conflicts_with = "label", required_unless_present = "label")]
+    #[arg(long, conflicts_with = "label", required_unless_present = "label", allow_hyphen_values = true, value_parser = super::level_f32)]
     level: Option<f32>,
     /// Extract the boundary of the voxels equal to this label.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::level_f64)]
     label: Option<f64>,
     /// Close surfaces at the volume border: half a voxel outside it next to
     /// samples above the level; at a border sample equal to the level the
@@ -218,4 +218,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         args.output.display()
     ));
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.volume.as_path()]
+    }
 }

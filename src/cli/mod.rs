@@ -126,6 +126,25 @@ pub(super) fn file_name(path: &std::path::Path) -> String {
     )
 }
 
+/// A level or label option: any number but NaN (`inf`, `-inf` and negative
+/// numbers are values; the options that take one also accept a leading
+/// hyphen).
+pub(super) fn level_f64(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_nan() {
+        return Err("NaN compares false with every sample; give a number (±inf allowed)".into());
+    }
+    Ok(v)
+}
+
+/// [`level_f64`] for f32 options.
+pub(super) fn level_f32(s: &str) -> Result<f32, String> {
+    level_f64(s).map(|v| v as f32)
+}
+
 /// Checks an output folder before any work is done: not an existing file,
 /// in a folder that exists (it is created when the outputs are written).
 pub(super) fn check_output_dir(dir: &std::path::Path) -> anyhow::Result<()> {
@@ -155,6 +174,7 @@ pub(super) fn clear_numbered_outputs(
             .and_then(|r| r.strip_suffix(".ply"))
             .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
         if numbered && entry.file_type().is_ok_and(|t| t.is_file()) {
+            crate::foundation::fs::check_output_path(&entry.path())?;
             std::fs::remove_file(entry.path()).map_err(|e| crate::Error::io(entry.path(), e))?;
             removed += 1;
         }
@@ -345,9 +365,42 @@ impl Global {
     }
 }
 
+/// The files a command reads, as its command line names them: the input
+/// guard ([`crate::foundation::fs::guard_inputs`]) starts from them before
+/// any work, so no output of the command can overwrite one.
+trait Inputs {
+    fn inputs(&self) -> Vec<&std::path::Path>;
+}
+
+impl Command {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        match self {
+            Command::Info(a) => a.inputs(),
+            Command::Stats(a) => a.inputs(),
+            Command::Convert(a) => a.inputs(),
+            Command::Mc(a) => a.inputs(),
+            Command::Cut(a) => a.inputs(),
+            Command::Relax(a) => a.inputs(),
+            Command::Spline(a) => a.inputs(),
+            Command::Implicit(a) => a.inputs(),
+            Command::Blobby(a) => a.inputs(),
+            Command::Fuse(a) => a.inputs(),
+            Command::Morph(a) => a.inputs(),
+            Command::Hull(a) => a.inputs(),
+            Command::Polyhedrize(a) => a.inputs(),
+            Command::Scan(a) => a.inputs(),
+            Command::Phantom(a) => a.inputs(),
+            Command::Render(a) => a.inputs(),
+            Command::Demo(a) => a.inputs(),
+            Command::Bench(a) => a.inputs(),
+        }
+    }
+}
+
 /// Parses arguments, runs the command, maps errors to exit code 1 (2 for usage).
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    crate::foundation::fs::guard_inputs(&cli.command.inputs());
     let result = match &cli.command {
         Command::Info(a) => info::run(&cli.global, a),
         Command::Stats(a) => stats::run(&cli.global, a),

@@ -187,3 +187,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     };
     args.report.emit(&report, Show::WithJson)
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.a.as_path(), self.b.as_path()]
+    }
+}

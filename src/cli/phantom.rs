@@ -145,3 +145,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     ));
     super::report::emit(&report, Show::WithJson, args.json, None)
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        Vec::new()
+    }
+}

@@ -378,3 +378,9 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.volume.as_path()]
+    }
+}

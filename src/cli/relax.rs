@@ -42,10 +42,10 @@ pub struct Args {
     #[arg(long, requires_all = ["skin_level", "bone_level"])]
     ct: Option<PathBuf>,
     /// Skin iso-level of the `--ct` volume (headsq: 500).
-    #[arg(long, requires = "ct")]
+    #[arg(long, requires = "ct", allow_hyphen_values = true, value_parser = super::level_f32)]
     skin_level: Option<f32>,
     /// Bone iso-level of the `--ct` volume (headsq: 1150).
-    #[arg(long, requires = "ct")]
+    #[arg(long, requires = "ct", allow_hyphen_values = true, value_parser = super::level_f32)]
     bone_level: Option<f32>,
     /// Bone mesh under an epidermis MESH; without it the bone layer is the
     /// skin scaled by 0.7 about the origin.
@@ -570,11 +570,11 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             (layers.skin, Some(layers.bone), Some(layers.figures))
         }
         Input::Mesh(mesh) => {
-            let skin = crate::io::read_mesh(mesh)?;
+            let skin = crate::io::read_surface(mesh)?;
             let bone = args
                 .bone_mesh
                 .as_deref()
-                .map(crate::io::read_mesh)
+                .map(crate::io::read_surface)
                 .transpose()?;
             (skin, bone, None)
         }
@@ -817,5 +817,19 @@ pub fn skin_crossings(before: &TriMesh, after: &TriMesh) -> Crossings {
     Crossings {
         before: b,
         after: a,
+    }
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        [
+            self.mesh.as_deref(),
+            self.ct.as_deref(),
+            self.bone_mesh.as_deref(),
+            Some(self.plan.as_path()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
     }
 }

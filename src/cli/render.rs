@@ -34,7 +34,7 @@ pub struct Args {
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     crate::foundation::fs::check_png_output(&args.output)?;
     let facing = args.view.facing()?;
-    let mesh = crate::io::read_mesh(&args.input)?;
+    let mesh = crate::io::read_surface(&args.input)?;
     let gpu = global.gpu()?;
     let opts = RenderOptions {
         width: args.size,
@@ -49,4 +49,10 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     crate::render::render_png(&gpu, &mesh, &opts, &args.output)?;
     global.note(format!("wrote {}", args.output.display()));
     Ok(())
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.input.as_path()]
+    }
 }

@@ -205,7 +205,13 @@ pub struct Args {
     /// Volume (any format `chisel stats` reads).
     volume: PathBuf,
     /// Structures = 6-connected components of the samples ≥ T.
-    #[arg(long, conflicts_with = "labels", required_unless_present = "labels")]
+    #[arg(
+        long,
+        conflicts_with = "labels",
+        required_unless_present = "labels",
+        allow_hyphen_values = true,
+        value_parser = super::level_f64
+    )]
     level: Option<f64>,
     /// Structures = the non-zero label values (all voxels of each label).
     #[arg(long)]
@@ -662,4 +668,10 @@ fn scan_structure(
         zkh,
         degenerate: false,
     })
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.volume.as_path()]
+    }
 }

@@ -193,7 +193,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     if args.fairing != 0.0 && args.fit != FitArg::Lsq {
         anyhow::bail!("--fairing weighs least squares: give --fit lsq");
     }
-    let mesh = crate::io::read_mesh(&args.mesh)?;
+    let mesh = crate::io::read_surface(&args.mesh)?;
     let data = match &args.data {
         Some(p) => Some(crate::io::read_mesh(p)?.positions),
         None => None,
@@ -364,4 +364,12 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         args.output.display()
     ));
     args.report.emit(&report, Show::WithJson)
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        std::iter::once(self.mesh.as_path())
+            .chain(self.data.as_deref())
+            .collect()
+    }
 }

@@ -98,10 +98,10 @@ pub struct Args {
     #[command(flatten)]
     report: ReportArgs,
     /// Volumes: count voxels with value ≥ this level and their 6-connected components.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::level_f64)]
     level: Option<f64>,
     /// Volumes: count voxels with value = this label and their 6-connected components.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = super::level_f64)]
     label: Option<f64>,
     /// With the GPU, the bounds / value range are also reduced there and
     /// checked against the CPU mirror (the report says whether they agree).
@@ -195,4 +195,10 @@ fn volume_stats(global: &Global, args: &Args) -> anyhow::Result<VolumeStatsRepor
         label: args.label.map(|l| label_components(&volume, l)),
         gpu,
     })
+}
+
+impl super::Inputs for Args {
+    fn inputs(&self) -> Vec<&std::path::Path> {
+        vec![self.file.as_path()]
+    }
 }

@@ -143,6 +143,21 @@ fn signed_at_one(c: &[[f64; 2]]) -> f64 {
     if inside { nearest } else { -nearest }
 }
 
+/// The first failing rays of `bad` for a refusal: unit direction, hits.
+fn examples(
+    dirs: &[[f32; 4]],
+    bad: &[usize],
+    count: impl Fn(usize) -> u32,
+) -> Vec<([f32; 3], u32)> {
+    bad.iter()
+        .take(EXAMPLES)
+        .map(|&i| {
+            let d = Vec3::new(dirs[i][0], dirs[i][1], dirs[i][2]).normalize_or_zero();
+            (d.to_array(), count(i))
+        })
+        .collect()
+}
+
 /// What C and the inputs are at one point.
 #[derive(Debug, Clone, Copy)]
 struct Sample {
@@ -175,50 +190,34 @@ impl Field<'_> {
         let ha = self.a.1.hits(self.center, dirs)?;
         let hb = self.b.1.cast(self.center, dirs)?;
         self.rays += 2 * dirs.len();
-        let refuse =
-            |name: &'static str, bad: Vec<usize>, star: bool, count: &dyn Fn(usize) -> u32| {
-                let center = self.center.as_dvec3().to_array();
-                let rays = dirs.len();
-                let examples = bad
-                    .iter()
-                    .take(EXAMPLES)
-                    .map(|&i| {
-                        let d = Vec3::new(dirs[i][0], dirs[i][1], dirs[i][2]).normalize_or_zero();
-                        (d.to_array(), count(i))
-                    })
-                    .collect();
-                let failing = bad.len();
-                Err::<(), _>(if star {
-                    Refusal::NotStarShaped {
-                        mesh: name,
-                        center,
-                        failing,
-                        rays,
-                        examples,
-                    }
-                } else {
-                    Refusal::OpenAlongRays {
-                        mesh: name,
-                        center,
-                        failing,
-                        rays,
-                        examples,
-                    }
-                })
-            };
         let real = |i: usize| dirs[i][..3].iter().any(|&v| v != 0.0);
+        let center = self.center.as_dvec3().to_array();
         let bad_b: Vec<usize> = (0..dirs.len())
             .filter(|&i| real(i) && hb[i].count != 1)
             .collect();
         if !bad_b.is_empty() {
-            refuse(self.b.0, bad_b, true, &|i| hb[i].count)?;
+            return Err(Refusal::NotStarShaped {
+                mesh: self.b.0,
+                center,
+                failing: bad_b.len(),
+                rays: dirs.len(),
+                examples: examples(dirs, &bad_b, |i| hb[i].count),
+            }
+            .into());
         }
         let count_a = |i: usize| ha.offsets[i + 1] - ha.offsets[i];
         let bad_a: Vec<usize> = (0..dirs.len())
             .filter(|&i| real(i) && count_a(i) % 2 == 0)
             .collect();
         if !bad_a.is_empty() {
-            refuse(self.a.0, bad_a, false, &count_a)?;
+            return Err(Refusal::OpenAlongRays {
+                mesh: self.a.0,
+                center,
+                failing: bad_a.len(),
+                rays: dirs.len(),
+                examples: examples(dirs, &bad_a, count_a),
+            }
+            .into());
         }
         Ok((0..dirs.len())
             .into_par_iter()

@@ -91,13 +91,107 @@ pub(crate) fn check_budget(path: &Path, at: Position, what: &str, needed: u64) -
     Ok(())
 }
 
-/// The whole file, after checking its size against the budget.
+/// Bytes a reader looks at before reading the rest of a file.
+pub(crate) const SNIFF_BYTES: usize = 1 << 16;
+
+/// The whole file, read boundedly whatever its kind (see [`read_whole_with`]).
 pub(crate) fn read_whole(path: &Path) -> Result<Vec<u8>> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
-    check_budget(path, Position::Whole, "reading the file", len)?;
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    read_whole_with(path, |_| Ok(None))
+}
+
+/// The whole file, read boundedly whatever its kind: a regular file after
+/// checking its length against the budget and never past that length (a
+/// file that grows while read is an error); a stream (a pipe, a FIFO, a
+/// device such as `/dev/zero`) up to the budget, in steps allocated
+/// fallibly. `sniff` sees the first [`SNIFF_BYTES`] (or the whole file when
+/// shorter) before anything else is read: it refuses bytes that cannot
+/// begin the format, or returns the size the format's header implies,
+/// which caps the read at one byte more (so the reader sees trailing data).
+pub(crate) fn read_whole_with(
+    path: &Path,
+    sniff: impl FnOnce(&[u8]) -> Result<Option<u64>>,
+) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let (file, meta) = crate::foundation::fs::open_input(path)?;
+    let regular = meta.is_file();
+    let limit = input_budget();
+    let what = if regular {
+        "reading the file"
+    } else {
+        "reading the stream (not a regular file)"
+    };
+    let mut cap = if regular {
+        check_budget(path, Position::Whole, what, meta.len())?;
+        meta.len()
+    } else {
+        limit
+    };
+    let mut out: Vec<u8> = Vec::new();
+    let mut reader = file.take(cap.saturating_add(1));
+    let mut chunk = vec![0u8; SNIFF_BYTES];
+    let mut sniff = Some(sniff);
+    loop {
+        let k = match reader.read(&mut chunk) {
+            Ok(k) => k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(Error::io(path, e)),
+        };
+        let len = out.len() as u64 + k as u64;
+        if k > 0 && len > cap {
+            return Err(if regular {
+                Error::format(
+                    path,
+                    Position::Byte(cap),
+                    format!("the end of the file at byte {cap}"),
+                    "more data (the file grew while it was read)",
+                )
+            } else {
+                Error::Size {
+                    path: path.into(),
+                    at: Position::Byte(cap),
+                    what: what.into(),
+                    needed: len,
+                    limit_kind: BUDGET_KIND,
+                    limit,
+                }
+            });
+        }
+        out.try_reserve(k).map_err(|_| Error::HostMemory {
+            what: format!("{}: {what}", path.display()),
+            bytes: len,
+        })?;
+        out.extend_from_slice(&chunk[..k]);
+        if sniff.is_some() && (k == 0 || out.len() >= SNIFF_BYTES) {
+            let implied = (sniff.take().expect("checked"))(&out)?;
+            if let Some(n) = implied {
+                // One byte past what the header implies: enough for the
+                // reader to see trailing data, never more.
+                let allowed = n.saturating_add(1);
+                if allowed < cap {
+                    cap = allowed;
+                    let left = cap.saturating_sub(out.len() as u64);
+                    reader = reader.into_inner().take(left);
+                }
+            }
+        }
+        if k == 0 {
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// A sniff for text formats: the first bytes hold no NUL byte.
+pub(crate) fn sniff_text(path: &Path, head: &[u8], format: &str) -> Result<Option<u64>> {
+    match head.iter().position(|&b| b == 0) {
+        Some(at) => Err(Error::format(
+            path,
+            Position::Byte(at as u64),
+            format!("{format} text"),
+            "a NUL byte (binary data)",
+        )),
+        None => Ok(None),
+    }
 }
 
 /// Checks an output mesh path: [`check_output_path`] and a known extension.
@@ -143,7 +237,14 @@ fn mesh_format(path: &Path) -> Result<MeshFormat> {
 /// winding; the result passes [`TriMesh::validate`].
 pub fn read_mesh(path: &Path) -> Result<TriMesh> {
     let format = mesh_format(path)?;
-    let bytes = read_whole(path)?;
+    // The first bytes must begin the format before the rest is read.
+    let bytes = read_whole_with(path, |head| match format {
+        MeshFormat::Vtk => vtk::magic(path, head).map(|_| None),
+        MeshFormat::Ply => ply::magic(path, head).map(|_| None),
+        MeshFormat::Stl => Ok(stl::implied_len(head)),
+        MeshFormat::Obj => sniff_text(path, head, "OBJ"),
+        MeshFormat::Byu => sniff_text(path, head, "MovieBYU"),
+    })?;
     let mesh = match format {
         MeshFormat::Vtk => vtk::read(path, &bytes)?,
         MeshFormat::Ply => ply::read(path, &bytes)?,
@@ -165,6 +266,22 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh> {
         ),
         other => other,
     })?;
+    Ok(mesh)
+}
+
+/// Reads a triangle mesh ([`read_mesh`]) for a command that needs
+/// triangles: a file without any (vertices only, or nothing) is an error
+/// that says so.
+pub fn read_surface(path: &Path) -> Result<TriMesh> {
+    let mesh = read_mesh(path)?;
+    if mesh.triangles.is_empty() {
+        return Err(Error::format(
+            path,
+            Position::Whole,
+            "a mesh with triangles",
+            format!("none ({} vertices and no faces)", mesh.positions.len()),
+        ));
+    }
     Ok(mesh)
 }
 

@@ -19,7 +19,6 @@
 //! spacing and origin round-trip exactly only when they are `f32` values.
 //! `.nii.gz` is gzip-compressed.
 
-use std::fs::File;
 use std::io::{self, BufReader, Write};
 use std::path::Path;
 
@@ -63,7 +62,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     let gz = path
         .file_name()
         .is_some_and(|n| n.to_string_lossy().to_ascii_lowercase().ends_with(".gz"));
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let (file, meta) = crate::foundation::fs::open_input(path)?;
     let mut bytes = vec![0u8; HEADER_LEN];
     let got = if gz {
         let mut dec = flate2::read::MultiGzDecoder::new(BufReader::new(file));
@@ -175,6 +174,20 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     let vox = h.f32(108);
     if !(vox.is_finite() && vox >= HEADER_LEN as f64 && vox.fract() == 0.0) {
         return Err(h.error(108, "an integral vox_offset ≥ 348", format!("{vox}")));
+    }
+    // The samples start inside the file (for a plain file; inside the
+    // budget's worth of decompressed bytes for a gzip one).
+    let within = if gz {
+        super::input_budget() as f64
+    } else {
+        meta.len() as f64
+    };
+    if vox > within {
+        return Err(h.error(
+            108,
+            format!("a vox_offset within the data (at most {within})"),
+            format!("{vox}"),
+        ));
     }
     let origin = orientation(&h)?;
 

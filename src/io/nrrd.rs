@@ -406,6 +406,28 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             spacing[axis] = v[axis];
         }
     }
+    // The space's dimension: `space dimension`, else the length of the
+    // direction vectors; the origin must have exactly that many components.
+    let space_dimension = match h.get("spacedimension") {
+        Some(f) => Some(f.value.trim().parse::<usize>().map_err(|_| {
+            Error::format(
+                path,
+                f.at.clone(),
+                "a space dimension (an integer)",
+                f.value.clone(),
+            )
+        })?),
+        None => match (h.get("spacedirections"), h.get("space")) {
+            (Some(f), _) => vectors(path, f)?
+                .into_iter()
+                .flatten()
+                .map(|v| v.len())
+                .next(),
+            // A named space: 3-D, or 4-D with time.
+            (None, Some(f)) => Some(3 + usize::from(f.value.to_ascii_lowercase().contains("time"))),
+            (None, None) => None,
+        },
+    };
     let mut origin = [0.0f64; 3];
     if let Some(f) = h.get("spaceorigin") {
         let v = vectors(path, f)?;
@@ -417,6 +439,14 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
                 f.value.clone(),
             ));
         };
+        if let Some(d) = space_dimension.filter(|&d| d != v.len()) {
+            return Err(Error::format(
+                path,
+                f.at.clone(),
+                format!("a `space origin` of {d} components (the space's dimension)"),
+                f.value.clone(),
+            ));
+        }
         if v.len() > 3 {
             return Err(Error::Unsupported {
                 path: path.into(),

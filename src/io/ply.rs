@@ -62,13 +62,20 @@ fn ply_type(sc: &Scanner, at: usize, name: &str) -> Result<Num> {
     })
 }
 
-/// Reads a PLY file held in `bytes`.
-pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
+/// Checks the first line, `ply`, of `bytes` (the file, or its first bytes
+/// before the rest is read); returns the scanner after it.
+pub(crate) fn magic<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<Scanner<'a>> {
     let mut sc = Scanner::new(path, bytes);
     let (at, magic) = sc.text_line("`ply`")?;
     if magic.trim() != "ply" {
         return Err(sc.error(at, "`ply`", format!("`{}`", clip(magic.trim()))));
     }
+    Ok(sc)
+}
+
+/// Reads a PLY file held in `bytes`.
+pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
+    let mut sc = magic(path, bytes)?;
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
     loop {
@@ -156,6 +163,21 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     let mut mesh = TriMesh::default();
     for el in &elements {
         read_element(&mut sc, binary, el, nv, &mut mesh)?;
+    }
+    // Data past the header's elements (for text, more than whitespace): the
+    // counts do not describe the file.
+    let done = if binary.is_some() {
+        sc.rest().is_empty()
+    } else {
+        sc.at_end()
+    };
+    if !done {
+        let at = sc.mark();
+        return Err(sc.error(
+            at,
+            "the end of the file after the elements the header announces",
+            "more data",
+        ));
     }
     Ok(mesh)
 }

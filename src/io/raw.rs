@@ -130,17 +130,26 @@ macro_rules! each {
     };
 }
 
-fn empty(ty: ScalarType, capacity: usize) -> VolumeData {
-    match ty {
-        ScalarType::U8 => VolumeData::U8(Vec::with_capacity(capacity)),
-        ScalarType::I8 => VolumeData::I8(Vec::with_capacity(capacity)),
-        ScalarType::U16 => VolumeData::U16(Vec::with_capacity(capacity)),
-        ScalarType::I16 => VolumeData::I16(Vec::with_capacity(capacity)),
-        ScalarType::U32 => VolumeData::U32(Vec::with_capacity(capacity)),
-        ScalarType::I32 => VolumeData::I32(Vec::with_capacity(capacity)),
-        ScalarType::F32 => VolumeData::F32(Vec::with_capacity(capacity)),
-        ScalarType::F64 => VolumeData::F64(Vec::with_capacity(capacity)),
-    }
+/// No samples yet, room for `capacity` reserved exactly and fallibly (so
+/// filling it never grows the buffer past the samples the header
+/// announced, and a machine without that memory gives an error, not an
+/// abort).
+fn empty(path: &Path, ty: ScalarType, capacity: usize) -> Result<VolumeData> {
+    let mut data = match ty {
+        ScalarType::U8 => VolumeData::U8(Vec::new()),
+        ScalarType::I8 => VolumeData::I8(Vec::new()),
+        ScalarType::U16 => VolumeData::U16(Vec::new()),
+        ScalarType::I16 => VolumeData::I16(Vec::new()),
+        ScalarType::U32 => VolumeData::U32(Vec::new()),
+        ScalarType::I32 => VolumeData::I32(Vec::new()),
+        ScalarType::F32 => VolumeData::F32(Vec::new()),
+        ScalarType::F64 => VolumeData::F64(Vec::new()),
+    };
+    each!(&mut data, v => v.try_reserve_exact(capacity)).map_err(|_| Error::HostMemory {
+        what: format!("{}: {capacity} samples of {}", path.display(), ty.name()),
+        bytes: capacity as u64 * ty.size() as u64,
+    })?;
+    Ok(data)
 }
 
 /// Reads until `buf` is full or the stream ends; returns the bytes read.
@@ -226,7 +235,7 @@ fn push_text(data: &mut VolumeData, x: f64) -> bool {
 /// Opens a data file at `piece.start`, skips `line_skip` lines; returns the
 /// reader and the byte offset reached.
 fn open_after_lines(piece: &Piece) -> Result<(BufReader<File>, u64)> {
-    let mut file = File::open(&piece.path).map_err(|e| Error::io(&piece.path, e))?;
+    let (mut file, _) = crate::foundation::fs::open_input(&piece.path)?;
     file.seek(SeekFrom::Start(piece.start))
         .map_err(|e| Error::io(&piece.path, e))?;
     let mut r = BufReader::new(file);
@@ -293,7 +302,7 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
     }
     let per = n / pieces;
     let per_bytes = per as u64 * elem;
-    let mut data = empty(p.ty, 0);
+    let mut data = empty(p.header, p.ty, n)?;
     if p.encoding == Encoding::Raw {
         // Check every file's length before allocating or reading anything.
         let mut starts = Vec::with_capacity(pieces);
@@ -338,9 +347,8 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
             }
             starts.push(start);
         }
-        data = empty(p.ty, n);
         for (piece, start) in p.pieces.iter().zip(starts) {
-            let mut f = File::open(&piece.path).map_err(|e| Error::io(&piece.path, e))?;
+            let (mut f, _) = crate::foundation::fs::open_input(&piece.path)?;
             f.seek(SeekFrom::Start(start))
                 .map_err(|e| Error::io(&piece.path, e))?;
             let got = each!(&mut data, buf => append(buf, per, &mut f))
@@ -379,10 +387,10 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
         }
     } else {
         for piece in &p.pieces {
-            let (r, offset) = open_after_lines(piece)?;
-            let mut stream: Box<dyn Read> = match p.encoding {
-                Encoding::Gzip => Box::new(flate2::bufread::MultiGzDecoder::new(r)),
-                _ => Box::new(flate2::bufread::ZlibDecoder::new(r)),
+            let (mut r, offset) = open_after_lines(piece)?;
+            let mut stream: Box<dyn Read + '_> = match p.encoding {
+                Encoding::Gzip => Box::new(flate2::bufread::MultiGzDecoder::new(&mut r)),
+                _ => Box::new(flate2::bufread::ZlibDecoder::new(&mut r)),
             };
             let kind = if p.encoding == Encoding::Gzip {
                 "gzip"
@@ -427,6 +435,18 @@ pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
                     Position::Byte(offset),
                     format!("a {kind} stream of exactly {per_bytes} bytes"),
                     "more data",
+                ));
+            }
+            // A zlib stream ends by itself: bytes after it in the file are
+            // not data (gzip members after the first are read as one stream,
+            // and anything else there is an invalid member).
+            drop(stream);
+            if read_full(&mut r, &mut extra).map_err(|e| Error::io(&piece.path, e))? != 0 {
+                return Err(Error::format(
+                    &piece.path,
+                    Position::Byte(offset),
+                    format!("the end of the file after the {kind} stream"),
+                    "more bytes",
                 ));
             }
         }

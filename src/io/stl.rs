@@ -2,7 +2,8 @@
 //!
 //! Read: a file is binary when its length is exactly `84 + 50·n` for the
 //! facet count `n` at byte 80; otherwise it must be ASCII (`solid …`), and a
-//! file that starts with neither is checked as binary against its length.
+//! file that starts with neither is checked as binary against its length:
+//! fewer bytes than the count announces, or more, is an error.
 //! Facet corners with bit-identical coordinates (`-0` = `+0`) are welded
 //! into one vertex, in order of first appearance, so the result is an
 //! indexed mesh. Facet normals are ignored (the winding defines the normal).
@@ -37,6 +38,22 @@ impl Welder {
             next
         })
     }
+}
+
+/// The size a binary STL's facet count implies, from the file's first
+/// bytes (`None` for an ASCII one, which starts with `solid` and is text).
+pub(crate) fn implied_len(bytes: &[u8]) -> Option<u64> {
+    let starts_solid = bytes
+        .iter()
+        .position(|b| !b.is_ascii_whitespace())
+        .is_some_and(|i| bytes[i..].starts_with(b"solid"));
+    if bytes.len() < 84 || (starts_solid && !bytes.contains(&0)) {
+        return None;
+    }
+    let n = u64::from(u32::from_le_bytes([
+        bytes[80], bytes[81], bytes[82], bytes[83],
+    ]));
+    Some(84 + 50 * n)
 }
 
 /// Reads an STL file held in `bytes`.
@@ -84,6 +101,14 @@ fn read_binary(path: &Path, bytes: &[u8], n: u64) -> Result<TriMesh> {
         }
         sc.take(2, "facet attribute bytes")?;
         w.mesh.triangles.push(tri);
+    }
+    if !sc.rest().is_empty() {
+        return Err(Error::format(
+            path,
+            Position::Byte(84 + 50 * n as u64),
+            format!("the end of the file after the {n} facets the count at byte 80 announces"),
+            "more data",
+        ));
     }
     Ok(w.mesh)
 }

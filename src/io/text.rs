@@ -289,7 +289,7 @@ impl<'a> Scanner<'a> {
 /// The first `cap` bytes of `path` (all of it when shorter): header text.
 pub(crate) fn read_prefix(path: &Path, cap: u64) -> Result<Vec<u8>> {
     use std::io::Read;
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let (file, _) = crate::foundation::fs::open_input(path)?;
     let mut head = Vec::new();
     file.take(cap)
         .read_to_end(&mut head)

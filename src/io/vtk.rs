@@ -63,8 +63,10 @@ struct Reader<'a> {
     owner: Owner,
 }
 
-/// Reads a VTK legacy POLYDATA file held in `bytes`.
-pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
+/// Checks the first line, `# vtk DataFile Version x.y`, of `bytes` (the
+/// file, or its first bytes before the rest is read); returns the scanner
+/// after it.
+pub(crate) fn magic<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<Scanner<'a>> {
     let mut sc = Scanner::new(path, bytes);
     let magic = "`# vtk DataFile Version x.y`";
     let (at, first) = sc.text_line(magic)?;
@@ -75,6 +77,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
     {
         return Err(sc.error(at, magic, format!("`{}`", clip(first.trim()))));
     }
+    Ok(sc)
+}
+
+/// Reads a VTK legacy POLYDATA file held in `bytes`.
+pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
+    let mut sc = magic(path, bytes)?;
     let at = sc.mark();
     sc.line()
         .ok_or_else(|| sc.error(at, "a title line", "end of file"))?;

@@ -85,10 +85,69 @@ pub fn range_reduce(samples: &[f32], backend: Backend<'_>) -> Result<Option<Samp
     .transpose()
 }
 
+/// Samples per f32 chunk that [`volume_range`] converts for the GPU (64 MiB).
+pub const RANGE_CHUNK: usize = 1 << 24;
+
 /// Intensity range of `volume`, over its samples converted to f32. Exact for
 /// element types with [`crate::volume::ScalarType::exact_in_f32`]; for
 /// `u32`/`i32`/`f64` it is the true range rounded to nearest f32 (rounding
-/// is monotonic, so it commutes with min/max).
+/// is monotonic, so it commutes with min/max). No copy of the volume is
+/// made: the CPU folds the samples in their own type, the GPU gets f32
+/// chunks of [`RANGE_CHUNK`] samples.
 pub fn volume_range(volume: &Volume, backend: Backend<'_>) -> Result<Option<SampleRange>> {
-    range_reduce(&volume.data.to_f32(), backend)
+    use crate::volume::VolumeData as D;
+    let g = match backend {
+        Backend::Cpu => {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            macro_rules! fold {
+                ($v:expr) => {
+                    for &x in $v {
+                        let x = x as f64;
+                        if x.is_nan() {
+                            return Err(Error::param(
+                                "range_reduce: samples",
+                                "NaN",
+                                "must not contain NaN",
+                            ));
+                        }
+                        lo = lo.min(x);
+                        hi = hi.max(x);
+                    }
+                };
+            }
+            match &volume.data {
+                D::U8(v) => fold!(v),
+                D::I8(v) => fold!(v),
+                D::U16(v) => fold!(v),
+                D::I16(v) => fold!(v),
+                D::U32(v) => fold!(v),
+                D::I32(v) => fold!(v),
+                D::F32(v) => fold!(v),
+                D::F64(v) => fold!(v),
+            }
+            return Ok((lo <= hi).then_some(SampleRange {
+                min: lo as f32,
+                max: hi as f32,
+            }));
+        }
+        Backend::Gpu(g) => g,
+    };
+    let mut out: Option<SampleRange> = None;
+    let n = volume.data.len();
+    for start in (0..n).step_by(RANGE_CHUNK) {
+        let end = (start + RANGE_CHUNK).min(n);
+        let chunk: Vec<f32> = (start..end)
+            .map(|i| volume.data.get_f64(i) as f32)
+            .collect();
+        if let Some(r) = range_reduce(&chunk, Backend::Gpu(g))? {
+            out = Some(match out {
+                None => r,
+                Some(o) => SampleRange {
+                    min: o.min.min(r.min),
+                    max: o.max.max(r.max),
+                },
+            });
+        }
+    }
+    Ok(out)
 }

@@ -289,3 +289,139 @@ fn the_backend_choice_is_the_same_everywhere_and_printed() {
         assert_eq!(v["backend"], report, "{args:?}");
     }
 }
+
+/// A ball of radius 3 as `v.nrrd` in `dir`.
+fn small_ball(dir: &Path) -> std::path::PathBuf {
+    let vol = dir.join("v.nrrd");
+    ok_json(&[
+        "phantom",
+        "ball",
+        "--r",
+        "3",
+        "-o",
+        path_str(&vol),
+        "--json",
+    ]);
+    vol
+}
+
+/// No output of a command may name one of its inputs: the same path, a
+/// symbolic link, a hard link, or the data file a header names. Each is
+/// refused before any work, and the input is left byte for byte as it was.
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let vol = small_ball(d);
+    let mesh = d.join("m.ply");
+    ok_json(&[
+        "mc",
+        path_str(&vol),
+        "--level",
+        "1",
+        "-o",
+        path_str(&mesh),
+        "--json",
+    ]);
+    let before = |p: &Path| std::fs::read(p).unwrap();
+    let (vol_bytes, mesh_bytes) = (before(&vol), before(&mesh));
+    let same = |what: &str| {
+        assert_eq!(
+            std::fs::read(&vol).unwrap(),
+            vol_bytes,
+            "{what}: volume changed"
+        );
+        assert_eq!(
+            std::fs::read(&mesh).unwrap(),
+            mesh_bytes,
+            "{what}: mesh changed"
+        );
+    };
+    let (v, m) = (path_str(&vol), path_str(&mesh));
+    assert_clean_error(&["stats", v, "--report", v], "is the input");
+    same("stats --report");
+    assert_clean_error(
+        &["mc", v, "--level", "1", "-o", m, "--report", v],
+        "is the input",
+    );
+    assert_clean_error(&["hull", v, "--level", "1", "--report", v], "is the input");
+    assert_clean_error(&["convert", m, "-o", m], "is the input");
+    assert_clean_error(&["render", m, "-o", m], "is the input");
+    same("mc, hull, convert, render");
+    // relax: the plan and the mesh are inputs.
+    let plan = d.join("plan.toml");
+    std::fs::copy(plan_file("fran_chin_advance.toml"), &plan).unwrap();
+    let plan_bytes = before(&plan);
+    let p = path_str(&plan);
+    assert_clean_error(&["relax", m, "--plan", p, "-o", m], "is the input");
+    assert_clean_error(
+        &[
+            "relax",
+            m,
+            "--plan",
+            p,
+            "-o",
+            path_str(&d.join("r.ply")),
+            "--report",
+            p,
+        ],
+        "is the input",
+    );
+    assert_eq!(before(&plan), plan_bytes);
+    same("relax");
+    // Through a symbolic link and a hard link.
+    #[cfg(unix)]
+    {
+        let soft = d.join("soft.ply");
+        std::os::unix::fs::symlink(&mesh, &soft).unwrap();
+        assert_clean_error(&["convert", m, "-o", path_str(&soft)], "is the input");
+        let hard = d.join("hard.ply");
+        std::fs::hard_link(&mesh, &hard).unwrap();
+        assert_clean_error(&["convert", m, "-o", path_str(&hard)], "is the input");
+        same("links");
+    }
+    // A detached header's data file: writing `b.nhdr` writes `b.raw`, the
+    // data of the input `a.nhdr`.
+    let raw = d.join("b.raw");
+    std::fs::write(&raw, [1u8; 8]).unwrap();
+    let a = d.join("a.nhdr");
+    std::fs::write(
+        &a,
+        b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: b.raw\n",
+    )
+    .unwrap();
+    assert_clean_error(
+        &["convert", path_str(&a), "-o", path_str(&d.join("b.nhdr"))],
+        "is the input",
+    );
+    assert_eq!(std::fs::read(&raw).unwrap(), [1u8; 8]);
+    assert!(!d.join("b.nhdr").exists());
+}
+
+/// Levels and labels: NaN is refused as a usage error, `-inf` and negative
+/// numbers are values.
+#[test]
+fn nan_levels_are_refused_and_negative_ones_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let vol = small_ball(dir.path());
+    let v = path_str(&vol);
+    for args in [
+        vec!["stats", v, "--level", "nan"],
+        vec!["stats", v, "--label", "NaN"],
+        vec!["mc", v, "--level", "nan", "-o", "x.ply"],
+        vec!["hull", v, "--level", "nan"],
+        vec!["scan", v, "--level", "nan"],
+    ] {
+        let run = chisel(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("NaN compares false"), "{args:?}: {stderr}");
+    }
+    for level in ["-inf", "-1", "-1e3"] {
+        let r = ok_json(&["stats", v, "--level", level, "--json"]);
+        let n = r["stats"]["voxels"].as_u64().unwrap();
+        assert_eq!(r["level"]["voxels"].as_u64(), Some(n), "{level}: {r}");
+    }
+    let r = ok_json(&["stats", v, "--level=-1", "--json"]);
+    assert!(r["level"]["voxels"].as_u64().unwrap() > 0);
+}

@@ -3,14 +3,15 @@
 //! giant allocation or a silent partial result — plus a seeded mutation
 //! loop over valid files of every format and the atomic-write guarantees.
 //!
-//! Modules: the `mesh` and `volume` readers, the `mutation` loop and
-//! `atomic_writes`; the helpers and the checks that span all readers stay
+//! Modules: the `mesh` and `volume` readers, the `mutation` loop,
+//! `atomic_writes` and the `campaign`'s regressions; the helpers and the checks that span all readers stay
 //! here (`memory_budget_is_enforced` re-runs itself by its root-level name).
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod atomic_writes;
+mod campaign;
 mod mesh;
 mod mutation;
 mod volume;

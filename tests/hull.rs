@@ -270,6 +270,7 @@ fn corner_hull_of_a_cube_is_the_cube() {
     let frame = chisel::voxel::Frame {
         spacing: [1.0, 2.0, 3.0],
         origin: [5.0, 0.0, -1.0],
+        ..Default::default()
     };
     let s = h.summary(&frame);
     assert_eq!((s.faces, s.vertices, s.edges, s.triangles), (6, 8, 12, 12));
@@ -283,6 +284,27 @@ fn corner_hull_of_a_cube_is_the_cube() {
     assert_eq!(h.containment([7, 7, 7]), Containment::Inside);
     assert_eq!(h.containment([2, 7, 7]), Containment::On);
     assert_eq!(h.containment([1, 7, 7]), Containment::Outside);
+    // Oblique and reflected frames: the mesh is the box moved into the
+    // world, still wound outward, with the same volume and area.
+    let m = h.to_mesh(&frame).unwrap();
+    for axes in [
+        [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+    ] {
+        let turned = chisel::voxel::Frame { axes, ..frame };
+        let t = h.to_mesh(&turned).unwrap();
+        assert!(
+            (t.signed_volume() - m.signed_volume()).abs() < 1e-6,
+            "{axes:?}"
+        );
+        assert!(m.signed_volume() > 0.0);
+        let st = h.summary(&turned);
+        assert!((st.area_world - 550.0).abs() < 1e-9 && (st.volume_world - 750.0).abs() < 1e-9);
+        assert_eq!(
+            t.positions[0].to_array(),
+            turned.world_f32(h.vertices()[0]).to_array()
+        );
+    }
 }
 
 #[test]

@@ -5,7 +5,7 @@ mod common;
 use std::path::Path;
 
 use chisel::io::{RawSpec, read_raw_volume, read_volume, write_volume};
-use chisel::volume::{ScalarType, VolumeData};
+use chisel::volume::{ScalarType, Space, VolumeData};
 use chisel::{Error, Volume};
 
 fn histogram_u8(v: &Volume) -> [usize; 256] {
@@ -118,6 +118,12 @@ fn every_volume_writer_round_trips_every_type() {
             let path = dir.path().join(name);
             write_volume(&path, &v).unwrap_or_else(|e| panic!("{name}: {e}"));
             let back = read_volume(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+            // A volume without an anatomical frame comes back from NIfTI in
+            // RAS (the format has no other world), at the same coordinates.
+            let back = Volume {
+                space: v.space,
+                ..back
+            };
             assert_eq!(back, v, "{name} {:?}", v.data.scalar_type());
         }
     }
@@ -136,7 +142,13 @@ fn real_volumes_round_trip() {
             let back = read_volume(&path).unwrap();
             assert_eq!(back.dims, v.dims, "{rel} → {name}");
             assert!(back.data == v.data, "{rel} → {name}: samples differ");
-            assert_eq!(back.origin, v.origin, "{rel} → {name}");
+            // The same place: in one anatomical frame (NIfTI writes RAS), or,
+            // for a volume that names none, the same coordinates.
+            let place = |x: &Volume| match v.space {
+                Some(_) => x.frame_in(Space::Lps),
+                None => (x.origin, x.axes),
+            };
+            assert_eq!(place(&back), place(&v), "{rel} → {name}");
             // NIfTI stores pixdim as f32 (3.2 → 3.2000000477): documented.
             let tol = if name.starts_with("v.nii") { 1e-6 } else { 0.0 };
             for (a, b) in back.spacing.iter().zip(v.spacing) {
@@ -209,23 +221,26 @@ encoding: raw\nbyte skip: -1\ndata file: LIST\ns002.raw\ns004.raw\n";
 }
 
 #[test]
-fn nrrd_oblique_or_flipped_directions_are_refused() {
+fn nrrd_flipped_and_permuted_directions_are_kept_sheared_ones_refused() {
     let dir = tempfile::tempdir().unwrap();
-    for dirs in [
-        "(0.7,0.7,0) (0,1,0) (0,0,1)",
-        "(-1,0,0) (0,1,0) (0,0,1)",
-        "(0,1,0) (1,0,0) (0,0,1)",
-    ] {
+    let read = |dirs: &str| {
         let hdr = format!(
             "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\nspace directions: {dirs}\nencoding: raw\n\nx"
         );
-        let e = read_volume(&write(dir.path(), "o.nrrd", hdr.as_bytes())).unwrap_err();
-        assert!(matches!(e, Error::Unsupported { .. }), "{dirs}: {e}");
-        assert!(
-            e.to_string().contains("o.nrrd") && e.to_string().contains("line 5"),
-            "{e}"
-        );
-    }
+        read_volume(&write(dir.path(), "o.nrrd", hdr.as_bytes()))
+    };
+    let v = read("(-2,0,0) (0,1,0) (0,0,1)").unwrap();
+    assert_eq!((v.spacing, v.axes[0]), ([2.0, 1.0, 1.0], [-1.0, 0.0, 0.0]));
+    assert!(v.reflects());
+    let v = read("(0,1,0) (1,0,0) (0,0,1)").unwrap();
+    assert_eq!(v.axes[0], [0.0, 1.0, 0.0]);
+    assert!(v.reflects());
+    let e = read("(0.7,0.7,0) (0,1,0) (0,0,1)").unwrap_err();
+    assert!(matches!(e, Error::Unsupported { .. }), "{e}");
+    assert!(
+        e.to_string().contains("o.nrrd") && e.to_string().contains("line 5"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -342,4 +357,135 @@ fn raw_volume_with_header_bytes_big_endian() {
     };
     let e = read_raw_volume(&path, &long).unwrap_err();
     assert!(matches!(e, Error::Size { .. }), "{e}");
+}
+
+/// An oblique frame: a rotation about (1, 2, 3) by 0.7 rad, its third axis
+/// negated when `reflect`.
+fn oblique_axes(reflect: bool) -> [[f64; 3]; 3] {
+    let n = glam::DVec3::new(1.0, 2.0, 3.0).normalize();
+    let q = glam::DQuat::from_axis_angle(n, 0.7);
+    let mut axes = [glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z].map(|e| (q * e).to_array());
+    if reflect {
+        axes[2] = axes[2].map(|c| -c);
+    }
+    axes
+}
+
+/// World positions of every sample of `v` in anatomical frame `to`.
+fn worlds(v: &Volume, to: Space) -> Vec<[f64; 3]> {
+    let (origin, axes) = v.frame_in(to);
+    let moved = Volume {
+        origin,
+        axes,
+        space: Some(to),
+        ..v.clone()
+    };
+    let [nx, ny, nz] = v.dims;
+    (0..nx * ny * nz)
+        .map(|i| {
+            moved.world([
+                (i % nx) as f64,
+                ((i / nx) % ny) as f64,
+                (i / (nx * ny)) as f64,
+            ])
+        })
+        .collect()
+}
+
+#[test]
+fn orientation_round_trips_through_every_writer() {
+    let dir = tempfile::tempdir().unwrap();
+    for reflect in [false, true] {
+        let v = Volume::new(
+            [3, 4, 2],
+            [0.5, 1.25, 3.0],
+            [-10.5, 3.25, 7.0],
+            VolumeData::I16(i16_ramp()),
+        )
+        .unwrap()
+        .with_frame(oblique_axes(reflect), Some(Space::Lps))
+        .unwrap();
+        let want = worlds(&v, Space::Lps);
+        for name in WRITE_NAMES {
+            let path = dir.path().join(name);
+            write_volume(&path, &v).unwrap();
+            let back = read_volume(&path).unwrap();
+            assert_eq!(back.data, v.data);
+            // NRRD and MetaImage write decimal text that reads back exactly;
+            // NIfTI stores f32 (and says RAS).
+            let nifti = name.starts_with("v.nii");
+            assert_eq!(
+                back.space,
+                Some(if nifti { Space::Ras } else { Space::Lps })
+            );
+            let got = worlds(&back, Space::Lps);
+            let worst = want
+                .iter()
+                .zip(&got)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+                .fold(0.0f64, f64::max);
+            let tol = if nifti { 2e-5 } else { 0.0 };
+            assert!(
+                worst <= tol,
+                "{name} reflect {reflect}: worlds differ by {worst}"
+            );
+            assert_eq!(back.reflects(), reflect, "{name}");
+        }
+    }
+}
+
+#[test]
+fn lps_nrrd_through_ras_nifti_keeps_every_voxel_in_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let nrrd = write(
+        dir.path(),
+        "a.nrrd",
+        &[
+            b"NRRD0004\ntype: short\ndimension: 3\nspace: left-posterior-superior\nsizes: 3 4 2\n\
+              space directions: (0,-0.5,0) (1.25,0,0) (0,0,3)\nspace origin: (10,-20,5)\n\
+              endian: big\nencoding: raw\n\n"
+                .as_slice(),
+            &i16_be(&i16_ramp()),
+        ]
+        .concat(),
+    );
+    let v = read_volume(&nrrd).unwrap();
+    assert_eq!(v.space, Some(Space::Lps));
+    assert_eq!(v.spacing, [0.5, 1.25, 3.0]);
+    assert_eq!(v.axes, [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]);
+    // Sample (1, 0, 0) lies 0.5 towards anterior (−y in LPS) of the origin.
+    assert_eq!(v.world([1.0, 0.0, 0.0]), [10.0, -20.5, 5.0]);
+    let nii = dir.path().join("b.nii");
+    write_volume(&nii, &v).unwrap();
+    let r = read_volume(&nii).unwrap();
+    // In RAS the same point has x and y negated.
+    assert_eq!(r.space, Some(Space::Ras));
+    assert_eq!(r.world([1.0, 0.0, 0.0]), [-10.0, 20.5, 5.0]);
+    let again = dir.path().join("c.nrrd");
+    write_volume(&again, &r).unwrap();
+    let back = read_volume(&again).unwrap();
+    assert_eq!(worlds(&back, Space::Lps), worlds(&v, Space::Lps));
+    assert_eq!(back.data, v.data);
+    // LAS is read as RAS with x negated: the same world points.
+    let las = write(
+        dir.path(),
+        "l.nrrd",
+        b"NRRD0004\ntype: uchar\ndimension: 3\nspace: LAS\nsizes: 1 1 2\n\
+          space directions: (1,0,0) (0,1,0) (0,0,2)\nspace origin: (3,4,5)\nencoding: raw\n\n\x01\x02",
+    );
+    let l = read_volume(&las).unwrap();
+    assert_eq!(l.space, Some(Space::Ras));
+    assert_eq!(l.world([0.0, 0.0, 1.0]), [-3.0, 4.0, 7.0]);
+    // Sheared directions are refused, naming the field.
+    let sheared = write(
+        dir.path(),
+        "s.nrrd",
+        b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 1 1 1\n\
+          space directions: (1,0,0) (1,1,0) (0,0,1)\nencoding: raw\n\n\x01",
+    );
+    let e = read_volume(&sheared).unwrap_err().to_string();
+    assert!(
+        e.contains("space directions") && e.contains("right angles"),
+        "{e}"
+    );
 }

@@ -331,10 +331,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let gpu = global.backend(&args.backend)?;
     let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
-    let frame = Frame {
-        spacing: volume.spacing,
-        origin: volume.origin,
-    };
+    let frame = Frame::of(&volume);
     let (kind, options) = (args.hull.kind(), args.hull.options());
     let (kept, skipped): (Vec<&Structure>, Vec<&Structure>) =
         structures.iter().partition(|s| s.voxels >= args.min_voxels);

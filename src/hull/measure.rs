@@ -118,6 +118,10 @@ impl ConvexHull {
                 triangles.push([f.vertices[0], f.vertices[k], f.vertices[k + 1]]);
             }
         }
+        // A reflecting frame turns the index-space winding inside out.
+        if frame.reflects() {
+            triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        }
         TriMesh::new(positions, triangles)
     }
 }

@@ -12,14 +12,17 @@
 //! `CompressedDataSize` is ignored, because it is only a hint and known to be
 //! wrong in real files (frogtissue's is 2,067 bytes short: trusting it loses
 //! 2,670 voxels); the inflated length must equal the product of the dims.
-//! `TransformMatrix`/`Rotation`/`Orientation` must be the identity (a
-//! [`Volume`] has no orientation, so anything else is
-//! [`Error::Unsupported`]). `ElementDataFile` may be `LOCAL` (data after the
+//! `TransformMatrix`/`Rotation`/`Orientation` gives the axes (row k the
+//! world direction of index axis k, as ITK reads it; it must be
+//! orthonormal); with `AnatomicalOrientation` (as ITK writes it) the world
+//! is LPS, ITK's convention, else no anatomical frame is named. `ElementDataFile` may be `LOCAL` (data after the
 //! header, in `.mhd` too), a file name (also for `.mha`), `LIST [subdim]`
 //! with names on the following lines, or a pattern `fmt min max step [subdim]`.
 //!
 //! Write: `.mha` with `ElementDataFile = LOCAL`, or `.mhd` with
-//! `<stem>.raw`; little-endian, uncompressed.
+//! `<stem>.raw`; little-endian, uncompressed; `TransformMatrix` and
+//! `Offset` in LPS (a RAS volume's x and y negated) with ITK's
+//! `AnatomicalOrientation` code when the volume names a frame.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -29,6 +32,7 @@ use super::raw::{Encoding, Payload, Piece, Skip, read_samples, sample_count, wri
 use super::text::{Endian, Scanner, clip, read_prefix};
 use crate::foundation::fs::write_atomic_with;
 use crate::volume::ScalarType;
+use crate::volume::{IDENTITY_AXES, Space};
 use crate::{Error, Position, Result, Volume};
 
 const HEADER_CAP: u64 = 16 << 20;
@@ -256,21 +260,24 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             *o = *x;
         }
     }
-    if let Some(f) = h.get(&["TransformMatrix", "Rotation", "Orientation"]) {
+    // Row k of the matrix is the world direction of index axis k (as ITK's
+    // MetaImageIO reads it); the world is LPS (ITK's convention).
+    let mut axes = IDENTITY_AXES;
+    let matrix = h.get(&["TransformMatrix", "Rotation", "Orientation"]);
+    if let Some(f) = matrix {
         let v = floats(path, f, ndims * ndims, "matrix entries")?;
-        let identity = v.len() == ndims * ndims
-            && v.iter()
-                .enumerate()
-                .all(|(i, &x)| x == if i % (ndims + 1) == 0 { 1.0 } else { 0.0 });
-        if !identity {
-            return Err(Error::Unsupported {
-                path: path.into(),
-                what: format!(
-                    "{}: a non-identity orientation {} (only axis-aligned images can be represented)",
-                    f.at,
-                    clip(&f.value)
-                ),
-            });
+        if v.len() != ndims * ndims {
+            return Err(Error::format(
+                path,
+                f.at.clone(),
+                format!("{} matrix entries", ndims * ndims),
+                f.value.clone(),
+            ));
+        }
+        for k in 0..ndims.min(3) {
+            for c in 0..ndims.min(3) {
+                axes[k][c] = v[k * ndims + c];
+            }
         }
     }
     let msb = boolean(
@@ -354,7 +361,19 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
         encoding,
         pieces,
     })?;
-    Volume::new(dims, spacing, origin, data)
+    let at = matrix.map_or(Position::Whole, |f| f.at.clone());
+    // ITK's world is LPS; a file that names an anatomical orientation (as
+    // ITK writes one) is in it.
+    let space = h.get(&["AnatomicalOrientation"]).map(|_| Space::Lps);
+    Volume::new(dims, spacing, origin, data)?
+        .with_frame(axes, space)
+        .map_err(|_| Error::Unsupported {
+            path: path.into(),
+            what: format!(
+                "{at}: `TransformMatrix` {axes:?} is not orthonormal (a sheared or scaled grid \
+                 is not represented)"
+            ),
+        })
 }
 
 fn met_type_name(ty: ScalarType) -> &'static str {
@@ -373,12 +392,37 @@ fn met_type_name(ty: ScalarType) -> &'static str {
 fn header(v: &Volume, data_file: &str) -> String {
     let [nx, ny, nz] = v.dims;
     let [sx, sy, sz] = v.spacing;
-    let [ox, oy, oz] = v.origin;
+    // The world of MetaImage is LPS: a RAS volume is turned into it.
+    let ([ox, oy, oz], axes) = v.frame_in(Space::Lps);
+    let matrix: Vec<String> = axes.iter().flatten().map(|c| c.to_string()).collect();
+    // ITK's orientation code: per axis the side it starts from (R, A, I
+    // for the LPS axes), of its largest component.
+    let orientation = match v.space {
+        None => String::new(),
+        Some(_) => {
+            let code: String = axes
+                .iter()
+                .map(|a| {
+                    let c = (0..3)
+                        .max_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
+                        .unwrap_or(0);
+                    let from = if a[c] >= 0.0 {
+                        ["R", "A", "I"]
+                    } else {
+                        ["L", "P", "S"]
+                    };
+                    from[c]
+                })
+                .collect();
+            format!("AnatomicalOrientation = {code}\n")
+        }
+    };
     format!(
         "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n\
-         CompressedData = False\nTransformMatrix = 1 0 0 0 1 0 0 0 1\nOffset = {ox} {oy} {oz}\n\
-         ElementSpacing = {sx} {sy} {sz}\nDimSize = {nx} {ny} {nz}\nElementType = {}\n\
-         ElementDataFile = {data_file}\n",
+         CompressedData = False\nTransformMatrix = {}\nOffset = {ox} {oy} {oz}\n\
+         {orientation}ElementSpacing = {sx} {sy} {sz}\nDimSize = {nx} {ny} {nz}\n\
+         ElementType = {}\nElementDataFile = {data_file}\n",
+        matrix.join(" "),
         met_type_name(v.data.scalar_type())
     )
 }

@@ -4,19 +4,19 @@
 //! `sizeof_hdr`), magic `n+1`, `dim[0]` 1–7 with axes beyond the third of
 //! size 1, datatypes u8/i8/i16/u16/i32/u32/f32/f64 (`bitpix` must agree),
 //! spacing from `pixdim[1..=3]` (positive), samples from `vox_offset`.
-//! Origin: `qoffset_*` when `qform_code > 0` (the quaternion must be the
-//! identity and `qfac = pixdim[0]` not negative), else the translation column
-//! of the `srow_*` matrix when `sform_code > 0` (which must be diagonal and
-//! positive), else 0; any rotation or flip is [`Error::Unsupported`], since
-//! a [`Volume`] has no orientation. Intensity scaling: when `scl_slope` is
+//! Placement: the `srow_*` affine when `sform_code > 0` (spacing and axes
+//! from its columns, which must be orthogonal), else the qform when
+//! `qform_code > 0` (quaternion, `qfac = pixdim[0]` for a reflection,
+//! `qoffset`), both in RAS; else (method 1) the world axes, origin 0 and no
+//! anatomical frame. Intensity scaling: when `scl_slope` is
 //! finite, non-zero and `(scl_slope, scl_inter) ≠ (1, 0)`, samples become
 //! `F32` values `slope·x + inter` (computed in `f64`, rounded once);
 //! otherwise the stored type is kept.
 //!
-//! Write: little-endian, `vox_offset` 352 (no extensions), `qform_code` 1
-//! with the identity quaternion and `qoffset` = origin, `xyzt_units` mm,
-//! `scl_slope` 1. `pixdim` and `qoffset` are `f32` in the format, so
-//! spacing and origin round-trip exactly only when they are `f32` values.
+//! Write: little-endian, `vox_offset` 352 (no extensions), the frame in
+//! RAS (an LPS volume's x and y negated) as qform and sform, both code 1,
+//! `xyzt_units` mm, `scl_slope` 1. The format stores `f32`, so spacing,
+//! origin and axes round-trip exactly only when they are `f32` values.
 //! `.nii.gz` is gzip-compressed.
 
 use std::io::{self, BufReader, Write};
@@ -28,7 +28,7 @@ use flate2::write::GzEncoder;
 use super::raw::{Encoding, Payload, Piece, Skip, read_samples, write_le};
 use super::text::{Endian, Num};
 use crate::foundation::fs::write_atomic_with;
-use crate::volume::{ScalarType, VolumeData};
+use crate::volume::{ScalarType, Space, VolumeData};
 use crate::{Error, Position, Result, Volume};
 
 const HEADER_LEN: usize = 348;
@@ -189,7 +189,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             format!("{vox}"),
         ));
     }
-    let origin = orientation(&h)?;
+    let placement = orientation(&h, spacing)?;
 
     let piece = if gz {
         Piece::new(path.into(), 0, 0, Skip::Bytes(vox as u64))
@@ -218,48 +218,156 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     } else {
         data
     };
-    Volume::new(dims, spacing, origin, data)
+    match placement {
+        None => Volume::new(dims, spacing, [0.0; 3], data),
+        Some(p) => Volume::new(dims, p.spacing, p.origin, data)?
+            .with_frame(p.axes, Some(Space::Ras))
+            .map_err(|_| {
+                h.unsupported(
+                    280,
+                    format!(
+                        "sform axes {:?} are not at right angles (a sheared grid is not \
+                         represented)",
+                        p.axes
+                    ),
+                )
+            }),
+    }
 }
 
-/// The origin from qform or sform; an error for rotations and flips.
-fn orientation(h: &Header) -> Result<[f64; 3]> {
+/// A NIfTI frame: origin, axes and spacing in RAS.
+struct Placement {
+    origin: [f64; 3],
+    axes: [[f64; 3]; 3],
+    spacing: [f64; 3],
+}
+
+/// The placement from sform (`sform_code > 0`, preferred as nibabel does),
+/// else qform (`qform_code > 0`), else none (method 1: the pixdim spacing
+/// along the world axes, origin 0, no anatomical frame).
+fn orientation(h: &Header, spacing: [f64; 3]) -> Result<Option<Placement>> {
     let (qcode, scode) = (h.i16(252), h.i16(254));
-    if qcode > 0 {
-        let q = [h.f32(256), h.f32(260), h.f32(264)];
-        if q.iter().any(|&x| x != 0.0) || h.f32(76) < 0.0 {
-            return Err(h.unsupported(
-                256,
-                format!(
-                    "qform rotation (quatern {q:?}, qfac {}); only identity orientation can be represented",
-                    h.f32(76)
-                ),
-            ));
-        }
-        let o = [h.f32(268), h.f32(272), h.f32(276)];
-        if o.iter().any(|x| !x.is_finite()) {
-            return Err(h.error(268, "finite qoffset values", format!("{o:?}")));
-        }
-        return Ok(o);
-    }
     if scode > 0 {
-        let mut o = [0.0; 3];
-        for (r, out) in o.iter_mut().enumerate() {
-            let row: Vec<f64> = (0..4).map(|c| h.f32(280 + 16 * r + 4 * c)).collect();
-            let diagonal = row[..3]
-                .iter()
-                .enumerate()
-                .all(|(c, &x)| if c == r { x > 0.0 } else { x == 0.0 });
-            if !diagonal || !row[3].is_finite() {
-                return Err(h.unsupported(
-                    280 + 16 * r,
-                    format!("sform row {r} {row:?}: only positive axis-aligned matrices can be represented"),
+        let mut m = [[0.0f64; 4]; 3];
+        for (r, row) in m.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x = h.f32(280 + 16 * r + 4 * c);
+                if !x.is_finite() {
+                    return Err(h.error(
+                        280 + 16 * r + 4 * c,
+                        "a finite srow entry",
+                        format!("{x}"),
+                    ));
+                }
+            }
+        }
+        let mut p = Placement {
+            origin: [m[0][3], m[1][3], m[2][3]],
+            axes: [[0.0; 3]; 3],
+            spacing: [0.0; 3],
+        };
+        for (k, (spacing, axis)) in p.spacing.iter_mut().zip(&mut p.axes).enumerate() {
+            let col = [m[0][k], m[1][k], m[2][k]];
+            let len = col.iter().map(|c| c * c).sum::<f64>().sqrt();
+            if len <= 0.0 {
+                return Err(h.error(
+                    280 + 4 * k,
+                    format!("a non-zero sform column {k}"),
+                    format!("{col:?}"),
                 ));
             }
-            *out = row[3];
+            *spacing = len;
+            *axis = col.map(|c| c / len);
         }
-        return Ok(o);
+        return Ok(Some(p));
     }
-    Ok([0.0; 3])
+    if qcode > 0 {
+        let [b, c, d] = [h.f32(256), h.f32(260), h.f32(264)];
+        let o = [h.f32(268), h.f32(272), h.f32(276)];
+        if [b, c, d].iter().chain(&o).any(|x| !x.is_finite()) {
+            return Err(h.error(
+                256,
+                "finite quatern and qoffset values",
+                format!("{:?}", [b, c, d]),
+            ));
+        }
+        // a from the unit quaternion (clamped: f32 rounding can make the
+        // sum of squares pass 1 by an ulp).
+        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        let r = [
+            [
+                a * a + b * b - c * c - d * d,
+                2.0 * (b * c - a * d),
+                2.0 * (b * d + a * c),
+            ],
+            [
+                2.0 * (b * c + a * d),
+                a * a + c * c - b * b - d * d,
+                2.0 * (c * d - a * b),
+            ],
+            [
+                2.0 * (b * d - a * c),
+                2.0 * (c * d + a * b),
+                a * a + d * d - c * c - b * b,
+            ],
+        ];
+        let qfac = if h.f32(76) < 0.0 { -1.0 } else { 1.0 };
+        let axes = std::array::from_fn(|k| {
+            let sign = if k == 2 { qfac } else { 1.0 };
+            std::array::from_fn(|row| r[row][k] * sign)
+        });
+        return Ok(Some(Placement {
+            origin: o,
+            axes,
+            spacing,
+        }));
+    }
+    Ok(None)
+}
+
+/// The unit quaternion (b, c, d; a ≥ 0) of rotation `r` (rows), as
+/// NIfTI's `mat44_to_quatern` derives it.
+fn quaternion(r: [[f64; 3]; 3]) -> [f64; 3] {
+    let trace = r[0][0] + r[1][1] + r[2][2] + 1.0;
+    let (a, b, c, d) = if trace > 0.5 {
+        let a = 0.5 * trace.sqrt();
+        (
+            a,
+            0.25 * (r[2][1] - r[1][2]) / a,
+            0.25 * (r[0][2] - r[2][0]) / a,
+            0.25 * (r[1][0] - r[0][1]) / a,
+        )
+    } else {
+        let xd = 1.0 + r[0][0] - (r[1][1] + r[2][2]);
+        let yd = 1.0 + r[1][1] - (r[0][0] + r[2][2]);
+        let zd = 1.0 + r[2][2] - (r[0][0] + r[1][1]);
+        if xd > 1.0 {
+            let b = 0.5 * xd.sqrt();
+            (
+                0.25 * (r[2][1] - r[1][2]) / b,
+                b,
+                0.25 * (r[0][1] + r[1][0]) / b,
+                0.25 * (r[0][2] + r[2][0]) / b,
+            )
+        } else if yd > 1.0 {
+            let c = 0.5 * yd.sqrt();
+            (
+                0.25 * (r[0][2] - r[2][0]) / c,
+                0.25 * (r[0][1] + r[1][0]) / c,
+                c,
+                0.25 * (r[1][2] + r[2][1]) / c,
+            )
+        } else {
+            let d = 0.5 * zd.sqrt();
+            (
+                0.25 * (r[1][0] - r[0][1]) / d,
+                0.25 * (r[0][2] + r[2][0]) / d,
+                0.25 * (r[1][2] + r[2][1]) / d,
+                d,
+            )
+        }
+    };
+    if a < 0.0 { [-b, -c, -d] } else { [b, c, d] }
 }
 
 fn read_up_to(r: &mut dyn io::Read, buf: &mut [u8]) -> io::Result<usize> {
@@ -305,7 +413,14 @@ fn header(v: &Volume) -> Result<Vec<u8>> {
     };
     put(&mut b, 70, &code.to_le_bytes());
     put(&mut b, 72, &(8 * ty.size() as i16).to_le_bytes());
-    let pixdim = [1.0, v.spacing[0], v.spacing[1], v.spacing[2]];
+    // The frame in RAS, as qform (rotation, qfac for a reflection) and as
+    // sform (the same affine, both with code 1).
+    let (origin, axes) = v.frame_in(Space::Ras);
+    let qfac = if v.reflects() { -1.0 } else { 1.0 };
+    let rotation: [[f64; 3]; 3] = std::array::from_fn(|row| {
+        std::array::from_fn(|k| axes[k][row] * if k == 2 { qfac } else { 1.0 })
+    });
+    let pixdim = [qfac, v.spacing[0], v.spacing[1], v.spacing[2]];
     for (i, p) in pixdim.iter().enumerate() {
         put(&mut b, 76 + 4 * i, &(*p as f32).to_le_bytes());
     }
@@ -313,8 +428,23 @@ fn header(v: &Volume) -> Result<Vec<u8>> {
     put(&mut b, 112, &1f32.to_le_bytes());
     b[123] = 2; // xyzt_units: millimetres
     put(&mut b, 252, &1i16.to_le_bytes());
-    for (i, o) in v.origin.iter().enumerate() {
+    put(&mut b, 254, &1i16.to_le_bytes());
+    for (i, q) in quaternion(rotation).iter().enumerate() {
+        put(&mut b, 256 + 4 * i, &(*q as f32).to_le_bytes());
+    }
+    for (i, o) in origin.iter().enumerate() {
         put(&mut b, 268 + 4 * i, &(*o as f32).to_le_bytes());
+    }
+    for row in 0..3 {
+        for (k, (axis, spacing)) in axes.iter().zip(v.spacing).enumerate() {
+            let x = axis[row] * spacing;
+            put(&mut b, 280 + 16 * row + 4 * k, &(x as f32).to_le_bytes());
+        }
+        put(
+            &mut b,
+            280 + 16 * row + 12,
+            &(origin[row] as f32).to_le_bytes(),
+        );
     }
     put(&mut b, 344, b"n+1\0");
     Ok(b)

@@ -25,6 +25,7 @@ use super::raw::{Encoding, Payload, Piece, Skip, read_samples, sample_count, wri
 use super::text::{Endian, Scanner, clip, read_prefix};
 use crate::foundation::fs::write_atomic_with;
 use crate::volume::ScalarType;
+use crate::volume::{IDENTITY_AXES, Space};
 use crate::{Error, Position, Result, Volume};
 
 /// Most bytes a header may take (a `LIST` of many file names fits easily).
@@ -378,6 +379,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             *s = v;
         }
     }
+    let mut axes = IDENTITY_AXES;
     if let Some(f) = h.get("spacedirections") {
         let dirs = vectors(path, f)?;
         if dirs.len() != dimension {
@@ -388,23 +390,29 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
                 f.value.clone(),
             ));
         }
+        let mut given = 0;
         for (axis, dir) in dirs.iter().enumerate().take(3) {
             let Some(v) = dir else { continue };
-            let aligned = v.len() > axis
-                && v[axis] > 0.0
-                && v.iter().enumerate().all(|(j, &c)| j == axis || c == 0.0);
-            if !aligned {
+            let len = v.iter().map(|c| c * c).sum::<f64>().sqrt();
+            if v.len() > 3 {
                 return Err(Error::Unsupported {
                     path: path.into(),
-                    what: format!(
-                        "{}: axis {axis} direction {v:?} is oblique, permuted or flipped; \
-                         only positive axis-aligned directions can be represented",
-                        f.at
-                    ),
+                    what: format!("{}: a {}-D space direction", f.at, v.len()),
                 });
             }
-            spacing[axis] = v[axis];
+            if !(len.is_finite() && len > 0.0) {
+                return Err(Error::format(
+                    path,
+                    f.at.clone(),
+                    "non-zero finite `space directions`",
+                    f.value.clone(),
+                ));
+            }
+            spacing[axis] = len;
+            axes[axis] = std::array::from_fn(|c| v.get(c).copied().unwrap_or(0.0) / len);
+            given += 1;
         }
+        complete_frame(&mut axes, given);
     }
     // The space's dimension: `space dimension`, else the length of the
     // direction vectors; the origin must have exactly that many components.
@@ -588,7 +596,35 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
         encoding,
         pieces: files,
     })?;
-    Volume::new(dims, spacing, origin, data)
+    // The anatomical frame: LPS and RAS as named; LAS turned into RAS (x
+    // negated); other spaces (scanner-xyz, 3D-right-handed) name none.
+    let mut space = None;
+    if let Some(f) = h.get("space") {
+        let name = f.value.trim().to_ascii_lowercase();
+        let name = name.trim_end_matches("-time");
+        space = match name {
+            "left-posterior-superior" | "lps" => Some(Space::Lps),
+            "right-anterior-superior" | "ras" => Some(Space::Ras),
+            "left-anterior-superior" | "las" => {
+                origin[0] = -origin[0];
+                axes.iter_mut().for_each(|a| a[0] = -a[0]);
+                Some(Space::Ras)
+            }
+            _ => None,
+        };
+    }
+    let at = h
+        .get("spacedirections")
+        .map_or(Position::Whole, |f| f.at.clone());
+    Volume::new(dims, spacing, origin, data)?
+        .with_frame(axes, space)
+        .map_err(|_| Error::Unsupported {
+            path: path.into(),
+            what: format!(
+                "{at}: `space directions` {axes:?} are not at right angles (a sheared grid is not \
+                 represented)"
+            ),
+        })
 }
 
 fn nrrd_type_name(ty: ScalarType) -> &'static str {
@@ -605,14 +641,25 @@ fn nrrd_type_name(ty: ScalarType) -> &'static str {
 }
 
 fn header(v: &Volume, data_file: Option<&str>) -> String {
-    let [sx, sy, sz] = v.spacing;
     let [ox, oy, oz] = v.origin;
     let [nx, ny, nz] = v.dims;
+    let space = match v.space {
+        Some(Space::Lps) => "space: left-posterior-superior",
+        Some(Space::Ras) => "space: right-anterior-superior",
+        None => "space dimension: 3",
+    };
+    let dirs: Vec<String> = (0..3)
+        .map(|k| {
+            let d = v.axes[k].map(|c| c * v.spacing[k]);
+            format!("({},{},{})", d[0], d[1], d[2])
+        })
+        .collect();
     let mut h = format!(
-        "NRRD0004\n# written by chisel\ntype: {}\ndimension: 3\nspace dimension: 3\n\
-         sizes: {nx} {ny} {nz}\nspace directions: ({sx},0,0) (0,{sy},0) (0,0,{sz})\n\
+        "NRRD0004\n# written by chisel\ntype: {}\ndimension: 3\n{space}\n\
+         sizes: {nx} {ny} {nz}\nspace directions: {}\n\
          space origin: ({ox},{oy},{oz})\nendian: little\nencoding: raw\n",
-        nrrd_type_name(v.data.scalar_type())
+        nrrd_type_name(v.data.scalar_type()),
+        dirs.join(" ")
     );
     if let Some(name) = data_file {
         h.push_str(&format!("data file: {name}\n"));
@@ -640,4 +687,31 @@ pub(crate) fn write_detached(path: &Path, v: &Volume) -> Result<()> {
     write_atomic_with(&data_path, |w: &mut dyn Write| write_le(w, &v.data))?;
     let head = header(v, Some(&name));
     write_atomic_with(path, |w| -> io::Result<()> { w.write_all(head.as_bytes()) })
+}
+
+/// Completes the first `given` orthonormal axes to a right-handed frame
+/// (an image of fewer than three spatial axes): the cross product for the
+/// third, the world axis least along the first for the second.
+fn complete_frame(axes: &mut [[f64; 3]; 3], given: usize) {
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    if given == 1 {
+        let a = axes[0];
+        let k = (0..3)
+            .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
+            .unwrap_or(0);
+        let mut e = [0.0; 3];
+        e[k] = 1.0;
+        let b = cross(cross(a, e), a);
+        let len = b.iter().map(|c| c * c).sum::<f64>().sqrt();
+        axes[1] = b.map(|c| c / len);
+    }
+    if (1..=2).contains(&given) {
+        axes[2] = cross(axes[0], axes[1]);
+    }
 }

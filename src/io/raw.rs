@@ -287,8 +287,29 @@ pub(crate) fn sample_count(
     })
 }
 
-/// Decodes all samples described by `p`.
+/// Decodes all samples described by `p`. An error in a data file the
+/// header names also names the header (the file the user gave).
 pub(crate) fn read_samples(p: &Payload) -> Result<VolumeData> {
+    samples(p).map_err(|e| {
+        let in_data_file = match &e {
+            Error::Io { path, .. }
+            | Error::Format { path, .. }
+            | Error::Size { path, .. }
+            | Error::Unsupported { path, .. } => path != p.header,
+            _ => false,
+        };
+        if in_data_file {
+            Error::In {
+                context: format!("{}: the data file it names", p.header.display()),
+                inner: Box::new(e),
+            }
+        } else {
+            e
+        }
+    })
+}
+
+fn samples(p: &Payload) -> Result<VolumeData> {
     let n = sample_count(p.header, &p.field, p.dims, p.ty)?;
     let elem = p.ty.size() as u64;
     let pieces = p.pieces.len();

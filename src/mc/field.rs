@@ -384,13 +384,11 @@ impl<'a> Field<'a> {
         }
     }
 
-    /// World position of index-space point `u` (padded grid): `origin +
-    /// spacing·(u − pad)` per axis, evaluated in f64 and rounded to f32.
+    /// World position of index-space point `u` (padded grid):
+    /// [`Volume::world`] of `u − pad`, evaluated in f64 and rounded to f32.
     pub fn to_world(&self, u: [f32; 3]) -> glam::Vec3 {
-        let o = self.volume.origin;
-        let s = self.volume.spacing;
-        let w = |a: usize| (o[a] + s[a] * (f64::from(u[a]) - self.pad as f64)) as f32;
-        glam::Vec3::new(w(0), w(1), w(2))
+        let w = self.volume.world(u.map(|x| f64::from(x) - self.pad as f64));
+        glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)
     }
 }
 

@@ -194,9 +194,14 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
         },
         || leaf_blocks(&raw.cells, field.dims),
     );
+    // Axes with a reflection turn the index-space winding inside out.
+    let mut triangles = raw.triangles;
+    if field.volume().reflects() {
+        triangles.iter_mut().for_each(|t| t.swap(1, 2));
+    }
     let mesh = TriMesh {
         positions,
-        triangles: raw.triangles,
+        triangles,
         scalars: Vec::new(),
     };
     let grid = Grid {

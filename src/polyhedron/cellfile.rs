@@ -344,7 +344,7 @@ impl Polyhedron {
             .collect();
         serde_json::json!({
             "coordinates": "combinatorial (voxel (i,j,k) has centre (2i+1, 2j+1, 2k+1))",
-            "frame": { "spacing": self.frame.spacing, "origin": self.frame.origin },
+            "frame": { "spacing": self.frame.spacing, "origin": self.frame.origin, "axes": self.frame.axes },
             "shells": shells,
         })
     }

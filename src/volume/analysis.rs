@@ -33,6 +33,11 @@ pub struct VolumeStats {
     pub spacing: [f64; 3],
     /// World position of sample (0,0,0).
     pub origin: [f64; 3],
+    /// World direction of each index axis.
+    pub axes: [[f64; 3]; 3],
+    /// The anatomical frame of the world coordinates (`LPS`, `RAS`), when
+    /// the file names one.
+    pub space: Option<super::Space>,
     /// Element type, serialised by name (`u8`, `i16`, ...).
     pub scalar_type: ScalarType,
     /// `nx·ny·nz`.
@@ -165,6 +170,8 @@ impl VolumeStats {
             dims: v.dims,
             spacing: v.spacing,
             origin: v.origin,
+            axes: v.axes,
+            space: v.space,
             scalar_type: v.data.scalar_type(),
             voxels: v.len() as u64,
             min: s.min,

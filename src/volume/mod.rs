@@ -1,8 +1,13 @@
 //! Host-side scalar volumes (CT, MR, label images).
 //!
 //! A [`Volume`] holds `dims = [nx, ny, nz]` samples in file order (x fastest,
-//! then y, then z; never flipped), the voxel `spacing` and the `origin` of
-//! sample (0,0,0) in world units (usually mm). 2-D images have `nz = 1`.
+//! then y, then z; never flipped), the voxel `spacing`, the `origin` of
+//! sample (0,0,0) and the world direction of each index axis (`axes`, an
+//! orthonormal frame: a rotation, or a rotation and a reflection) in world
+//! units (usually mm), and, when the file says, the anatomical [`Space`]
+//! those world coordinates are in. Sample `(i, j, k)` lies at
+//! `origin + i·spacing[0]·axes[0] + j·spacing[1]·axes[1] + k·spacing[2]·axes[2]`
+//! ([`Volume::world`]). 2-D images have `nz = 1`.
 
 pub mod analysis;
 
@@ -133,6 +138,53 @@ impl VolumeData {
     }
 }
 
+/// The anatomical frame of world coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Space {
+    /// x towards the patient's left, y posterior, z superior (DICOM, ITK
+    /// and MetaImage, NRRD from 3D Slicer).
+    #[serde(rename = "LPS")]
+    Lps,
+    /// x towards the patient's right, y anterior, z superior (NIfTI).
+    #[serde(rename = "RAS")]
+    Ras,
+}
+
+impl Space {
+    /// Per-axis signs that take coordinates in `self` to `to`: LPS and RAS
+    /// differ in the signs of x and y.
+    pub fn signs_to(self, to: Space) -> [f64; 3] {
+        if self == to {
+            [1.0; 3]
+        } else {
+            [-1.0, -1.0, 1.0]
+        }
+    }
+
+    /// `LPS` or `RAS`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Space::Lps => "LPS",
+            Space::Ras => "RAS",
+        }
+    }
+}
+
+/// The axes of a volume whose index axes are the world axes.
+pub const IDENTITY_AXES: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// How far a volume's axes may be from orthonormal (dot products), for
+/// directions written as decimal text by other tools.
+pub const AXES_TOLERANCE: f64 = 1e-5;
+
+/// Whether `axes` include a reflection (their determinant is negative).
+pub fn reflects(axes: &[[f64; 3]; 3]) -> bool {
+    let [a, b, c] = axes;
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0])
+        < 0.0
+}
+
 /// A 3-D (or 2-D, `nz = 1`) scalar volume.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Volume {
@@ -142,6 +194,12 @@ pub struct Volume {
     pub spacing: [f64; 3],
     /// World position of sample (0,0,0).
     pub origin: [f64; 3],
+    /// World direction of each index axis: unit vectors, mutually
+    /// orthogonal ([`IDENTITY_AXES`] for an axis-aligned volume).
+    pub axes: [[f64; 3]; 3],
+    /// The anatomical frame of the world coordinates, when the file names
+    /// one.
+    pub space: Option<Space>,
     /// `nx·ny·nz` samples, x fastest.
     pub data: VolumeData,
 }
@@ -189,8 +247,61 @@ impl Volume {
             dims,
             spacing,
             origin,
+            axes: IDENTITY_AXES,
+            space: None,
             data,
         })
+    }
+
+    /// The volume with index axes along `axes` in anatomical frame `space`.
+    ///
+    /// Errors: axes that are not finite unit vectors, mutually orthogonal
+    /// within [`AXES_TOLERANCE`] (sheared grids are not represented).
+    pub fn with_frame(mut self, axes: [[f64; 3]; 3], space: Option<Space>) -> crate::Result<Self> {
+        for i in 0..3 {
+            for j in 0..3 {
+                let dot: f64 = (0..3).map(|c| axes[i][c] * axes[j][c]).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                if !dot.is_finite() || (dot - want).abs() > AXES_TOLERANCE {
+                    return Err(crate::Error::param(
+                        "axes",
+                        format!("{axes:?}"),
+                        "must be orthonormal (unit directions at right angles; sheared grids \
+                         are not represented)",
+                    ));
+                }
+            }
+        }
+        self.axes = axes;
+        self.space = space;
+        Ok(self)
+    }
+
+    /// World position of fractional index `(i, j, k)`.
+    pub fn world(&self, index: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            self.origin[c]
+                + (0..3)
+                    .map(|k| index[k] * self.spacing[k] * self.axes[k][c])
+                    .sum::<f64>()
+        })
+    }
+
+    /// Whether the axes include a reflection (determinant −1): surfaces
+    /// built in index space then turn inside out in the world unless their
+    /// winding is reversed.
+    pub fn reflects(&self) -> bool {
+        reflects(&self.axes)
+    }
+
+    /// Origin and axes expressed in anatomical frame `to` (unchanged when
+    /// the volume names no frame or the same one).
+    pub fn frame_in(&self, to: Space) -> ([f64; 3], [[f64; 3]; 3]) {
+        let signs = self.space.map_or([1.0; 3], |s| s.signs_to(to));
+        (
+            std::array::from_fn(|c| self.origin[c] * signs[c]),
+            self.axes.map(|a| std::array::from_fn(|c| a[c] * signs[c])),
+        )
     }
 
     /// Number of samples `nx·ny·nz`.
@@ -232,12 +343,12 @@ impl Volume {
             VolumeData::F32(v) => VolumeData::F32(v[r].to_vec()),
             VolumeData::F64(v) => VolumeData::F64(v[r].to_vec()),
         };
-        let mut origin = self.origin;
-        origin[2] += self.spacing[2] * z as f64;
         Ok(Volume {
             dims: [self.dims[0], self.dims[1], 1],
             spacing: self.spacing,
-            origin,
+            origin: self.world([0.0, 0.0, z as f64]),
+            axes: self.axes,
+            space: self.space,
             data,
         })
     }

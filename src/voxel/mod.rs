@@ -53,20 +53,43 @@ pub enum Component {
 }
 
 /// Placement of voxel indices in the world: voxel `(i, j, k)` has its centre
-/// at `origin + spacing·(i, j, k)`, so combinatorial coordinate `c` maps to
-/// `origin + spacing·(c − 1)/2`.
+/// at `origin + Σ_k spacing[k]·index_k·axes[k]` (as [`Volume::world`]), so
+/// combinatorial coordinate `c` maps to the index `(c − 1)/2`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frame {
     /// Distance between voxel centres per axis (world units).
     pub spacing: [f64; 3],
     /// World position of the centre of voxel `(0, 0, 0)`.
     pub origin: [f64; 3],
+    /// World direction of each index axis (orthonormal).
+    pub axes: [[f64; 3]; 3],
 }
 
 impl Frame {
+    /// The frame of `volume`'s samples.
+    pub fn of(volume: &Volume) -> Frame {
+        Frame {
+            spacing: volume.spacing,
+            origin: volume.origin,
+            axes: volume.axes,
+        }
+    }
+
     /// World position of combinatorial coordinates `c`.
     pub fn world(&self, c: [i64; 3]) -> [f64; 3] {
-        std::array::from_fn(|a| self.origin[a] + self.spacing[a] * (c[a] as f64 - 1.0) / 2.0)
+        let index: [f64; 3] = std::array::from_fn(|a| (c[a] as f64 - 1.0) / 2.0);
+        std::array::from_fn(|w| {
+            self.origin[w]
+                + (0..3)
+                    .map(|a| self.spacing[a] * index[a] * self.axes[a][w])
+                    .sum::<f64>()
+        })
+    }
+
+    /// Whether the axes include a reflection (surfaces built in index space
+    /// need their winding reversed in the world).
+    pub fn reflects(&self) -> bool {
+        crate::volume::reflects(&self.axes)
     }
 
     /// [`Frame::world`] as an `f32` mesh position.
@@ -81,6 +104,7 @@ impl Default for Frame {
         Frame {
             spacing: [1.0; 3],
             origin: [0.0; 3],
+            axes: crate::volume::IDENTITY_AXES,
         }
     }
 }
@@ -112,10 +136,7 @@ impl DigitalObject {
         component: Component,
     ) -> crate::Result<DigitalObject> {
         let keep = select(&volume.data, selection);
-        let frame = Frame {
-            spacing: volume.spacing,
-            origin: volume.origin,
-        };
+        let frame = Frame::of(volume);
         let chosen: Vec<bool> = match component {
             Component::All => keep,
             Component::Largest | Component::Index(_) => {

@@ -199,7 +199,7 @@ fn metaimage_bad_inputs() {
     expect(
         "r.mha",
         &mha(
-            &format!("{MET_444}TransformMatrix = 0 1 0 1 0 0 0 0 1\nElementDataFile = LOCAL\n"),
+            &format!("{MET_444}TransformMatrix = 1 0 0 1 1 0 0 0 1\nElementDataFile = LOCAL\n"),
             &[0; 64],
         ),
         Kind::Unsupported,
@@ -282,11 +282,25 @@ fn nifti_bad_inputs() {
     let mut f = nifti([2, 2, 2], 2, 8);
     f[344..348].copy_from_slice(b"ni1\0");
     expect("m.nii", &f, Kind::Unsupported, "byte 344");
+    // A rotation (qform: half a turn about y) is kept; a sheared sform is
+    // refused.
     let mut f = nifti([2, 2, 2], 2, 8);
     f[252..254].copy_from_slice(&1i16.to_le_bytes());
     f[260..264].copy_from_slice(&1f32.to_le_bytes());
     f.extend([0u8; 8]);
-    expect("q.nii", &f, Kind::Unsupported, "byte 256");
+    let dir = tempfile::tempdir().unwrap();
+    let v = read_volume(&put(dir.path(), "q.nii", &f)).unwrap();
+    assert_eq!(
+        v.axes,
+        [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]
+    );
+    let mut f = nifti([2, 2, 2], 2, 8);
+    f[254..256].copy_from_slice(&1i16.to_le_bytes());
+    for (at, x) in [(280, 1f32), (284, 1.0), (300, 1.0), (320, 1.0)] {
+        f[at..at + 4].copy_from_slice(&x.to_le_bytes());
+    }
+    f.extend([0u8; 8]);
+    expect("s.nii", &f, Kind::Unsupported, "byte 280");
     expect(
         "z.nii.gz",
         b"\x1f\x8b\x08\x00garbage",

@@ -90,6 +90,44 @@ fn spacing_and_origin_are_honoured() {
 }
 
 #[test]
+fn oblique_and_reflected_axes_place_the_surface_in_the_world() {
+    // A ball off the grid centre (the torus of the fixtures is symmetric).
+    let a = ball(20, 6.0, [0.5, 2.0, 3.0], [10.0, -5.0, 7.0]);
+    let sa = marching_cubes(&a, IsoSpec::Level(0.0), &McOptions::default(), Backend::Cpu).unwrap();
+    let q = glam::DQuat::from_axis_angle(glam::DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
+    for reflect in [false, true] {
+        let mut axes = [glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z].map(|e| q * e);
+        if reflect {
+            axes[2] = -axes[2];
+        }
+        let b = a
+            .clone()
+            .with_frame(axes.map(|v| v.to_array()), None)
+            .unwrap();
+        let sb =
+            marching_cubes(&b, IsoSpec::Level(0.0), &McOptions::default(), Backend::Cpu).unwrap();
+        // Each vertex is the aligned one moved by the frame about the origin.
+        let o = glam::DVec3::from(a.origin);
+        for (p, w) in sa.mesh.positions.iter().zip(&sb.mesh.positions) {
+            let d = p.as_dvec3() - o;
+            let want = o + axes[0] * d.x + axes[1] * d.y + axes[2] * d.z;
+            assert!(
+                (want - w.as_dvec3()).abs().max_element() < 1e-4,
+                "{want} vs {w}"
+            );
+        }
+        // Still wound outward, with the same volume (a reflection reverses
+        // the index-space winding).
+        let (va, vb) = (sa.mesh.signed_volume(), sb.mesh.signed_volume());
+        assert!(
+            va > 0.0 && (vb - va).abs() < 1e-3 * va,
+            "reflect {reflect}: {va} vs {vb}"
+        );
+        assert!((sb.groups[0].volume - sa.groups[0].volume).abs() < 1e-3 * va);
+    }
+}
+
+#[test]
 fn open_border_surfaces_report_their_boundary() {
     // A slab filling the volume in x and y: open without closing, closed with.
     let dims = [6, 5, 6];

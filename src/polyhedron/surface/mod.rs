@@ -164,7 +164,12 @@ impl MergedSurface {
     /// scalar `depth` per vertex ([`MergedSurface::vertex_depth`]).
     pub fn to_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
         let positions = self.vertices.iter().map(|&v| frame.world_f32(v)).collect();
-        let mut mesh = TriMesh::new(positions, self.triangles.clone())?;
+        let mut triangles = self.triangles.clone();
+        // A reflecting frame turns the index-space winding inside out.
+        if frame.reflects() {
+            triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        let mut mesh = TriMesh::new(positions, triangles)?;
         mesh.scalars.push(ScalarField {
             name: "depth".into(),
             values: self.vertex_depth.iter().map(|&d| d as f32).collect(),
@@ -178,8 +183,12 @@ impl MergedSurface {
     /// ([`MergedSurface::face_depth`]), so colours do not blend across
     /// faces. Not welded: write [`MergedSurface::to_mesh`] instead.
     pub fn to_face_mesh(&self, frame: &Frame) -> crate::Result<TriMesh> {
+        let flip = frame.reflects();
         let positions = (self.triangles.iter())
-            .flat_map(|t| t.map(|v| frame.world_f32(self.vertices[v as usize])))
+            .flat_map(|t| {
+                let t = if flip { [t[0], t[2], t[1]] } else { *t };
+                t.map(|v| frame.world_f32(self.vertices[v as usize]))
+            })
             .collect();
         let triangles = (0..self.triangles.len() as u32)
             .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])

@@ -154,8 +154,11 @@ impl<'a> Scanner<'a> {
     pub fn line_tokens(&mut self) -> Vec<(usize, &'a str)> {
         let mut out = Vec::new();
         loop {
+            // Every whitespace byte but the line's end separates tokens (a
+            // form feed once stopped both loops: an endless empty token).
             while self.pos < self.bytes.len()
-                && matches!(self.bytes[self.pos], b' ' | b'\t' | b'\r')
+                && self.bytes[self.pos].is_ascii_whitespace()
+                && self.bytes[self.pos] != b'\n'
             {
                 self.pos += 1;
             }

@@ -34,6 +34,18 @@ fn options(tolerance: f64) -> FuseOptions {
     }
 }
 
+/// Two spheres of radius 0.5 side by side (centres 2 apart): from inside
+/// the first, rays towards the second cross the mesh three times.
+fn two_spheres() -> TriMesh {
+    let mut a = sphere(3, 0.5, Vec3::ZERO);
+    let second = sphere(3, 0.5, Vec3::new(2.0, 0.0, 0.0));
+    let n = a.positions.len() as u32;
+    a.positions.extend(&second.positions);
+    a.triangles
+        .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
+    a
+}
+
 /// C is a closed, outward, self-intersection-free genus-0 surface.
 fn assert_valid_surface(what: &str, c: &TriMesh) {
     let topo = Topology::of(c);
@@ -270,14 +282,7 @@ fn subtraction_refuses_where_b_reaches_out_of_a() {
 
 #[test]
 fn subtraction_from_a_non_star_shaped_mesh_is_refused_with_its_rays() {
-    // A is two spheres side by side; from inside the first, rays towards
-    // the second cross A three times.
-    let mut a = sphere(3, 0.5, Vec3::ZERO);
-    let second = sphere(3, 0.5, Vec3::new(2.0, 0.0, 0.0));
-    let n = a.positions.len() as u32;
-    a.positions.extend(&second.positions);
-    a.triangles
-        .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
+    let a = two_spheres();
     let b = sphere(3, 0.4, Vec3::new(0.2, 0.0, 0.0));
     // (A fusion goes on by layers; a subtraction refuses.)
     let mut o = options(1e-3);
@@ -549,14 +554,7 @@ fn torus_fuses_with_a_sphere_by_layers() {
 
 #[test]
 fn layered_fusion_refuses_what_the_seed_excludes() {
-    // A: two spheres side by side; from inside the first, rays towards the
-    // second cross A three times.
-    let mut a = sphere(3, 0.5, Vec3::ZERO);
-    let second = sphere(3, 0.5, Vec3::new(2.0, 0.0, 0.0));
-    let n = a.positions.len() as u32;
-    a.positions.extend(&second.positions);
-    a.triangles
-        .extend(second.triangles.iter().map(|t| t.map(|v| v + n)));
+    let a = two_spheres();
     // B meeting both spheres: A ∩ B falls into two pieces.
     let b = sphere(3, 0.8, Vec3::new(1.0, 0.0, 0.0));
     let mut o = options(1e-3);

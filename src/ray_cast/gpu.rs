@@ -18,6 +18,19 @@ pub struct Params {
     pub origin_z: f32,
 }
 
+impl Params {
+    /// The parameters of `n_rays` rays from `origin` through `bvh`.
+    pub fn new(n_rays: u32, bvh: &BvhBuffers, origin: Vec3) -> Params {
+        Params {
+            n_rays,
+            n_nodes: bvh.n_nodes,
+            origin_x: origin.x,
+            origin_y: origin.y,
+            origin_z: origin.z,
+        }
+    }
+}
+
 /// Most rays per dispatch (keeps the hit buffer at 80 MiB, under the
 /// default 128 MiB storage binding).
 pub const RAYS_PER_DISPATCH: usize = 1 << 22;
@@ -158,13 +171,7 @@ impl HitBuffers {
             ));
         }
         let n_rays = dirs.len() as u32;
-        let params = Params {
-            n_rays,
-            n_nodes: bvh.n_nodes,
-            origin_x: origin.x,
-            origin_y: origin.y,
-            origin_z: origin.z,
-        };
+        let params = Params::new(n_rays, bvh, origin);
         let dirs: &[[f32; 4]] = if dirs.is_empty() { &[[0.0; 4]] } else { dirs };
         let sentinel = Hit {
             t: f32::NAN,
@@ -222,13 +229,7 @@ impl RayBuffers {
             ));
         }
         let n_rays = dirs.len() as u32;
-        let params = Params {
-            n_rays,
-            n_nodes: bvh.n_nodes,
-            origin_x: origin.x,
-            origin_y: origin.y,
-            origin_z: origin.z,
-        };
+        let params = Params::new(n_rays, bvh, origin);
         let sentinel = RayHit {
             near: f32::NAN,
             far: f32::NAN,

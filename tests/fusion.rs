@@ -46,6 +46,18 @@ fn two_spheres() -> TriMesh {
     a
 }
 
+/// The same triangles, positions within 10⁻⁵ (a CPU and a GPU run).
+fn assert_same_mesh(cpu: &TriMesh, gpu: &TriMesh) {
+    assert_eq!(cpu.triangles, gpu.triangles);
+    let worst = cpu
+        .positions
+        .iter()
+        .zip(&gpu.positions)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1e-5, "positions differ by {worst}");
+}
+
 /// C is a closed, outward, self-intersection-free genus-0 surface.
 fn assert_valid_surface(what: &str, c: &TriMesh) {
     let topo = Topology::of(c);
@@ -399,15 +411,7 @@ fn cpu_and_gpu_fusions_are_the_same_mesh() {
     let gpu = fuse(&a, &b, &options(1e-3), Backend::Gpu(gpu), |_| {}).unwrap();
     // ray_cast is exact in triangle ids and counts, and its distances agree
     // to the bit on a device without contraction: the same refinement.
-    assert_eq!(cpu.mesh.triangles, gpu.mesh.triangles);
-    let worst = cpu
-        .mesh
-        .positions
-        .iter()
-        .zip(&gpu.mesh.positions)
-        .map(|(p, q)| (*p - *q).length())
-        .fold(0.0f32, f32::max);
-    assert!(worst <= 1e-5, "positions differ by {worst}");
+    assert_same_mesh(&cpu.mesh, &gpu.mesh);
 }
 
 /// The foot bones' components, largest first.
@@ -540,15 +544,7 @@ fn torus_fuses_with_a_sphere_by_layers() {
         };
         let cpu = fuse(&a, &b, &o, Backend::Cpu, |_| {}).unwrap();
         let on_gpu = fuse(&a, &b, &o, Backend::Gpu(gpu), |_| {}).unwrap();
-        assert_eq!(cpu.mesh.triangles, on_gpu.mesh.triangles);
-        let worst = cpu
-            .mesh
-            .positions
-            .iter()
-            .zip(&on_gpu.mesh.positions)
-            .map(|(p, q)| p.distance(*q))
-            .fold(0.0f32, f32::max);
-        assert!(worst <= 1e-5, "positions differ by {worst}");
+        assert_same_mesh(&cpu.mesh, &on_gpu.mesh);
     }
 }
 

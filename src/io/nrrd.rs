@@ -412,7 +412,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
             axes[axis] = std::array::from_fn(|c| v.get(c).copied().unwrap_or(0.0) / len);
             given += 1;
         }
-        complete_frame(&mut axes, given);
+        crate::volume::complete_axes(&mut axes, given);
     }
     // The space's dimension: `space dimension`, else the length of the
     // direction vectors; the origin must have exactly that many components.
@@ -687,31 +687,4 @@ pub(crate) fn write_detached(path: &Path, v: &Volume) -> Result<()> {
     write_atomic_with(&data_path, |w: &mut dyn Write| write_le(w, &v.data))?;
     let head = header(v, Some(&name));
     write_atomic_with(path, |w| -> io::Result<()> { w.write_all(head.as_bytes()) })
-}
-
-/// Completes the first `given` orthonormal axes to a right-handed frame
-/// (an image of fewer than three spatial axes): the cross product for the
-/// third, the world axis least along the first for the second.
-fn complete_frame(axes: &mut [[f64; 3]; 3], given: usize) {
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    if given == 1 {
-        let a = axes[0];
-        let k = (0..3)
-            .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
-            .unwrap_or(0);
-        let mut e = [0.0; 3];
-        e[k] = 1.0;
-        let b = cross(cross(a, e), a);
-        let len = b.iter().map(|c| c * c).sum::<f64>().sqrt();
-        axes[1] = b.map(|c| c / len);
-    }
-    if (1..=2).contains(&given) {
-        axes[2] = cross(axes[0], axes[1]);
-    }
 }

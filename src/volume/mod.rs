@@ -185,6 +185,33 @@ pub fn reflects(axes: &[[f64; 3]; 3]) -> bool {
         < 0.0
 }
 
+/// Completes the first `given` orthonormal axes to a right-handed frame
+/// (an image of fewer than three spatial axes): the cross product for the
+/// third, the world axis least along the first for the second.
+pub fn complete_axes(axes: &mut [[f64; 3]; 3], given: usize) {
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    if given == 1 {
+        let a = axes[0];
+        let k = (0..3)
+            .min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs()))
+            .unwrap_or(0);
+        let mut e = [0.0; 3];
+        e[k] = 1.0;
+        let b = cross(cross(a, e), a);
+        let len = b.iter().map(|c| c * c).sum::<f64>().sqrt();
+        axes[1] = b.map(|c| c / len);
+    }
+    if (1..=2).contains(&given) {
+        axes[2] = cross(axes[0], axes[1]);
+    }
+}
+
 /// A 3-D (or 2-D, `nz = 1`) scalar volume.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Volume {

@@ -1,9 +1,9 @@
-//! `chisel convert IN -o OUT`: mesh ↔ mesh or volume ↔ volume, by extension.
+//! `chisel convert IN -o OUT`: mesh ↔ mesh or volume ↔ volume (the input
+//! told by its content, the output by its extension).
 
 use std::path::PathBuf;
 
 use super::Global;
-use super::stats::is_volume;
 
 /// Arguments of `chisel convert`.
 #[derive(Debug, clap::Args)]
@@ -51,7 +51,15 @@ fn select_and_move(args: &Args, mut m: crate::TriMesh) -> anyhow::Result<crate::
 type CheckOutput = fn(&std::path::Path) -> crate::Result<()>;
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
-    match (is_volume(&args.input), is_volume(&args.output)) {
+    let input_is_volume = crate::io::is_volume(&args.input)?;
+    // `.vtk` holds either kind: the input's.
+    let output_is_volume = if crate::foundation::fs::file_name_lower(&args.output).ends_with(".vtk")
+    {
+        input_is_volume
+    } else {
+        crate::io::names_volume(&args.output)
+    };
+    match (input_is_volume, output_is_volume) {
         (true, true) => {
             anyhow::ensure!(
                 args.component.is_none() && args.translate.is_none(),
@@ -61,7 +69,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
                 args.preview.is_none(),
                 "--preview draws meshes; use `chisel mc --preview` for a volume's surface"
             );
-            let v = crate::io::read_volume(&args.input)?;
+            let v = global.read_volume(&args.input)?;
             crate::io::write_volume(&args.output, &v)?;
             global.note(format!(
                 "wrote {} ({}×{}×{} {})",

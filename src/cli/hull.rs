@@ -257,7 +257,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let (selection, component) = args.select.parse()?;
     let mut timings = HullTimings::default();
     let t = Instant::now();
-    let volume = crate::io::read_volume(&args.volume)?;
+    let volume = global.read_volume(&args.volume)?;
     let object = DigitalObject::from_volume(&volume, selection, component)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.volume.display()))?;
     timings.object = t.elapsed().as_secs_f64();

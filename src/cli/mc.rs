@@ -106,7 +106,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     {
         anyhow::bail!("--label takes a whole number (a voxel value); got {l}");
     }
-    let volume = crate::io::read_volume(&args.volume)?;
+    let volume = global.read_volume(&args.volume)?;
     if volume.dims.iter().any(|&d| d < 2) {
         anyhow::bail!(
             "{}: a volume of {:?} samples has no cells: marching cubes needs at least 2 samples along each axis",

@@ -53,6 +53,10 @@ pub struct Global {
     /// Hide progress bars and informational messages.
     #[arg(long, short, global = true)]
     quiet: bool,
+    /// DICOM directories holding several series: the SeriesInstanceUID to
+    /// read (`chisel stats DIR` lists them).
+    #[arg(long, global = true, value_name = "UID")]
+    series: Option<String>,
 }
 
 /// Preview axes: which world directions are up and front in the views
@@ -355,6 +359,19 @@ impl Global {
         );
         bar.set_message(what.to_string());
         bar
+    }
+
+    /// Reads a volume (a file or a DICOM directory, `--series` choosing
+    /// among several series) and prints the reader's notes.
+    fn read_volume(&self, path: &std::path::Path) -> anyhow::Result<crate::Volume> {
+        let options = crate::io::ReadOptions {
+            series: self.series.clone(),
+        };
+        let (volume, notes) = crate::io::read_volume_with(path, &options)?;
+        for note in notes {
+            self.note(format!("{}: {note}", path.display()));
+        }
+        Ok(volume)
     }
 
     /// Prints an informational line unless `--quiet`.

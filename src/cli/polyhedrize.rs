@@ -185,7 +185,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let mut timings = PolyhedrizeTimings::default();
     let since = |t: Instant| t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let mut volume = crate::io::read_volume(&args.volume)?;
+    let mut volume = global.read_volume(&args.volume)?;
     if let Some(z) = args.slice {
         volume = volume
             .slice_z(z)

@@ -549,7 +549,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let backend = gpu.as_ref().map_or(Backend::Cpu, Backend::Gpu);
     let (skin, bone, ct) = match input {
         Input::Ct(ct, skin_level, bone_level) => {
-            let volume = crate::io::read_volume(ct)?;
+            let volume = global.read_volume(ct)?;
             let mut ct_params = CtParams::for_volume(&volume, skin_level, bone_level);
             if let Some(e) = args.skin_min_edge {
                 ct_params.skin_min_edge = e;

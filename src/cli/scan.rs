@@ -302,7 +302,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     let name = args.volume.display();
     let t_total = Instant::now();
     let t = Instant::now();
-    let volume = crate::io::read_volume(&args.volume)?;
+    let volume = global.read_volume(&args.volume)?;
     let read_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let (ids, structures) = match args.level {

@@ -23,6 +23,17 @@ use crate::volume::analysis::{
 pub enum StatsReport {
     Mesh(MeshStats),
     Volume(VolumeStatsReport),
+    Series(SeriesList),
+}
+
+/// `stats` of a DICOM directory holding several series: the list.
+#[derive(Debug, Serialize)]
+pub struct SeriesList {
+    file: PathBuf,
+    /// `dicom_directory`.
+    kind: &'static str,
+    series: Vec<crate::io::SeriesInfo>,
+    hint: &'static str,
 }
 
 impl Report for StatsReport {
@@ -38,6 +49,10 @@ pub struct MeshStats {
     backend: &'static str,
     /// Names of the per-vertex scalar fields.
     scalars: Vec<String>,
+    /// What the reader changed or skipped (polygons triangulated, arrays
+    /// passed over).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    notes: Vec<String>,
     topology: Topology,
     self_intersections: CrossingFigures,
     /// With the GPU: its bounds and whether they equal the CPU mirror's.
@@ -70,6 +85,12 @@ pub struct VolumeStatsReport {
     /// `volume`.
     kind: &'static str,
     backend: &'static str,
+    /// What the reader skipped (VTK arrays besides the volume's).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    notes: Vec<String>,
+    /// A DICOM directory: its series (the one read among them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dicom_series: Option<Vec<crate::io::SeriesInfo>>,
     stats: VolumeStats,
     /// Samples ≥ `--level` and their 6-connected components.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -93,7 +114,8 @@ struct GpuRange {
 #[derive(Debug, clap::Args)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Mesh (.vtk .ply .obj .stl .byu) or volume (.nrrd .nhdr .mhd .mha .nii .nii.gz).
+    /// Mesh (.vtk .vtp .ply .obj .stl .byu), volume (.nrrd .nhdr .mhd .mha .nii
+    /// .nii.gz .vtk .vti, DICOM) or a DICOM directory (several series are listed).
     file: PathBuf,
     #[command(flatten)]
     report: ReportArgs,
@@ -109,21 +131,28 @@ pub struct Args {
     backend: BackendChoice,
 }
 
-/// Whether `path` names a volume (by extension) rather than a mesh.
-pub fn is_volume(path: &std::path::Path) -> bool {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_lowercase())
-        .unwrap_or_default();
-    [".nrrd", ".nhdr", ".mhd", ".mha", ".nii", ".nii.gz"]
-        .iter()
-        .any(|ext| name.ends_with(ext))
-}
-
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
     args.report.check()?;
-    let report = if is_volume(&args.file) {
-        StatsReport::Volume(volume_stats(global, args)?)
+    let report = if args.file.is_dir() && global.series.is_none() {
+        // A DICOM directory: its series; the volume when there is one.
+        let series = crate::io::dicom_series(&args.file)?;
+        if series.len() == 1 {
+            StatsReport::Volume(volume_stats(global, args, Some(series))?)
+        } else {
+            no_volume_options(args)?;
+            StatsReport::Series(SeriesList {
+                file: args.file.clone(),
+                kind: "dicom_directory",
+                series,
+                hint: "choose one with --series UID",
+            })
+        }
+    } else if crate::io::is_volume(&args.file)? {
+        let series = match args.file.is_dir() {
+            true => Some(crate::io::dicom_series(&args.file)?),
+            false => None,
+        };
+        StatsReport::Volume(volume_stats(global, args, series)?)
     } else {
         if args.level.is_some() || args.label.is_some() {
             anyhow::bail!(
@@ -137,7 +166,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
 }
 
 fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<MeshStats> {
-    let mesh = crate::io::read_mesh(&args.file)?;
+    let (mesh, notes) = crate::io::read_mesh_noted(&args.file)?;
     let topology = Topology::of(&mesh);
     let crossings = self_intersections(&mesh);
     let (component, _) = vertex_components(mesh.n_vertices(), &mesh.triangles);
@@ -162,6 +191,7 @@ fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<MeshStats> {
         kind: "mesh",
         backend: if gpu.is_some() { "gpu" } else { "cpu" },
         scalars: mesh.scalars.iter().map(|s| s.name.clone()).collect(),
+        notes,
         topology,
         self_intersections: CrossingFigures {
             pairs: crossings.pairs.len(),
@@ -173,8 +203,26 @@ fn mesh_stats(global: &Global, args: &Args) -> anyhow::Result<MeshStats> {
     })
 }
 
-fn volume_stats(global: &Global, args: &Args) -> anyhow::Result<VolumeStatsReport> {
-    let volume = crate::io::read_volume(&args.file)?;
+/// `--level` and `--label` need a volume.
+fn no_volume_options(args: &Args) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        args.level.is_none() && args.label.is_none(),
+        "--level and --label need one volume; {} holds several DICOM series (--series UID \
+         chooses one)",
+        args.file.display()
+    );
+    Ok(())
+}
+
+fn volume_stats(
+    global: &Global,
+    args: &Args,
+    series: Option<Vec<crate::io::SeriesInfo>>,
+) -> anyhow::Result<VolumeStatsReport> {
+    let options = crate::io::ReadOptions {
+        series: global.series.clone(),
+    };
+    let (volume, notes) = crate::io::read_volume_with(&args.file, &options)?;
     let gpu = match global.backend(&args.backend)? {
         Some(gpu) => {
             let range = crate::reduce::volume_range(&volume, Backend::Gpu(&gpu))?;
@@ -190,6 +238,8 @@ fn volume_stats(global: &Global, args: &Args) -> anyhow::Result<VolumeStatsRepor
         file: args.file.clone(),
         kind: "volume",
         backend: if gpu.is_some() { "gpu" } else { "cpu" },
+        notes,
+        dicom_series: series,
         stats: VolumeStats::of(&volume),
         level: args.level.map(|t| threshold_components(&volume, t)),
         label: args.label.map(|l| label_components(&volume, l)),

@@ -38,6 +38,8 @@
 
 mod byu;
 pub(crate) mod config;
+mod detect;
+mod dicom;
 mod metaimage;
 mod nifti;
 mod nrrd;
@@ -47,14 +49,16 @@ mod raw;
 mod stl;
 mod text;
 mod vtk;
+mod vtk_xml;
 
+pub use dicom::SeriesInfo;
 pub use raw::{RawSpec, read_raw_volume};
+
+use detect::{Format, MeshFormat, VolumeFormat, format_of, mesh_by_extension, volume_by_extension};
 
 use std::path::Path;
 
-use crate::foundation::fs::{
-    check_output_path, extension_text, file_name_lower, not_a_directory, write_atomic_with,
-};
+use crate::foundation::fs::{check_output_path, write_atomic_with};
 use crate::{Error, Position, Result, TriMesh, Volume};
 
 /// Environment variable overriding the memory budget for inputs, in bytes.
@@ -197,56 +201,60 @@ pub(crate) fn sniff_text(path: &Path, head: &[u8], format: &str) -> Result<Optio
 /// Checks an output mesh path: [`check_output_path`] and a known extension.
 pub fn check_mesh_output(path: &Path) -> Result<()> {
     check_output_path(path)?;
-    mesh_format(path).map(|_| ())
+    mesh_by_extension(path).map(|_| ())
 }
 
-/// Mesh formats by extension.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum MeshFormat {
-    Vtk,
-    Ply,
-    Obj,
-    Stl,
-    Byu,
+/// What a reader passed over or changed on the way (arrays it skipped,
+/// polygons it triangulated), for the user to see.
+pub type Notes = Vec<String>;
+
+/// Whether `path` holds a volume rather than a mesh: a directory (DICOM),
+/// or a file whose first bytes or extension name a volume format.
+pub fn is_volume(path: &Path) -> Result<bool> {
+    Ok(matches!(format_of(path)?, Format::Volume(_)))
 }
 
-fn mesh_format(path: &Path) -> Result<MeshFormat> {
-    not_a_directory(path, "a mesh file")?;
-    let name = file_name_lower(path);
-    let ext = name.rsplit_once('.').map_or("", |(_, e)| e);
-    Ok(match ext {
-        "vtk" => MeshFormat::Vtk,
-        "ply" => MeshFormat::Ply,
-        "obj" => MeshFormat::Obj,
-        "stl" => MeshFormat::Stl,
-        "byu" | "g" => MeshFormat::Byu,
-        _ => {
-            return Err(Error::Unsupported {
-                path: path.into(),
-                what: format!(
-                    "mesh {} (known: .vtk .ply .obj .stl .byu .g)",
-                    extension_text(ext)
-                ),
-            });
-        }
-    })
+/// Whether `path`'s extension names a volume format (`.vtk` names both
+/// kinds and counts as a mesh here).
+pub fn names_volume(path: &Path) -> bool {
+    mesh_by_extension(path).is_err() && volume_by_extension(path).is_ok()
 }
 
-/// Reads a triangle mesh; the format follows the extension (see the module
-/// table). Polygons are fan-triangulated, strips unrolled with alternating
-/// winding; the result passes [`TriMesh::validate`].
+fn wrong_kind(path: &Path, expected: &str, found: &str) -> Error {
+    Error::format(path, Position::Whole, expected, found)
+}
+
+/// Reads a triangle mesh; the format follows the first bytes, else the
+/// extension (see the module table). Polygons are fan-triangulated, strips
+/// unrolled with alternating winding; the result passes
+/// [`TriMesh::validate`].
 pub fn read_mesh(path: &Path) -> Result<TriMesh> {
-    let format = mesh_format(path)?;
+    read_mesh_noted(path).map(|(mesh, _)| mesh)
+}
+
+/// [`read_mesh`], with the reader's [`Notes`].
+pub fn read_mesh_noted(path: &Path) -> Result<(TriMesh, Notes)> {
+    let format = match format_of(path)? {
+        Format::Mesh(m) => m,
+        other => return Err(wrong_kind(path, "a mesh", other.name())),
+    };
     // The first bytes must begin the format before the rest is read.
     let bytes = read_whole_with(path, |head| match format {
         MeshFormat::Vtk => vtk::magic(path, head).map(|_| None),
+        MeshFormat::Vtp => vtk_xml_head(path, head),
         MeshFormat::Ply => ply::magic(path, head).map(|_| None),
         MeshFormat::Stl => Ok(stl::implied_len(head)),
         MeshFormat::Obj => sniff_text(path, head, "OBJ"),
         MeshFormat::Byu => sniff_text(path, head, "MovieBYU"),
     })?;
+    let mut notes = Notes::new();
     let mesh = match format {
         MeshFormat::Vtk => vtk::read(path, &bytes)?,
+        MeshFormat::Vtp => {
+            let (mesh, poly) = vtk_xml::read_poly(path, &bytes)?;
+            notes = poly.notes();
+            mesh
+        }
         MeshFormat::Ply => ply::read(path, &bytes)?,
         MeshFormat::Obj => obj::read(path, &bytes)?,
         MeshFormat::Stl => stl::read(path, &bytes)?,
@@ -266,7 +274,7 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh> {
         ),
         other => other,
     })?;
-    Ok(mesh)
+    Ok((mesh, notes))
 }
 
 /// Reads a triangle mesh ([`read_mesh`]) for a command that needs
@@ -286,22 +294,28 @@ pub fn read_surface(path: &Path) -> Result<TriMesh> {
 }
 
 /// Whether the format chosen by `path`'s extension stores per-vertex scalar
-/// fields (PLY and VTK do; OBJ, STL and BYU drop them).
+/// fields (PLY, VTK and VTP do; OBJ, STL and BYU drop them).
 pub fn mesh_format_carries_scalars(path: &Path) -> bool {
-    matches!(mesh_format(path), Ok(MeshFormat::Ply | MeshFormat::Vtk))
+    matches!(
+        mesh_by_extension(path),
+        Ok(MeshFormat::Ply | MeshFormat::Vtk | MeshFormat::Vtp)
+    )
 }
 
 /// Writes a mesh atomically; the format follows the extension: `.ply`
 /// (binary little-endian, scalars as `float` vertex properties), `.vtk`
-/// (ASCII legacy, scalars as `POINT_DATA SCALARS`), `.obj`, `.stl` (binary),
-/// `.byu`/`.g`. Scalar names are written with whitespace replaced by `_`
-/// (and `x`/`y`/`z` prefixed with `scalar_`), so they read back as one token.
-/// The mesh is validated first; nothing is written if it is invalid.
+/// (ASCII legacy, scalars as `POINT_DATA SCALARS`), `.vtp` (VTK XML
+/// PolyData, appended raw data, scalars as `Float32` point data), `.obj`,
+/// `.stl` (binary), `.byu`/`.g`. Scalar names are written with whitespace
+/// replaced by `_` (and `x`/`y`/`z` prefixed with `scalar_`), so they read
+/// back as one token. The mesh is validated first; nothing is written if
+/// it is invalid.
 pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
-    let format = mesh_format(path)?;
+    let format = mesh_by_extension(path)?;
     mesh.validate()?;
     write_atomic_with(path, |w| match format {
         MeshFormat::Vtk => vtk::write(w, mesh),
+        MeshFormat::Vtp => vtk_xml::write_poly(w, mesh),
         MeshFormat::Ply => ply::write(w, mesh),
         MeshFormat::Obj => obj::write(w, mesh),
         MeshFormat::Stl => stl::write(w, mesh),
@@ -309,71 +323,126 @@ pub fn write_mesh(path: &Path, mesh: &TriMesh) -> Result<()> {
     })
 }
 
-/// Volume formats by extension.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum VolumeFormat {
-    Nrrd,
-    Nhdr,
-    Mha,
-    Mhd,
-    Nii,
-    NiiGz,
-}
-
 /// Checks an output volume path: [`check_output_path`] and a known extension.
 pub fn check_volume_output(path: &Path) -> Result<()> {
     check_output_path(path)?;
-    volume_format(path).map(|_| ())
-}
-
-fn volume_format(path: &Path) -> Result<VolumeFormat> {
-    not_a_directory(path, "a volume file")?;
-    let name = file_name_lower(path);
-    if name.ends_with(".nii.gz") {
-        return Ok(VolumeFormat::NiiGz);
+    match volume_by_extension(path)? {
+        VolumeFormat::Dicom => Err(Error::Unsupported {
+            path: path.into(),
+            what: "writing DICOM (chisel reads DICOM series; write .nrrd, .nii.gz, .mha or .vti)"
+                .into(),
+        }),
+        _ => Ok(()),
     }
-    let ext = name.rsplit_once('.').map_or("", |(_, e)| e);
-    Ok(match ext {
-        "nrrd" => VolumeFormat::Nrrd,
-        "nhdr" => VolumeFormat::Nhdr,
-        "mha" => VolumeFormat::Mha,
-        "mhd" => VolumeFormat::Mhd,
-        "nii" => VolumeFormat::Nii,
-        _ => {
-            return Err(Error::Unsupported {
-                path: path.into(),
-                what: format!(
-                    "volume {} (known: .nrrd .nhdr .mha .mhd .nii .nii.gz; headerless raw \
-                     samples are read through a .nhdr or .mhd header naming them)",
-                    extension_text(ext)
-                ),
-            });
-        }
-    })
 }
 
-/// Reads a volume; the format follows the extension (see the module table).
-/// Spacing and origin are kept; 2-D images have `dims = [nx, ny, 1]`.
+/// How to read a volume.
+#[derive(Debug, Clone, Default)]
+pub struct ReadOptions {
+    /// The SeriesInstanceUID to read from a DICOM directory holding several
+    /// series ([`dicom_series`] lists them).
+    pub series: Option<String>,
+}
+
+/// The series of the DICOM image files under `dir` (up to four levels
+/// down), by SeriesInstanceUID.
+pub fn dicom_series(dir: &Path) -> Result<Vec<SeriesInfo>> {
+    dicom::list_series(dir)
+}
+
+/// Reads a volume; the format follows the first bytes, else the extension
+/// (see the module table); a directory is a DICOM series. Spacing, origin,
+/// axes and anatomical space are kept; 2-D images have `dims = [nx, ny, 1]`.
 pub fn read_volume(path: &Path) -> Result<Volume> {
-    match volume_format(path)? {
-        VolumeFormat::Nrrd | VolumeFormat::Nhdr => nrrd::read(path),
-        VolumeFormat::Mha | VolumeFormat::Mhd => metaimage::read(path),
-        VolumeFormat::Nii | VolumeFormat::NiiGz => nifti::read(path),
+    read_volume_with(path, &ReadOptions::default()).map(|(v, _)| v)
+}
+
+/// [`read_volume`] with options, and the reader's [`Notes`].
+pub fn read_volume_with(path: &Path, options: &ReadOptions) -> Result<(Volume, Notes)> {
+    let format = match format_of(path)? {
+        Format::Volume(v) => v,
+        other => return Err(wrong_kind(path, "a volume", other.name())),
+    };
+    if options.series.is_some() && format != VolumeFormat::Dicom {
+        return Err(Error::param(
+            "series",
+            options.series.clone().unwrap_or_default(),
+            "applies to DICOM directories only",
+        ));
+    }
+    let mut notes = Notes::new();
+    let volume = match format {
+        VolumeFormat::Nrrd | VolumeFormat::Nhdr => nrrd::read(path)?,
+        VolumeFormat::Mha | VolumeFormat::Mhd => metaimage::read(path)?,
+        VolumeFormat::Nii | VolumeFormat::NiiGz => nifti::read(path)?,
+        VolumeFormat::Dicom => dicom::read(path, options.series.as_deref())?,
+        VolumeFormat::Vtk => {
+            let bytes = read_whole_with(path, |head| vtk::magic(path, head).map(|_| None))?;
+            let points = vtk::read_structured_points(path, &bytes)?;
+            notes = skipped_arrays(points.skipped);
+            points.volume
+        }
+        VolumeFormat::Vti => {
+            let bytes = read_whole_with(path, |head| vtk_xml_head(path, head))?;
+            let (volume, skipped) = vtk_xml::read_image(path, &bytes)?;
+            notes = skipped_arrays(skipped);
+            volume
+        }
+    };
+    Ok((volume, notes))
+}
+
+/// A sniff for VTK XML: the first bytes open a `<VTKFile type="...">`.
+fn vtk_xml_head(path: &Path, head: &[u8]) -> Result<Option<u64>> {
+    match vtk_xml::dataset_type(head) {
+        Some(_) => Ok(None),
+        None => Err(Error::format(
+            path,
+            Position::Byte(0),
+            "a VTK XML file (`<VTKFile type=...>`)",
+            "other bytes",
+        )),
+    }
+}
+
+fn skipped_arrays(names: Vec<String>) -> Notes {
+    if names.is_empty() {
+        Notes::new()
+    } else {
+        vec![format!(
+            "skipped data arrays (one scalar array is read as the volume): {}",
+            names.join(", ")
+        )]
     }
 }
 
 /// Writes a volume atomically; the format follows the extension:
 /// `.nrrd` (attached header, raw little-endian), `.nhdr` (detached header +
 /// `<stem>.raw`), `.mha` (`ElementDataFile = LOCAL`), `.mhd` (+ `<stem>.raw`),
-/// `.nii` and `.nii.gz` (NIfTI-1, little-endian, `vox_offset` 352). For the
+/// `.nii` and `.nii.gz` (NIfTI-1, little-endian, `vox_offset` 352), `.vti`
+/// (VTK XML ImageData with `Direction`), `.vtk` (legacy STRUCTURED_POINTS,
+/// BINARY; axis-aligned volumes only, the format has no direction). For the
 /// two-file forms the data file is written (atomically) before the header.
 pub fn write_volume(path: &Path, v: &Volume) -> Result<()> {
-    match volume_format(path)? {
+    match volume_by_extension(path)? {
         VolumeFormat::Nrrd => nrrd::write_attached(path, v),
         VolumeFormat::Nhdr => nrrd::write_detached(path, v),
         VolumeFormat::Mha => metaimage::write_local(path, v),
         VolumeFormat::Mhd => metaimage::write_detached(path, v),
         VolumeFormat::Nii => nifti::write(path, v, false),
         VolumeFormat::NiiGz => nifti::write(path, v, true),
+        VolumeFormat::Vti => write_atomic_with(path, |w| vtk_xml::write_image(w, v)),
+        VolumeFormat::Vtk => {
+            if !vtk::structured_points_can_hold(v) {
+                return Err(Error::Unsupported {
+                    path: path.into(),
+                    what: "a rotated or mirrored volume in legacy VTK STRUCTURED_POINTS (the \
+                           format has no direction; write .vti, .nrrd or .nii.gz)"
+                        .into(),
+                });
+            }
+            write_atomic_with(path, |w| vtk::write_structured_points(w, v))
+        }
+        VolumeFormat::Dicom => check_volume_output(path),
     }
 }

@@ -107,3 +107,50 @@ fn stats_gpu_backend_matches_cpu_on_real_data() {
     assert_eq!(v["gpu"]["matches_cpu"], true, "{v}");
     assert_eq!(v["gpu"]["range"]["max"], 3926.0);
 }
+
+/// A DICOM directory: one series is read (and listed); several are listed
+/// until `--series` chooses one; `mc` reads a series the same way.
+#[test]
+fn stats_lists_dicom_series_and_reads_the_chosen_one() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom");
+    let one = ok_json(&["stats", path_str(&root.join("ct_explicit")), "--json"]);
+    assert_eq!(one["kind"], "volume");
+    assert_eq!(one["dicom_series"].as_array().unwrap().len(), 1);
+    assert_eq!(one["stats"]["dims"], serde_json::json!([6, 5, 4]));
+    assert_eq!(one["stats"]["space"], "LPS");
+    assert_eq!(one["stats"]["min"], -1017.0);
+    assert_eq!(one["stats"]["max"], -322.0);
+
+    let two = root.join("two_series");
+    let listed = ok_json(&["stats", path_str(&two), "--json"]);
+    assert_eq!(listed["kind"], "dicom_directory");
+    let series = listed["series"].as_array().unwrap();
+    assert_eq!(series.len(), 2);
+    let uid = series[1]["uid"].as_str().unwrap();
+    assert_eq!(series[1]["description"], "series b");
+    let chosen = ok_json(&["stats", path_str(&two), "--series", uid, "--json"]);
+    assert_eq!(chosen["stats"]["dims"], serde_json::json!([6, 5, 2]));
+    // Other commands refuse the unchosen directory, naming both series.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("s.ply");
+    crate::support::assert_clean_error(
+        &[
+            "mc",
+            path_str(&two),
+            "--level",
+            "-500",
+            "-o",
+            path_str(&out),
+        ],
+        uid,
+    );
+    crate::support::ok(&[
+        "mc",
+        path_str(&root.join("ct_explicit")),
+        "--level",
+        "-500",
+        "-o",
+        path_str(&out),
+    ]);
+    assert!(out.exists());
+}

@@ -151,8 +151,37 @@ pub fn seeds(scratch: &Path) -> Vec<Seed> {
         b"NDims = 3\nDimSize = 4 4 4\nElementType = MET_UCHAR\nElementDataFile = d.raw\n".to_vec(),
         false,
     );
-    // Configuration: the shipped plan (TOML and as JSON) and a scene.
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // DICOM files written by pydicom (tests/data/dicom): explicit and
+    // implicit VR, RLE, no file meta, enhanced multi-frame.
+    let dicom = root.join("tests/data/dicom");
+    for (name, file) in [
+        ("explicit.dcm", "ct_explicit/IM0001"),
+        ("implicit.dcm", "ct_implicit/IM0001"),
+        ("rle.dcm", "ct_rle/IM0001"),
+        ("nometa.dcm", "ct_no_meta/IM0001"),
+        ("multiframe.dcm", "multiframe.dcm"),
+    ] {
+        add(name, std::fs::read(dicom.join(file)).unwrap(), false);
+    }
+    // VTK files written by VTK 9.7.2 (tests/data/vtk): XML ImageData and
+    // PolyData in ASCII, inline base64, appended raw and base64, zlib,
+    // both byte orders and header widths; legacy STRUCTURED_POINTS.
+    let vtk = root.join("tests/data/vtk");
+    for file in [
+        "image_ascii.vti",
+        "image_binary_zlib.vti",
+        "image_appended_raw.vti",
+        "image_appended_b64_zlib.vti",
+        "poly_ascii.vtp",
+        "poly_appended_raw.vtp",
+        "poly_binary_zlib_be_u32.vtp",
+        "sp_ascii.vtk",
+        "sp_f64_extra_binary.vtk",
+    ] {
+        add(file, std::fs::read(vtk.join(file)).unwrap(), false);
+    }
+    // Configuration: the shipped plan (TOML and as JSON) and a scene.
     add(
         "plan.toml",
         std::fs::read(root.join("src/tissue/plans/fran_chin_advance.toml")).unwrap(),
@@ -180,6 +209,10 @@ fn reader_of(name: &str) -> &'static str {
         "nrrd" | "nhdr" => "nrrd",
         "mha" | "mhd" => "metaimage",
         "nii" | "gz" => "nifti",
+        "dcm" => "dicom",
+        "vti" => "vti",
+        "vtp" => "vtp",
+        "vtk" if name.starts_with("sp_") => "structured_points",
         "vtk" => "vtk",
         "ply" => "ply",
         "obj" => "obj",

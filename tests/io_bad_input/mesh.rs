@@ -74,7 +74,7 @@ fn vtk_bad_inputs() {
         "d.vtk",
         b"# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\n",
         Kind::Format,
-        "line 4",
+        "found a VTK legacy STRUCTURED_POINTS volume",
     );
     expect(
         "s.vtk",

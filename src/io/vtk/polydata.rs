@@ -18,31 +18,10 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::text::{Endian, Num, Scanner, clip, fan};
+use super::super::text::{Endian, Num, Scanner, clip, fan};
+use super::{field_name, magic, vtk_type};
 use crate::mesh::ScalarField;
 use crate::{Result, TriMesh};
-
-fn vtk_type(sc: &Scanner, at: usize, name: &str) -> Result<Num> {
-    Ok(match name.to_ascii_lowercase().as_str() {
-        "char" | "signed_char" | "vtktypeint8" => Num::I8,
-        "unsigned_char" | "vtktypeuint8" => Num::U8,
-        "short" | "vtktypeint16" => Num::I16,
-        "unsigned_short" | "vtktypeuint16" => Num::U16,
-        "int" | "vtktypeint32" | "vtkidtype" => Num::I32,
-        "unsigned_int" | "vtktypeuint32" => Num::U32,
-        "long" | "vtktypeint64" => Num::I64,
-        "unsigned_long" | "vtktypeuint64" => Num::U64,
-        "float" | "vtktypefloat32" => Num::F32,
-        "double" | "vtktypefloat64" => Num::F64,
-        _ => {
-            return Err(sc.error(
-                at,
-                "a VTK data type (unsigned_char, short, int, float, double, ...)",
-                format!("`{}`", clip(name)),
-            ));
-        }
-    })
-}
 
 /// Which data set the current attribute section belongs to.
 #[derive(Debug, Clone, Copy)]
@@ -61,23 +40,6 @@ struct Reader<'a> {
     n_cells: u64,
     scalars: Vec<ScalarField>,
     owner: Owner,
-}
-
-/// Checks the first line, `# vtk DataFile Version x.y`, of `bytes` (the
-/// file, or its first bytes before the rest is read); returns the scanner
-/// after it.
-pub(crate) fn magic<'a>(path: &'a Path, bytes: &'a [u8]) -> Result<Scanner<'a>> {
-    let mut sc = Scanner::new(path, bytes);
-    let magic = "`# vtk DataFile Version x.y`";
-    let (at, first) = sc.text_line(magic)?;
-    if !first
-        .trim()
-        .to_ascii_lowercase()
-        .starts_with("# vtk datafile")
-    {
-        return Err(sc.error(at, magic, format!("`{}`", clip(first.trim()))));
-    }
-    Ok(sc)
 }
 
 /// Reads a VTK legacy POLYDATA file held in `bytes`.
@@ -589,19 +551,4 @@ pub(crate) fn write(w: &mut dyn Write, mesh: &TriMesh) -> io::Result<()> {
         }
     }
     Ok(())
-}
-
-/// A scalar name as one whitespace-free token that cannot be taken for a
-/// coordinate: whitespace becomes `_`, an empty name `scalar`, and `x`, `y`,
-/// `z` get a `scalar_` prefix.
-pub(crate) fn field_name(name: &str) -> String {
-    let n: String = name
-        .chars()
-        .map(|c| if c.is_whitespace() { '_' } else { c })
-        .collect();
-    match n.as_str() {
-        "" => "scalar".into(),
-        "x" | "y" | "z" => format!("scalar_{n}"),
-        _ => n,
-    }
 }

@@ -10,6 +10,7 @@
 //! - [`fs`]: atomic file writes and output path checks.
 
 pub mod aabb;
+pub mod alloc;
 pub mod exact;
 pub mod forest;
 pub mod fs;

@@ -126,6 +126,12 @@ pub(crate) fn volume_by_extension(path: &Path) -> Result<VolumeFormat> {
 /// kinds (a pipe or FIFO must not be read twice, a device may never end).
 fn head(path: &Path) -> Result<Option<Vec<u8>>> {
     use std::io::Read;
+    // Look before opening: opening a FIFO would wait for, and then cut
+    // off, its writer.
+    let kind = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !kind.is_file() {
+        return Ok(None);
+    }
     let (file, meta) = open_input(path)?;
     if !meta.is_file() {
         return Ok(None);
@@ -190,31 +196,13 @@ fn metaimage_header(head: &[u8]) -> bool {
     KEYS.contains(&key.trim().to_ascii_lowercase().as_str())
 }
 
-/// The format of `path`: a directory is a DICOM series; a regular file's
-/// first bytes decide where the format has a magic; otherwise the
-/// extension (a mesh extension first, then a volume one).
-pub(crate) fn format_of(path: &Path) -> Result<Format> {
+/// The format `path`'s content names: a directory is a DICOM series; a
+/// regular file's first bytes decide where the format has a magic; `None`
+/// otherwise (no magic, or a stream that must not be read twice), and the
+/// caller goes by the extension.
+pub(crate) fn format_of(path: &Path) -> Result<Option<Format>> {
     if path.is_dir() {
-        return Ok(Format::Volume(VolumeFormat::Dicom));
+        return Ok(Some(Format::Volume(VolumeFormat::Dicom)));
     }
-    if let Some(head) = head(path)?
-        && let Some(format) = by_content(&head)
-    {
-        return Ok(format);
-    }
-    match mesh_by_extension(path) {
-        Ok(MeshFormat::Vtk | MeshFormat::Vtp) | Err(_) => {}
-        Ok(mesh) => return Ok(Format::Mesh(mesh)),
-    }
-    match volume_by_extension(path) {
-        Ok(v) => Ok(Format::Volume(v)),
-        Err(_) => Err(Error::Unsupported {
-            path: path.into(),
-            what: format!(
-                "{}: no known format begins with its first bytes (known meshes: \
-                 {MESH_EXTENSIONS}; volumes: {VOLUME_EXTENSIONS} or a DICOM directory)",
-                extension_text(&extension(path).1)
-            ),
-        }),
-    }
+    Ok(head(path)?.and_then(|head| by_content(&head)))
 }

@@ -3,6 +3,9 @@
 //! | format | read | write | extension |
 //! |---|---|---|---|
 //! | VTK legacy POLYDATA | ASCII + BINARY (big-endian), POLYGONS, TRIANGLE_STRIPS, 5.1 OFFSETS/CONNECTIVITY | ASCII, scalars as `POINT_DATA SCALARS` | `.vtk` |
+//! | VTK legacy STRUCTURED_POINTS | ASCII + BINARY, the first point `SCALARS` | BINARY, axis-aligned volumes | `.vtk` |
+//! | VTK XML ImageData / PolyData | ascii, base64, appended raw/base64, zlib, `UInt32`/`UInt64` headers, both byte orders | appended raw | `.vti`, `.vtp` |
+//! | DICOM | files and series in a directory (`dicom`, on dicom-rs) | — | any, or none |
 //! | PLY | ascii, binary_little_endian, binary_big_endian | binary little-endian, scalars as extra `float` vertex properties | `.ply` |
 //! | Wavefront OBJ | `v`, `f` (`v/vt/vn`, negative indices, polygons) | `v`, `f` (no scalars) | `.obj` |
 //! | STL | ASCII + binary, identical corners welded | binary (no scalars) | `.stl` |
@@ -12,12 +15,18 @@
 //! | NIfTI-1 | single file, both endians, plain or gzip | little-endian, plain or gzip | `.nii`, `.nii.gz` |
 //! | raw samples | [`read_raw_volume`] with a [`RawSpec`] | — | any |
 //!
+//! **Which reader.** A file's first bytes pick the reader where the format
+//! has a magic (`detect`); otherwise its extension does. A directory is a
+//! DICOM series.
+//!
 //! **Why hand-written parsers.** Every reader here must report the file, the
 //! position (line for text, byte for binary) and what it expected, and must
 //! check every size a header announces against the file size and the memory
 //! budget *before* allocating; that is easiest to guarantee, and to test,
 //! when one small tokenizer (`text::Scanner`) is shared by all readers. The
-//! formats themselves are short. Only (de)compression uses a crate (`flate2`).
+//! formats themselves are short. Crates do the rest: flate2 (zlib, gzip),
+//! quick-xml and base64 (VTK XML), and the dicom-rs crates for all of DICOM
+//! (its element lengths and RLE fragments checked first, see `dicom`).
 //!
 //! **Guarantees.** Readers never panic on input data and never return a
 //! partial result: a count field larger than the rest of the file is an
@@ -25,7 +34,7 @@
 //! coordinates, out-of-range indices and polygons with fewer than 3 corners
 //! are [`Error::Format`], and orientations the data model cannot hold
 //! (oblique or flipped axes) are [`Error::Unsupported`]. The memory budget
-//! is [`input_budget`]: `CHISEL_MAX_INPUT_BYTES` bytes, 16 GiB by default.
+//! is [`memory_budget`](crate::foundation::alloc::memory_budget): `CHISEL_MAX_INPUT_BYTES` bytes, 16 GiB by default.
 //! Polygons are fan-triangulated `(p0, pi, pi+1)`; the winding of the file is
 //! kept as it is. Volume samples stay in file order (x fastest, never flipped).
 //!
@@ -61,27 +70,14 @@ use std::path::Path;
 use crate::foundation::fs::{check_output_path, write_atomic_with};
 use crate::{Error, Position, Result, TriMesh, Volume};
 
-/// Environment variable overriding the memory budget for inputs, in bytes.
-pub const BUDGET_ENV: &str = "CHISEL_MAX_INPUT_BYTES";
-
-/// Default memory budget for one input: 16 GiB.
-pub const DEFAULT_BUDGET: u64 = 16 << 30;
+use crate::foundation::alloc::memory_budget;
 
 /// Limit kind used in [`Error::Size`] for the memory budget.
 pub(crate) const BUDGET_KIND: &str = "the memory budget (CHISEL_MAX_INPUT_BYTES)";
 
-/// The most bytes one input may make the readers allocate:
-/// `CHISEL_MAX_INPUT_BYTES` when set to an integer, else [`DEFAULT_BUDGET`].
-pub fn input_budget() -> u64 {
-    std::env::var(BUDGET_ENV)
-        .ok()
-        .and_then(|v| v.trim().parse().ok())
-        .unwrap_or(DEFAULT_BUDGET)
-}
-
 /// Checks `needed` bytes for `what` against the budget before allocating.
 pub(crate) fn check_budget(path: &Path, at: Position, what: &str, needed: u64) -> Result<()> {
-    let limit = input_budget();
+    let limit = memory_budget();
     if needed > limit {
         return Err(Error::Size {
             path: path.into(),
@@ -93,6 +89,12 @@ pub(crate) fn check_budget(path: &Path, at: Position, what: &str, needed: u64) -
         });
     }
     Ok(())
+}
+
+/// The product of sizes read from a file, saturating: the size and budget
+/// checks that follow refuse a saturated product.
+pub(crate) fn saturating_product(sizes: impl Iterator<Item = u64>) -> u64 {
+    sizes.fold(1, u64::saturating_mul)
 }
 
 /// Bytes a reader looks at before reading the rest of a file.
@@ -118,7 +120,7 @@ pub(crate) fn read_whole_with(
     use std::io::Read;
     let (file, meta) = crate::foundation::fs::open_input(path)?;
     let regular = meta.is_file();
-    let limit = input_budget();
+    let limit = memory_budget();
     let what = if regular {
         "reading the file"
     } else {
@@ -211,7 +213,10 @@ pub type Notes = Vec<String>;
 /// Whether `path` holds a volume rather than a mesh: a directory (DICOM),
 /// or a file whose first bytes or extension name a volume format.
 pub fn is_volume(path: &Path) -> Result<bool> {
-    Ok(matches!(format_of(path)?, Format::Volume(_)))
+    Ok(match format_of(path)? {
+        Some(format) => matches!(format, Format::Volume(_)),
+        None => names_volume(path),
+    })
 }
 
 /// Whether `path`'s extension names a volume format (`.vtk` names both
@@ -235,8 +240,9 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh> {
 /// [`read_mesh`], with the reader's [`Notes`].
 pub fn read_mesh_noted(path: &Path) -> Result<(TriMesh, Notes)> {
     let format = match format_of(path)? {
-        Format::Mesh(m) => m,
-        other => return Err(wrong_kind(path, "a mesh", other.name())),
+        Some(Format::Mesh(m)) => m,
+        Some(other) => return Err(wrong_kind(path, "a mesh", other.name())),
+        None => mesh_by_extension(path)?,
     };
     // The first bytes must begin the format before the rest is read.
     let bytes = read_whole_with(path, |head| match format {
@@ -360,8 +366,9 @@ pub fn read_volume(path: &Path) -> Result<Volume> {
 /// [`read_volume`] with options, and the reader's [`Notes`].
 pub fn read_volume_with(path: &Path, options: &ReadOptions) -> Result<(Volume, Notes)> {
     let format = match format_of(path)? {
-        Format::Volume(v) => v,
-        other => return Err(wrong_kind(path, "a volume", other.name())),
+        Some(Format::Volume(v)) => v,
+        Some(other) => return Err(wrong_kind(path, "a volume", other.name())),
+        None => volume_by_extension(path)?,
     };
     if options.series.is_some() && format != VolumeFormat::Dicom {
         return Err(Error::param(

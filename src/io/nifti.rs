@@ -178,7 +178,7 @@ pub(crate) fn read(path: &Path) -> Result<Volume> {
     // The samples start inside the file (for a plain file; inside the
     // budget's worth of decompressed bytes for a gzip one).
     let within = if gz {
-        super::input_budget() as f64
+        crate::foundation::alloc::memory_budget() as f64
     } else {
         meta.len() as f64
     };

@@ -289,9 +289,27 @@ impl<'a> Scanner<'a> {
     }
 }
 
-/// The first `cap` bytes of `path` (all of it when shorter): header text.
+/// The first `cap` bytes of `path` (all of it when shorter): header text
+/// of a reader that opens the file again for its data. A pipe or FIFO
+/// cannot be read twice (the second open would wait for a writer without
+/// end), so it is refused before it is opened.
 pub(crate) fn read_prefix(path: &Path, cap: u64) -> Result<Vec<u8>> {
     use std::io::Read;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let kind = std::fs::metadata(path)
+            .map_err(|e| Error::io(path, e))?
+            .file_type();
+        if kind.is_fifo() || kind.is_socket() {
+            return Err(Error::format(
+                path,
+                Position::Whole,
+                "a regular file (this format's reader opens the file twice: header, then data)",
+                "a pipe or FIFO",
+            ));
+        }
+    }
     let (file, _) = crate::foundation::fs::open_input(path)?;
     let mut head = Vec::new();
     file.take(cap)

@@ -185,12 +185,13 @@ pub fn marching_cubes(
 /// World transform, group figures and the forest (shared by both backends).
 /// [`Forest::build`] runs alongside the (parallel) figure passes.
 pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
-    let (positions, blocks) = rayon::join(
+    // To world coordinates in place (a vertex array is not copied).
+    let mut positions: Vec<glam::Vec3> = bytemuck::cast_vec(raw.positions);
+    let ((), blocks) = rayon::join(
         || {
-            raw.positions
-                .par_iter()
-                .map(|&u| field.to_world(u))
-                .collect::<Vec<glam::Vec3>>()
+            positions
+                .par_iter_mut()
+                .for_each(|p| *p = field.to_world(p.to_array()))
         },
         || leaf_blocks(&raw.cells, field.dims),
     );

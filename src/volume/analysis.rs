@@ -215,8 +215,8 @@ pub fn label_components(v: &Volume, label: f64) -> ComponentCount {
 }
 
 fn count_components(v: &Volume, selection: String, keep: impl Fn(f64) -> bool) -> ComponentCount {
-    let mask = select(&v.data, keep);
-    let mut sizes = RunComponents::of(v.dims, |i| mask[i]).sizes;
+    // No per-voxel mask: the selection is evaluated where the runs are found.
+    let mut sizes = RunComponents::of(v.dims, |i| keep(v.data.get_f64(i))).sizes;
     sizes.sort_unstable_by(|a, b| b.cmp(a));
     ComponentCount {
         selection,
@@ -224,23 +224,6 @@ fn count_components(v: &Volume, selection: String, keep: impl Fn(f64) -> bool) -
         components: sizes.len(),
         largest: sizes.first().copied().unwrap_or(0),
         sizes: sizes.into_iter().take(MAX_LISTED_SIZES).collect(),
-    }
-}
-
-/// Per-sample `keep(value)`.
-fn select(data: &VolumeData, keep: impl Fn(f64) -> bool) -> Vec<bool> {
-    fn map<T: Copy + Into<f64>>(d: &[T], keep: impl Fn(f64) -> bool) -> Vec<bool> {
-        d.iter().map(|&x| keep(x.into())).collect()
-    }
-    match data {
-        VolumeData::U8(d) => map(d, keep),
-        VolumeData::I8(d) => map(d, keep),
-        VolumeData::U16(d) => map(d, keep),
-        VolumeData::I16(d) => map(d, keep),
-        VolumeData::U32(d) => map(d, keep),
-        VolumeData::I32(d) => map(d, keep),
-        VolumeData::F32(d) => map(d, keep),
-        VolumeData::F64(d) => d.iter().map(|&x| keep(x)).collect(),
     }
 }
 
@@ -364,7 +347,8 @@ pub fn label_6_connected(dims: [usize; 3], inside: impl Fn(usize) -> bool) -> Re
             u32::MAX - 1,
         ));
     }
-    let mut labels = vec![0u32; n];
+    let mut labels =
+        crate::foundation::alloc::filled("6-connected labels (one u32 per voxel)", n, 0u32)?;
     let nx = dims[0];
     for row in 0..found.row_start.len() - 1 {
         for r in found.row_start[row]..found.row_start[row + 1] {

@@ -425,3 +425,48 @@ fn nan_levels_are_refused_and_negative_ones_parse() {
     let r = ok_json(&["stats", v, "--level=-1", "--json"]);
     assert!(r["level"]["voxels"].as_u64().unwrap() > 0);
 }
+
+/// Buffers derived from an input (marching cubes arrays, per-voxel labels)
+/// are allocated against the memory budget too: a volume that fits the
+/// budget but whose surface does not is an error naming the buffer, not an
+/// abort.
+#[test]
+fn derived_buffers_stay_within_the_memory_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let ball = dir.path().join("ball.nrrd");
+    ok_json(&[
+        "phantom",
+        "ball",
+        "--r",
+        "20",
+        "-o",
+        path_str(&ball),
+        "--json",
+    ]);
+    let out = dir.path().join("s.ply");
+    let run = |budget: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_chisel"))
+            .args([
+                "mc",
+                path_str(&ball),
+                "--level",
+                "0.5",
+                "-o",
+                path_str(&out),
+                "-q",
+            ])
+            .env("CHISEL_MAX_INPUT_BYTES", budget)
+            .env("CHISEL_ADAPTER", "cpu")
+            .output()
+            .unwrap()
+    };
+    let input_bytes = std::fs::metadata(&ball).unwrap().len();
+    // Enough for the file, not for the surface's vertex positions.
+    let tight = run(&(input_bytes + 4096).to_string());
+    let stderr = String::from_utf8_lossy(&tight.stderr);
+    assert_eq!(tight.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("marching cubes"), "{stderr}");
+    assert!(stderr.contains("memory budget"), "{stderr}");
+    // Negative control: the default budget makes the surface.
+    assert!(run("17179869184").status.success());
+}

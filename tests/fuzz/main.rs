@@ -435,6 +435,14 @@ const REGRESSIONS: &[(&str, Option<&str>)] = &[
         "dicom_rle_segment_short_of_frame.dcm",
         Some("segment 0 decoding to 30 bytes"),
     ),
+    // Found by the first campaign with VTK seeds: a dimension product that
+    // overflowed (a panic), a point count past 32-bit indices reported
+    // without the file.
+    (
+        "vtk_structured_points_dimensions_overflow.vtk",
+        Some("point count fits 64 bits"),
+    ),
+    ("vtp_points_past_32_bit_indices.vtp", Some("32-bit indices")),
 ];
 
 #[test]

@@ -48,3 +48,48 @@ fn endless_inputs_are_refused_from_their_first_bytes() {
     let e = read_volume(&dir.path().join("z.nhdr")).unwrap_err();
     assert!(e.to_string().contains("zero.txt"), "{e}");
 }
+
+/// A FIFO is read once: the format comes from its name (its first bytes
+/// cannot be looked at twice), and the whole stream is read boundedly; a
+/// format whose reader opens the file twice (NRRD, MetaImage) refuses a
+/// FIFO before opening it (the second open would wait without end).
+#[cfg(unix)]
+#[test]
+fn fifos_are_read_once_by_their_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("m.ply");
+    let m = chisel::TriMesh {
+        positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+        triangles: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    chisel::io::write_mesh(&mesh, &m).unwrap();
+    let volume = dir.path().join("v.nrrd");
+    let v = chisel::Volume::new(
+        [2, 2, 2],
+        [1.0; 3],
+        [0.0; 3],
+        chisel::volume::VolumeData::U8((0..8).collect()),
+    )
+    .unwrap();
+    chisel::io::write_volume(&volume, &v).unwrap();
+    let fifo = |name: &str| {
+        let p = dir.path().join(name);
+        let status = std::process::Command::new("mkfifo")
+            .arg(&p)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        p
+    };
+    let f = fifo("f.ply");
+    let bytes = std::fs::read(&mesh).unwrap();
+    let writer_path = f.clone();
+    let writer = std::thread::spawn(move || std::fs::write(writer_path, bytes).unwrap());
+    assert_eq!(read_mesh(&f).unwrap(), m);
+    writer.join().unwrap();
+    // No writer: the refusal comes before any open.
+    let e = read_volume(&fifo("f.nrrd")).unwrap_err();
+    assert!(e.to_string().contains("a pipe or FIFO"), "{e}");
+    assert!(chisel::io::read_volume(&volume).is_ok());
+}

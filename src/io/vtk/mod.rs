@@ -46,6 +46,41 @@ fn vtk_type(sc: &Scanner, at: usize, name: &str) -> Result<Num> {
     })
 }
 
+/// The rest of a `SCALARS name type [components]` header after the
+/// keyword, and the optional `LOOKUP_TABLE name` line that follows it; in
+/// binary mode the scanner is left at the payload. Returns the name, the
+/// type as written and as a [`Num`], and the component count (1 to 4).
+pub(crate) fn scalars_header<'a>(
+    sc: &mut Scanner<'a>,
+    binary: bool,
+) -> Result<(&'a str, &'a str, Num, u64)> {
+    let (_, name) = sc.next("a scalar name")?;
+    let (tat, ty) = sc.next("a data type")?;
+    let num = vtk_type(sc, tat, ty)?;
+    let mut comps = 1u64;
+    if let Some((cat, tok)) = sc.line_tokens().first() {
+        comps = tok
+            .parse()
+            .ok()
+            .filter(|c| (1..=4).contains(c))
+            .ok_or_else(|| sc.error(*cat, "1..4 components", format!("`{}`", clip(tok))))?;
+    }
+    if binary {
+        sc.skip_line();
+        sc.payload_follows();
+        if sc.rest().starts_with(b"LOOKUP_TABLE") {
+            sc.skip_line();
+        }
+    } else if sc
+        .peek()
+        .is_some_and(|t| t.eq_ignore_ascii_case(b"LOOKUP_TABLE"))
+    {
+        sc.next("LOOKUP_TABLE")?;
+        sc.next("a lookup table name")?;
+    }
+    Ok((name, ty, num, comps))
+}
+
 /// Checks the first line, `# vtk DataFile Version x.y`, of `bytes` (the
 /// file, or its first bytes before the rest is read); returns the scanner
 /// after it.

@@ -19,7 +19,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::super::text::{Endian, Num, Scanner, clip, fan};
-use super::{field_name, magic, vtk_type};
+use super::{field_name, magic, scalars_header, vtk_type};
 use crate::mesh::ScalarField;
 use crate::{Result, TriMesh};
 
@@ -419,37 +419,8 @@ impl Reader<'_> {
 
     fn scalars_section(&mut self, at: usize) -> Result<()> {
         let n = self.owner_count(at)?;
-        let (_, name) = self.sc.next("a scalar name")?;
+        let (name, _, num, comps) = scalars_header(&mut self.sc, self.binary.is_some())?;
         let name = name.to_string();
-        let (tat, ty) = self.sc.next("a data type")?;
-        let num = vtk_type(&self.sc, tat, ty)?;
-        // Optional component count on the same line.
-        let mut comps = 1u64;
-        let line_rest = self.sc.line_tokens();
-        if let Some((cat, tok)) = line_rest.first() {
-            comps = tok
-                .parse()
-                .ok()
-                .filter(|c| (1..=4).contains(c))
-                .ok_or_else(|| {
-                    self.sc
-                        .error(*cat, "1..4 components", format!("`{}`", clip(tok)))
-                })?;
-        }
-        self.end_header_line();
-        if self.binary.is_some() {
-            // The optional `LOOKUP_TABLE name` line sits between header and payload.
-            if self.sc.rest().starts_with(b"LOOKUP_TABLE") {
-                self.sc.skip_line();
-            }
-        } else if self
-            .sc
-            .peek()
-            .is_some_and(|t| t.eq_ignore_ascii_case(b"LOOKUP_TABLE"))
-        {
-            self.sc.next("LOOKUP_TABLE")?;
-            self.sc.next("a lookup table name")?;
-        }
         let count = (n as u64).saturating_mul(comps);
         let keep = matches!(self.owner, Owner::Points(_)) && comps == 1;
         let mut values = Vec::new();

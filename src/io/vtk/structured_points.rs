@@ -19,9 +19,11 @@
 use std::io::{self, Write};
 use std::path::Path;
 
+use super::super::saturating_product;
 use super::super::text::{Endian, Num, Scanner, clip};
 use super::{
-    check_samples_budget, empty_samples, legacy_type_name, magic, push_binary, push_text, vtk_type,
+    check_samples_budget, empty_samples, legacy_type_name, magic, push_binary, push_text,
+    scalars_header, vtk_type,
 };
 use crate::volume::{IDENTITY_AXES, VolumeData};
 use crate::{Error, Result, Volume};
@@ -120,6 +122,16 @@ pub(crate) fn read_structured_points(path: &Path, bytes: &[u8]) -> Result<Struct
                         .filter(|&n| n >= 1)
                         .ok_or_else(|| r.sc.error(dat, "a dimension ≥ 1", format!("{n}")))?;
                 }
+                if d.iter()
+                    .try_fold(1u64, |a, &x| a.checked_mul(x as u64))
+                    .is_none()
+                {
+                    return Err(r.sc.error(
+                        at,
+                        "DIMENSIONS whose point count fits 64 bits",
+                        format!("{} × {} × {}", d[0], d[1], d[2]),
+                    ));
+                }
                 r.dims = Some(d);
             }
             "SPACING" | "ASPECT_RATIO" => {
@@ -144,11 +156,9 @@ pub(crate) fn read_structured_points(path: &Path, bytes: &[u8]) -> Result<Struct
                 geometry_done = true;
                 let (cat, n) = r.sc.count("a count")?;
                 let want = if upper == "POINT_DATA" {
-                    dims.iter().map(|&d| d as u64).product::<u64>()
+                    saturating_product(dims.iter().map(|&d| d as u64))
                 } else {
-                    dims.iter()
-                        .map(|&d| d.saturating_sub(1).max(1) as u64)
-                        .product()
+                    saturating_product(dims.iter().map(|&d| d.saturating_sub(1).max(1) as u64))
                 };
                 if n != want {
                     let what = if upper == "POINT_DATA" {
@@ -320,34 +330,7 @@ impl Reader<'_> {
 
     fn scalars(&mut self, at: usize) -> Result<()> {
         let n = self.tuples(at, "SCALARS")?;
-        let (_, name) = self.sc.next("a scalar name")?;
-        let (tat, ty) = self.sc.next("a data type")?;
-        let num = vtk_type(&self.sc, tat, ty)?;
-        let mut comps = 1u64;
-        if let Some((cat, tok)) = self.sc.line_tokens().first() {
-            comps = tok
-                .parse()
-                .ok()
-                .filter(|c| (1..=4).contains(c))
-                .ok_or_else(|| {
-                    self.sc
-                        .error(*cat, "1..4 components", format!("`{}`", clip(tok)))
-                })?;
-        }
-        self.end_header_line();
-        // The optional `LOOKUP_TABLE name` line between header and payload.
-        if self.binary.is_some() {
-            if self.sc.rest().starts_with(b"LOOKUP_TABLE") {
-                self.sc.skip_line();
-            }
-        } else if self
-            .sc
-            .peek()
-            .is_some_and(|t| t.eq_ignore_ascii_case(b"LOOKUP_TABLE"))
-        {
-            self.sc.next("LOOKUP_TABLE")?;
-            self.sc.next("a lookup table name")?;
-        }
+        let (name, ty, num, comps) = scalars_header(&mut self.sc, self.binary.is_some())?;
         let first_point_scalars = matches!(self.owner, Owner::Points(_)) && self.volume.is_none();
         if !first_point_scalars {
             self.note("SCALARS", name);

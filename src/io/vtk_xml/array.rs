@@ -332,6 +332,22 @@ impl<'a> Doc<'a> {
         Ok(out)
     }
 
+    /// Reads and checks every `FieldData` array of `el` (none is kept),
+    /// handing `field NAME` of each to `note`.
+    pub fn skip_field_data(&self, el: &Elem, mut note: impl FnMut(String)) -> Result<()> {
+        for fd in el.children_named("FieldData") {
+            for arr in fd.children_named("DataArray") {
+                let a = self.array(arr)?;
+                let tuples = arr
+                    .attr("NumberOfTuples")
+                    .and_then(|t| t.parse::<u64>().ok());
+                self.skip(&a, tuples.map(|t| t.saturating_mul(a.comps)))?;
+                note(format!("field {}", a.name));
+            }
+        }
+        Ok(())
+    }
+
     /// Reads and checks an array that is not kept: `count` values when
     /// known, else as many as its header says. `String`/`Bit` arrays are
     /// passed over (an appended one then leaves the end of the appended
@@ -383,7 +399,7 @@ impl<'a> Doc<'a> {
             what: format!("{count} values of {}", a.label()),
             needed: count,
             limit_kind: super::super::BUDGET_KIND,
-            limit: super::super::input_budget(),
+            limit: crate::foundation::alloc::memory_budget(),
         }
     }
 

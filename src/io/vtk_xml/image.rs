@@ -3,6 +3,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
+use super::super::saturating_product;
 use super::super::text::Num;
 use super::super::vtk::empty_samples;
 use super::{Doc, Elem, xml_type_name};
@@ -41,23 +42,14 @@ pub(crate) fn read_image(path: &Path, bytes: &[u8]) -> Result<(Volume, Vec<Strin
         }
     }
     let dims = extent_dims(&doc, img, "WholeExtent", &whole)?;
-    let n: u64 = dims.iter().map(|&d| d as u64).product();
+    let n = saturating_product(dims.iter().map(|&d| d as u64));
     let mut skipped: Vec<String> = Vec::new();
     let mut note = |s: String| {
         if !skipped.contains(&s) {
             skipped.push(s);
         }
     };
-    for fd in img.children_named("FieldData") {
-        for el in fd.children_named("DataArray") {
-            let a = doc.array(el)?;
-            let tuples = el
-                .attr("NumberOfTuples")
-                .and_then(|t| t.parse::<u64>().ok());
-            doc.skip(&a, tuples.map(|t| t.saturating_mul(a.comps)))?;
-            note(format!("field {}", a.name));
-        }
-    }
+    doc.skip_field_data(img, &mut note)?;
     let pieces: Vec<&Elem> = img.children_named("Piece").collect();
     if pieces.is_empty() {
         return Err(doc.error(img.at, "a <Piece> inside <ImageData>", "none"));
@@ -76,11 +68,8 @@ pub(crate) fn read_image(path: &Path, bytes: &[u8]) -> Result<(Volume, Vec<Strin
                 format!("{ext:?}"),
             ));
         }
-        let pn: u64 = pdims.iter().map(|&d| d as u64).product();
-        let cells: u64 = pdims
-            .iter()
-            .map(|&d| d.saturating_sub(1).max(1) as u64)
-            .product();
+        let pn = saturating_product(pdims.iter().map(|&d| d as u64));
+        let cells = saturating_product(pdims.iter().map(|&d| d.saturating_sub(1).max(1) as u64));
         let mut data = None;
         if let Some(pd) = piece.child("PointData") {
             let arrays = pd
@@ -236,16 +225,7 @@ fn place(
     n: u64,
 ) -> Result<()> {
     if full.is_none() {
-        let num = match data {
-            VolumeData::U8(_) => Num::U8,
-            VolumeData::I8(_) => Num::I8,
-            VolumeData::U16(_) => Num::U16,
-            VolumeData::I16(_) => Num::I16,
-            VolumeData::U32(_) => Num::U32,
-            VolumeData::I32(_) => Num::I32,
-            VolumeData::F32(_) => Num::F32,
-            VolumeData::F64(_) => Num::F64,
-        };
+        let num = num_of(data);
         let at = Position::Byte(piece.at as u64);
         super::super::check_budget(
             doc.path,
@@ -315,16 +295,7 @@ fn place(
 /// written as they are.
 pub(crate) fn write_image(w: &mut dyn Write, v: &Volume) -> io::Result<()> {
     let [nx, ny, nz] = v.dims;
-    let num = match &v.data {
-        VolumeData::U8(_) => Num::U8,
-        VolumeData::I8(_) => Num::I8,
-        VolumeData::U16(_) => Num::U16,
-        VolumeData::I16(_) => Num::I16,
-        VolumeData::U32(_) => Num::U32,
-        VolumeData::I32(_) => Num::I32,
-        VolumeData::F32(_) => Num::F32,
-        VolumeData::F64(_) => Num::F64,
-    };
+    let num = num_of(&v.data);
     let ext = format!(
         "0 {} 0 {} 0 {}",
         nx.saturating_sub(1),
@@ -364,4 +335,18 @@ pub(crate) fn write_image(w: &mut dyn Write, v: &Volume) -> io::Result<()> {
     w.write_all(&((v.len() * num.size()) as u64).to_le_bytes())?;
     super::super::raw::write_le(w, &v.data)?;
     writeln!(w, "\n  </AppendedData>\n</VTKFile>")
+}
+
+/// The file type of `data`'s samples.
+fn num_of(data: &VolumeData) -> Num {
+    match data {
+        VolumeData::U8(_) => Num::U8,
+        VolumeData::I8(_) => Num::I8,
+        VolumeData::U16(_) => Num::U16,
+        VolumeData::I16(_) => Num::I16,
+        VolumeData::U32(_) => Num::U32,
+        VolumeData::I32(_) => Num::I32,
+        VolumeData::F32(_) => Num::F32,
+        VolumeData::F64(_) => Num::F64,
+    }
 }

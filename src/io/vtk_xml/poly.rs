@@ -70,16 +70,7 @@ pub(crate) fn read_poly(path: &Path, bytes: &[u8]) -> Result<(TriMesh, PolyNotes
             notes.skipped.push(s);
         }
     };
-    for fd in pd.children_named("FieldData") {
-        for el in fd.children_named("DataArray") {
-            let a = doc.array(el)?;
-            let tuples = el
-                .attr("NumberOfTuples")
-                .and_then(|t| t.parse::<u64>().ok());
-            doc.skip(&a, tuples.map(|t| t.saturating_mul(a.comps)))?;
-            note(&mut notes, format!("field {}", a.name));
-        }
-    }
+    doc.skip_field_data(pd, |s| note(&mut notes, s))?;
     let pieces: Vec<&Elem> = pd.children_named("Piece").collect();
     let mut positions: Vec<Vec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
@@ -88,11 +79,11 @@ pub(crate) fn read_poly(path: &Path, bytes: &[u8]) -> Result<(TriMesh, PolyNotes
     for piece in &pieces {
         let np = doc.count(piece, "NumberOfPoints")?;
         let base = positions.len() as u64;
-        if base + np > u64::from(u32::MAX) {
-            return Err(Error::limit(
-                "points of a mesh (u32 indices)",
-                base + np,
-                u32::MAX,
+        if base.saturating_add(np) > u64::from(u32::MAX) {
+            return Err(doc.error(
+                piece.at,
+                "at most 4294967295 points in all pieces (32-bit indices)",
+                format!("NumberOfPoints {np} after {base} points"),
             ));
         }
         if let Some(points) = piece.child("Points") {

@@ -6,6 +6,8 @@ use rayon::prelude::*;
 
 use super::super::field::Field;
 use super::super::tables;
+use crate::Result;
+use crate::foundation::alloc::filled;
 
 /// The bit-row geometry: row length and the mask of the points that own a
 /// +x edge (`x < nx − 1`), per word.
@@ -45,11 +47,11 @@ pub(super) struct Bits {
 
 impl Bits {
     /// Reads every layer (in parallel) through [`Field::inside_row`].
-    pub(super) fn load(field: &Field<'_>) -> Self {
+    pub(super) fn load(field: &Field<'_>) -> Result<Self> {
         let rows = Rows::new(field);
         let nz = field.dims[2];
         let plane = rows.ny * rows.words;
-        let mut data = vec![0u64; nz * plane];
+        let mut data = filled("marching cubes: inside bits", nz * plane, 0u64)?;
         data.par_chunks_mut(plane)
             .enumerate()
             .for_each(|(z, layer)| {
@@ -57,7 +59,7 @@ impl Bits {
                     field.inside_row(y, z, row);
                 }
             });
-        Bits { rows, nz, data }
+        Ok(Bits { rows, nz, data })
     }
 
     /// Row `y` of layer `z`.

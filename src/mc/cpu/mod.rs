@@ -55,6 +55,7 @@ pub const T_MIN: f32 = 1.0 / 1024.0;
 use super::field::Field;
 use super::{exclusive_offsets, tables};
 use crate::Result;
+use crate::foundation::alloc::filled;
 
 /// Index-space output of one marching-cubes run, before world transform.
 #[derive(Debug, Default)]
@@ -81,7 +82,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
     if field.dims.iter().any(|&d| d < 2) {
         return Ok(RawSurface::default());
     }
-    let bits = Bits::load(field);
+    let bits = Bits::load(field)?;
     let nz = field.dims[2];
     let table = tables::table();
     // Vertices of point layer z, triangles of cell layer z (none on the top).
@@ -101,12 +102,12 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
     let (n_v, n_t) = (vbase[nz] as usize, tbase[nz] as usize);
     let chunks = chunk_bounds(&bits, &counts);
 
-    let mut positions = vec![[0f32; 3]; n_v];
-    let mut edges = vec![0u64; n_v];
-    let mut triangles = vec![[0u32; 3]; n_t];
-    let mut cells = vec![0u32; n_t];
+    let mut positions = filled("marching cubes: vertex positions", n_v, [0f32; 3])?;
+    let mut edges = filled("marching cubes: vertex edge ids", n_v, 0u64)?;
+    let mut triangles = filled("marching cubes: triangles", n_t, [0u32; 3])?;
+    let mut cells = filled("marching cubes: triangle cells", n_t, 0u32)?;
     // Union-find node of each triangle, then its group.
-    let mut groups = vec![0u32; n_t];
+    let mut groups = filled("marching cubes: triangle groups", n_t, 0u32)?;
     let mut outs = Vec::with_capacity(chunks.len());
     {
         let (mut p, mut e) = (positions.as_mut_slice(), edges.as_mut_slice());

@@ -17,9 +17,11 @@ import shutil
 import numpy as np
 import pydicom
 from pydicom.dataset import Dataset, FileMetaDataset
+import pydicom.encaps
 from pydicom.uid import (ExplicitVRLittleEndian, ImplicitVRLittleEndian,
                          RLELossless, generate_uid, CTImageStorage,
-                         EnhancedCTImageStorage)
+                         EnhancedCTImageStorage, JPEG2000Lossless,
+                         DeflatedExplicitVRLittleEndian)
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "dicom")
 COLS, ROWS, SLICES = 6, 5, 4
@@ -191,6 +193,19 @@ def main():
     ds.PixelData = b"".join(stored(k).tobytes() for k in order)
     save(ds, os.path.join(OUT, "multiframe.dcm"))
     expect("multiframe.dcm", positions, 1.0, -1024.0, "i16")
+    # Transfer syntaxes this build refuses by name: JPEG 2000 (a native
+    # codec left out; the fragment is not decoded) and deflated data sets.
+    ds = slice_dataset(generate_uid(entropy_srcs=["j2k"]), 0, ORIGIN)
+    ds.PixelData = pydicom.encaps.encapsulate([b"\xff\x4f\xff\x51" + b"\0" * 60])
+    ds["PixelData"].VR = "OB"
+    fm = FileMetaDataset()
+    fm.MediaStorageSOPClassUID = ds.SOPClassUID
+    fm.MediaStorageSOPInstanceUID = ds.SOPInstanceUID
+    fm.TransferSyntaxUID = JPEG2000Lossless
+    ds.file_meta = fm
+    ds.save_as(os.path.join(OUT, "jpeg2000.dcm"), enforce_file_format=True)
+    ds = slice_dataset(generate_uid(entropy_srcs=["deflate"]), 0, ORIGIN)
+    save(ds, os.path.join(OUT, "deflated.dcm"), DeflatedExplicitVRLittleEndian)
     with open(os.path.join(OUT, "expected.json"), "w") as f:
         json.dump(EXPECTED, f, indent=1, sort_keys=True)
         f.write("\n")

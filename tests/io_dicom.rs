@@ -251,3 +251,18 @@ fn orientation_survives_other_formats() {
         close(&a, &b, 1e-5, "world position");
     }
 }
+
+/// Transfer syntaxes this build does not decode are refused by name.
+#[test]
+fn undecodable_transfer_syntaxes_are_named() {
+    let j2k = read_volume(&dir().join("jpeg2000.dcm")).unwrap_err();
+    assert!(matches!(j2k, Error::Unsupported { .. }), "{j2k}");
+    assert!(j2k.to_string().contains("1.2.840.10008.1.2.4.90"), "{j2k}");
+    let deflated = read_volume(&dir().join("deflated.dcm")).unwrap_err();
+    assert!(matches!(deflated, Error::Unsupported { .. }), "{deflated}");
+    assert!(
+        deflated.to_string().contains("1.2.840.10008.1.2.1.99"),
+        "{deflated}"
+    );
+    assert!(deflated.to_string().contains("deflated"), "{deflated}");
+}

@@ -43,13 +43,8 @@ fn mask_volume(
     let slice = dims[0] * dims[1];
     // Up to 8 GB at the largest sizes: a failed allocation is an error,
     // not an abort.
-    let mut data = Vec::new();
-    data.try_reserve_exact(slice * dims[2])
-        .map_err(|_| crate::Error::HostMemory {
-            what: format!("a {}×{}×{} phantom", dims[0], dims[1], dims[2]),
-            bytes: (slice * dims[2]) as u64,
-        })?;
-    data.resize(slice * dims[2], 0u8);
+    let what = format!("a {}×{}×{} phantom", dims[0], dims[1], dims[2]);
+    let mut data = crate::foundation::alloc::filled(&what, slice * dims[2], 0u8)?;
     if slice > 0 {
         data.par_chunks_mut(slice).enumerate().for_each(|(z, out)| {
             for (k, o) in out.iter_mut().enumerate() {

@@ -424,7 +424,14 @@ pub(crate) fn stored_values(path: &Path, obj: &DefaultDicomObject) -> Result<Vec
     }
     let decoded = obj.decode_pixel_data().map_err(|e| Error::Unsupported {
         path: path.into(),
-        what: format!("DICOM pixel data in transfer syntax {ts} ({e})"),
+        what: format!(
+            "DICOM pixel data in transfer syntax {} ({ts}): this build decodes native, RLE and \
+             JPEG (baseline, extended, lossless) pixel data; JPEG 2000, JPEG-LS and JPEG XL need \
+             native codec libraries it leaves out (dicom-rs: {e})",
+            TransferSyntaxRegistry
+                .get(&ts)
+                .map_or("unknown", |t| t.name())
+        ),
     })?;
     let options = ConvertOptions::new().with_modality_lut(ModalityLutOption::None);
     (0..decoded.number_of_frames())

@@ -80,6 +80,7 @@ pub use recursion::polyhedrize;
 pub use summary::PolyhedronSummary;
 pub(super) use voxelize::{differences, verify_box};
 
+use crate::foundation::alloc::filled;
 use crate::foundation::exact::{cross_wide, gcd, sub};
 use crate::gpu::Backend;
 use crate::hull::{ConvexHull, HullOptions};
@@ -195,7 +196,11 @@ impl ShellGeometry {
                     origin: lo,
                     dims: std::array::from_fn(|k| (hi[k] - lo[k] + 1) as usize),
                 };
-                let mut flags = vec![false; bbox.n_voxels()?];
+                let mut flags = filled(
+                    "polyhedrize: voxel flags of the bounding box",
+                    bbox.n_voxels()?,
+                    false,
+                )?;
                 let d = sub(vb, va);
                 // ≥ 1: the endpoints differ.
                 let g = d.iter().fold(0i64, |g, &c| gcd(g, c.abs())).max(1);

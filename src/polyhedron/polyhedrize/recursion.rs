@@ -2,6 +2,7 @@
 //! tree of shells ([`polyhedrize()`]), making each component's child
 //! shell(s) and merging overlapping siblings level by level.
 
+use crate::foundation::alloc::filled;
 use std::collections::VecDeque;
 
 use crate::gpu::Backend;
@@ -310,7 +311,7 @@ fn object_of(voxels: &[[i64; 3]], frame: Frame) -> crate::Result<DigitalObject> 
         origin: lo,
         dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize),
     };
-    let mut mask = vec![false; sub.n_voxels()?];
+    let mut mask = filled("polyhedrize: a sub-box mask", sub.n_voxels()?, false)?;
     for &v in voxels {
         if let Some(i) = try_local_index(&sub, v) {
             mask[i] = true;

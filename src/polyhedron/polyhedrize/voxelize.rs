@@ -3,6 +3,7 @@
 //! `impl Polyhedron`: `voxelize`, `mismatches`); the box and comparison
 //! helpers are shared with the ray-parity check of `polyhedron::inside`.
 
+use crate::foundation::alloc::filled;
 use crate::gpu::Backend;
 use crate::hull_scan::VoxelBox;
 use crate::voxel::DigitalObject;
@@ -20,7 +21,11 @@ impl Polyhedron {
     pub fn voxelize(&self, bbox: &VoxelBox, backend: Backend<'_>) -> crate::Result<Vec<bool>> {
         let n = self.shells.len();
         let mut regions: Vec<Option<(VoxelBox, Vec<bool>)>> = vec![None; n];
-        let mut out = vec![false; bbox.n_voxels()?];
+        let mut out = filled(
+            "polyhedrize: voxels of the bounding box",
+            bbox.n_voxels()?,
+            false,
+        )?;
         for i in (0..n).rev() {
             let region = match regions[i].take() {
                 Some(r) => r,

@@ -46,6 +46,38 @@ fn vtk_type(sc: &Scanner, at: usize, name: &str) -> Result<Num> {
     })
 }
 
+/// The header of a legacy file up to its data set: the magic line, the
+/// title, `ASCII` or `BINARY` (big-endian payloads) and `DATASET <kind>`.
+/// Returns the scanner after the kind and the payload byte order.
+pub(crate) fn header<'a>(
+    path: &'a Path,
+    bytes: &'a [u8],
+    kind: &str,
+) -> Result<(Scanner<'a>, Option<Endian>)> {
+    let mut sc = magic(path, bytes)?;
+    let at = sc.mark();
+    sc.line()
+        .ok_or_else(|| sc.error(at, "a title line", "end of file"))?;
+    let (at, mode) = sc.next("ASCII or BINARY")?;
+    let binary = if mode.eq_ignore_ascii_case("ascii") {
+        None
+    } else if mode.eq_ignore_ascii_case("binary") {
+        Some(Endian::Big)
+    } else {
+        return Err(sc.error(at, "ASCII or BINARY", format!("`{}`", clip(mode))));
+    };
+    sc.keyword("DATASET")?;
+    let (at, found) = sc.next(kind)?;
+    if !found.eq_ignore_ascii_case(kind) {
+        return Err(sc.error(
+            at,
+            format!("DATASET {kind}"),
+            format!("DATASET {}", clip(found)),
+        ));
+    }
+    Ok((sc, binary))
+}
+
 /// The rest of a `SCALARS name type [components]` header after the
 /// keyword, and the optional `LOOKUP_TABLE name` line that follows it; in
 /// binary mode the scanner is left at the payload. Returns the name, the

@@ -19,7 +19,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::super::text::{Endian, Num, Scanner, clip, fan};
-use super::{field_name, magic, scalars_header, vtk_type};
+use super::{field_name, header, scalars_header, vtk_type};
 use crate::mesh::ScalarField;
 use crate::{Result, TriMesh};
 
@@ -44,23 +44,7 @@ struct Reader<'a> {
 
 /// Reads a VTK legacy POLYDATA file held in `bytes`.
 pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<TriMesh> {
-    let mut sc = magic(path, bytes)?;
-    let at = sc.mark();
-    sc.line()
-        .ok_or_else(|| sc.error(at, "a title line", "end of file"))?;
-    let (at, mode) = sc.next("ASCII or BINARY")?;
-    let binary = if mode.eq_ignore_ascii_case("ascii") {
-        None
-    } else if mode.eq_ignore_ascii_case("binary") {
-        Some(Endian::Big)
-    } else {
-        return Err(sc.error(at, "ASCII or BINARY", format!("`{}`", clip(mode))));
-    };
-    sc.keyword("DATASET")?;
-    let (at, kind) = sc.next("POLYDATA")?;
-    if !kind.eq_ignore_ascii_case("polydata") {
-        return Err(sc.error(at, "DATASET POLYDATA", format!("DATASET {}", clip(kind))));
-    }
+    let (sc, binary) = header(path, bytes, "POLYDATA")?;
     let mut r = Reader {
         sc,
         binary,

@@ -22,7 +22,7 @@ use std::path::Path;
 use super::super::saturating_product;
 use super::super::text::{Endian, Num, Scanner, clip};
 use super::{
-    check_samples_budget, empty_samples, legacy_type_name, magic, push_binary, push_text,
+    check_samples_budget, empty_samples, header, legacy_type_name, push_binary, push_text,
     scalars_header, vtk_type,
 };
 use crate::volume::{IDENTITY_AXES, VolumeData};
@@ -68,27 +68,7 @@ struct Reader<'a> {
 
 /// Reads a VTK legacy STRUCTURED_POINTS file held in `bytes`.
 pub(crate) fn read_structured_points(path: &Path, bytes: &[u8]) -> Result<StructuredPoints> {
-    let mut sc = magic(path, bytes)?;
-    let at = sc.mark();
-    sc.line()
-        .ok_or_else(|| sc.error(at, "a title line", "end of file"))?;
-    let (at, mode) = sc.next("ASCII or BINARY")?;
-    let binary = if mode.eq_ignore_ascii_case("ascii") {
-        None
-    } else if mode.eq_ignore_ascii_case("binary") {
-        Some(Endian::Big)
-    } else {
-        return Err(sc.error(at, "ASCII or BINARY", format!("`{}`", clip(mode))));
-    };
-    sc.keyword("DATASET")?;
-    let (at, kind) = sc.next("STRUCTURED_POINTS")?;
-    if !kind.eq_ignore_ascii_case("structured_points") {
-        return Err(sc.error(
-            at,
-            "DATASET STRUCTURED_POINTS",
-            format!("DATASET {}", clip(kind)),
-        ));
-    }
+    let (sc, binary) = header(path, bytes, "STRUCTURED_POINTS")?;
     let mut r = Reader {
         path,
         sc,

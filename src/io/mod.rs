@@ -34,7 +34,7 @@
 //! coordinates, out-of-range indices and polygons with fewer than 3 corners
 //! are [`Error::Format`], and orientations the data model cannot hold
 //! (oblique or flipped axes) are [`Error::Unsupported`]. The memory budget
-//! is [`memory_budget`](crate::foundation::alloc::memory_budget): `CHISEL_MAX_INPUT_BYTES` bytes, 16 GiB by default.
+//! is [`memory_budget`]: `CHISEL_MAX_INPUT_BYTES` bytes, 16 GiB by default.
 //! Polygons are fan-triangulated `(p0, pi, pi+1)`; the winding of the file is
 //! kept as it is. Volume samples stay in file order (x fastest, never flipped).
 //!

@@ -51,6 +51,10 @@ fn select_and_move(args: &Args, mut m: crate::TriMesh) -> anyhow::Result<crate::
 type CheckOutput = fn(&std::path::Path) -> crate::Result<()>;
 
 pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
+    // Output names are checked before the input is looked at.
+    if let Some(path) = &args.preview {
+        crate::foundation::fs::check_png_output(path)?;
+    }
     let input_is_volume = crate::io::is_volume(&args.input)?;
     // `.vtk` holds either kind: the input's.
     let output_is_volume = if crate::foundation::fs::file_name_lower(&args.output).ends_with(".vtk")

@@ -48,7 +48,10 @@ fn main() {
     let surf = marching_cubes(
         &shell(n),
         IsoSpec::Level(0.0),
-        &McOptions { close_border: true },
+        &McOptions {
+            close_border: true,
+            ..McOptions::default()
+        },
         Backend::Cpu,
     )
     .expect("marching cubes");

@@ -23,43 +23,11 @@ use chisel::Backend;
 use chisel::foundation::{Forest, vertex_components};
 use chisel::gpu::Gpu;
 use chisel::mc::{Field, IsoSpec, LEAF_BLOCK, McOptions, Surface, gpu, marching_cubes};
-use chisel::volume::{Volume, VolumeData};
 use criterion::{Criterion, Throughput};
 
 #[path = "common/mod.rs"]
 mod bench_common;
-use bench_common::quick;
-
-/// A CT-like head phantom (i16, "Hounsfield-ish" 0..2000): soft tissue
-/// ellipsoid ~1000, a bone shell ~1600 with a jaw, air 0, some texture.
-pub fn head_phantom(n: usize) -> Volume {
-    let c = (n as f32 - 1.0) / 2.0;
-    let s = 2.0 / n as f32;
-    let mut data = Vec::with_capacity(n * n * n);
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = [(x as f32 - c) * s, (y as f32 - c) * s, (z as f32 - c) * s];
-                let head = (p[0] / 0.8).powi(2) + (p[1] / 0.9).powi(2) + (p[2] / 0.95).powi(2);
-                let skull = (p[0] / 0.7).powi(2) + (p[1] / 0.8).powi(2) + (p[2] / 0.85).powi(2);
-                let jaw = (p[0] / 0.5).powi(2)
-                    + ((p[1] + 0.35) / 0.35).powi(2)
-                    + ((p[2] + 0.6) / 0.15).powi(2);
-                let texture = 40.0
-                    * ((x as f32 * 0.31).sin() + (y as f32 * 0.17).cos() + (z as f32 * 0.23).sin());
-                let mut v = 0.0;
-                if head < 1.0 {
-                    v = 1000.0 + texture;
-                }
-                if (0.82..1.0).contains(&skull) || (jaw < 1.0 && jaw > 0.5) {
-                    v = 1600.0 + texture;
-                }
-                data.push(v as i16);
-            }
-        }
-    }
-    Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::I16(data)).expect("phantom dims")
-}
+use bench_common::{head_phantom, quick};
 
 fn main() {
     let mut c = Criterion::default().configure_from_args();
@@ -77,7 +45,7 @@ fn main() {
         None => eprintln!("adapter: none (GPU benches skipped)"),
     }
     let software = gpu.as_ref().is_some_and(|g| g.is_software());
-    let mut cases: Vec<(String, Volume, f32)> = Vec::new();
+    let mut cases: Vec<(String, chisel::Volume, f32)> = Vec::new();
     let head =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/headsq/quarter.nhdr");
     if let Ok(v) = chisel::io::read_volume(&head) {
@@ -88,7 +56,10 @@ fn main() {
     for &n in sizes {
         cases.push((format!("phantom_{n}_bone"), head_phantom(n), 1300.0));
     }
-    let opts = McOptions { close_border: true };
+    let opts = McOptions {
+        close_border: true,
+        ..McOptions::default()
+    };
     let mut group = c.benchmark_group("mc");
     for (name, vol, level) in &cases {
         let voxels = vol.len() as u64;

@@ -23,7 +23,8 @@ pub struct McReport<'a> {
     adapter: Option<String>,
     vertices: usize,
     triangles: usize,
-    group_count: usize,
+    /// `None` with `--no-groups`.
+    group_count: Option<usize>,
     groups: &'a [Group],
     timings_s: McTimings,
     outputs: McOutputs<'a>,
@@ -80,6 +81,10 @@ pub struct Args {
     /// Also write one mesh per group (connected component) into this folder.
     #[arg(long)]
     groups_dir: Option<PathBuf>,
+    /// Only the mesh: no grouping, per-group figures or forest (the report's
+    /// `group_count` is null and `groups` empty).
+    #[arg(long, conflicts_with = "groups_dir")]
+    no_groups: bool,
     /// Preview PNG.
     #[arg(long)]
     preview: Option<PathBuf>,
@@ -128,6 +133,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         iso,
         &McOptions {
             close_border: args.close_border,
+            mesh_only: args.no_groups,
         },
         backend,
     )?;
@@ -197,7 +203,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         adapter: gpu.as_ref().map(|g| g.describe()),
         vertices: surface.mesh.n_vertices(),
         triangles: surface.mesh.n_triangles(),
-        group_count: surface.groups.len(),
+        group_count: (!args.no_groups).then_some(surface.groups.len()),
         groups: &surface.groups,
         timings_s: McTimings {
             read: read_s,
@@ -209,10 +215,14 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
             preview: args.preview.as_deref(),
         },
     };
+    let groups = if args.no_groups {
+        String::new()
+    } else {
+        format!(" in {} groups", surface.groups.len())
+    };
     global.note(format!(
-        "{} triangles in {} groups ({:.3} s on {}); wrote {}",
+        "{} triangles{groups} ({:.3} s on {}); wrote {}",
         surface.mesh.n_triangles(),
-        surface.groups.len(),
         mc_s,
         backend.name(),
         args.output.display()

@@ -28,8 +28,21 @@ pub fn filled<T: Clone>(what: &str, n: usize, value: T) -> Result<Vec<T>> {
     Ok(v)
 }
 
-/// An empty vector with room for exactly `n` elements, for `what`.
-pub fn reserved<T>(what: &str, n: usize) -> Result<Vec<T>> {
+/// `n` zeros for `what`, checked against [`memory_budget`]: allocated
+/// zeroed (a large buffer comes as fresh zero pages, not written here), so
+/// a pass that then writes every element touches its memory once instead
+/// of twice ([`filled`] writes it first).
+pub fn zeroed<T: bytemuck::Zeroable>(what: &str, n: usize) -> Result<Vec<T>> {
+    let bytes = within_budget::<T>(what, n)?;
+    bytemuck::allocation::try_zeroed_vec(n).map_err(|()| Error::HostMemory {
+        what: what.to_string(),
+        bytes,
+    })
+}
+
+/// The bytes of `n` elements of `T`, or the error when they exceed the
+/// budget.
+fn within_budget<T>(what: &str, n: usize) -> Result<u64> {
     let bytes = (n as u64).saturating_mul(std::mem::size_of::<T>() as u64);
     let budget = memory_budget();
     if bytes > budget {
@@ -38,6 +51,12 @@ pub fn reserved<T>(what: &str, n: usize) -> Result<Vec<T>> {
             bytes,
         });
     }
+    Ok(bytes)
+}
+
+/// An empty vector with room for exactly `n` elements, for `what`.
+pub fn reserved<T>(what: &str, n: usize) -> Result<Vec<T>> {
+    let bytes = within_budget::<T>(what, n)?;
     let mut v = Vec::new();
     v.try_reserve_exact(n).map_err(|_| Error::HostMemory {
         what: what.to_string(),
@@ -54,6 +73,9 @@ mod tests {
     fn too_large_is_an_error_naming_the_buffer() {
         let e = filled("test labels", usize::MAX / 8, 0u64).unwrap_err();
         assert!(matches!(e, Error::HostMemory { .. }), "{e}");
+        let e = zeroed::<[f32; 3]>("test positions", usize::MAX / 8).unwrap_err();
+        assert!(e.to_string().contains("test positions"), "{e}");
+        assert_eq!(zeroed::<[u32; 3]>("small", 2).unwrap(), vec![[0; 3]; 2]);
         assert!(e.to_string().contains("test labels"), "{e}");
         assert_eq!(filled("small", 3, 7u8).unwrap(), vec![7, 7, 7]);
         assert_eq!(reserved::<u32>("room", 5).unwrap().capacity(), 5);

@@ -111,7 +111,10 @@ pub fn marching_cubes(pose: &Pose, h: f64, backend: Backend<'_>) -> Result<Surfa
     crate::mc::marching_cubes(
         &volume,
         IsoSpec::Level(0.0),
-        &McOptions { close_border: true },
+        &McOptions {
+            close_border: true,
+            ..McOptions::default()
+        },
         backend,
     )
 }

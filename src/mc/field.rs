@@ -30,7 +30,11 @@ pub struct Field<'a> {
 }
 
 impl<'a> Field<'a> {
-    /// Checks the iso specification and the sample values (all finite).
+    /// Checks the iso specification and the grid size. The samples'
+    /// finiteness is checked where they are read: by the CPU path's bit
+    /// load, row by row as it packs them ([`Field::check_finite_row`]), and
+    /// by [`Field::check_finite`] (a pass of its own) before the GPU path
+    /// converts them.
     pub fn new(volume: &'a Volume, iso: IsoSpec, close_border: bool) -> Result<Self> {
         let level = match iso {
             IsoSpec::Level(l) if l.is_finite() => l,
@@ -39,27 +43,6 @@ impl<'a> Field<'a> {
             }
             IsoSpec::Label(_) => 0.5,
         };
-        if matches!(iso, IsoSpec::Level(_)) {
-            let bad = match &volume.data {
-                VolumeData::F32(v) => v.iter().position(|x| !x.is_finite()),
-                VolumeData::F64(v) => v.iter().position(|x| !x.is_finite()),
-                _ => None,
-            };
-            if let Some(i) = bad {
-                let (nx, ny) = (volume.dims[0], volume.dims[1]);
-                return Err(Error::data(
-                    "volume",
-                    "sample",
-                    i,
-                    format!(
-                        "at ({}, {}, {}) is not finite; marching cubes needs finite samples",
-                        i % nx,
-                        (i / nx) % ny,
-                        i / (nx * ny)
-                    ),
-                ));
-            }
-        }
         let pad = usize::from(close_border);
         let dims = volume.dims.map(|d| d + 2 * pad);
         if dims.iter().any(|&d| d > MAX_AXIS_SAMPLES) {
@@ -94,6 +77,47 @@ impl<'a> Field<'a> {
             dims,
             level,
         })
+    }
+
+    /// Errors at the first sample that is not finite (level mode; labels
+    /// are compared, never interpolated). Marching cubes needs finite
+    /// samples: a NaN is neither inside nor outside.
+    pub fn check_finite(&self) -> Result<()> {
+        let [_, vy, vz] = self.volume.dims;
+        (0..vz).try_for_each(|k| (0..vy).try_for_each(|j| self.check_inner_row(j, k)))
+    }
+
+    /// [`Field::check_finite`] for row `y` of layer `z` of the padded grid
+    /// (padding rows hold no samples of their own: nothing to check).
+    pub fn check_finite_row(&self, y: usize, z: usize) -> Result<()> {
+        let p = self.pad;
+        let [_, vy, vz] = self.volume.dims;
+        match (y.checked_sub(p), z.checked_sub(p)) {
+            (Some(j), Some(k)) if j < vy && k < vz => self.check_inner_row(j, k),
+            _ => Ok(()),
+        }
+    }
+
+    fn check_inner_row(&self, j: usize, k: usize) -> Result<()> {
+        if matches!(self.iso, IsoSpec::Label(_)) {
+            return Ok(());
+        }
+        let nx = self.volume.dims[0];
+        let start = self.volume.index(0, j, k);
+        let bad = match &self.volume.data {
+            VolumeData::F32(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
+            VolumeData::F64(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
+            _ => None,
+        };
+        match bad {
+            None => Ok(()),
+            Some(i) => Err(Error::data(
+                "volume",
+                "sample",
+                start + i,
+                format!("at ({i}, {j}, {k}) is not finite; marching cubes needs finite samples"),
+            )),
+        }
     }
 
     /// Number of sample points of the (padded) grid.
@@ -472,6 +496,19 @@ impl<'f, 'a, T: Scalar> NativeSamples<'f, 'a, T> {
             self.field.sample(x, y, z)
         }
     }
+}
+
+/// The first `x` of `row` that is not `finite`: whole chunks are tested
+/// without an early exit (a loop that vectorises), the position only
+/// searched in a chunk that fails.
+fn first_non_finite<T: Copy>(row: &[T], finite: impl Fn(T) -> bool) -> Option<usize> {
+    row.chunks(64).enumerate().find_map(|(c, chunk)| {
+        if chunk.iter().fold(true, |a, &x| a & finite(x)) {
+            None
+        } else {
+            chunk.iter().position(|&x| !finite(x)).map(|i| 64 * c + i)
+        }
+    })
 }
 
 /// Sets bit `i` of `out` where `inside(src[i])`. `out`: ≥ ⌈len/64⌉ words,

@@ -86,15 +86,15 @@ pub struct GpuRaw {
 }
 
 /// Marching cubes of `field` on the GPU, grouping finished on the host.
-pub fn marching_cubes(gpu: &Gpu, field: &Field<'_>) -> Result<RawSurface> {
+pub fn marching_cubes(gpu: &Gpu, field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
     let raw = marching_cubes_raw(gpu, field)?;
-    Ok(assemble(raw))
+    Ok(assemble(raw, grouping))
 }
 
 /// Turns read-back GPU output into a [`RawSurface`] (grouping on the host:
 /// vertex-connected components numbered by first triangle, the same
 /// partition and numbering as the CPU's one-pass grouping).
-pub fn assemble(raw: GpuRaw) -> RawSurface {
+pub fn assemble(raw: GpuRaw, grouping: bool) -> RawSurface {
     let positions = raw.positions.iter().map(|p| [p[0], p[1], p[2]]).collect();
     let edges = raw
         .positions
@@ -103,7 +103,11 @@ pub fn assemble(raw: GpuRaw) -> RawSurface {
         .collect();
     let triangles: Vec<[u32; 3]> = raw.triangles.iter().map(|t| [t[0], t[1], t[2]]).collect();
     let cells = raw.triangles.iter().map(|t| t[3]).collect();
-    let (groups, n_groups) = vertex_components(raw.positions.len(), &triangles);
+    let (groups, n_groups) = if grouping {
+        vertex_components(raw.positions.len(), &triangles)
+    } else {
+        (Vec::new(), 0)
+    };
     RawSurface {
         positions,
         edges,
@@ -122,6 +126,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     if field.dims.iter().any(|&d| d < 2) {
         return Ok(GpuRaw::default());
     }
+    field.check_finite()?;
     if (field.n_points() as u64) * 3 > u64::from(u32::MAX) {
         return Err(Error::limit(
             format!(

@@ -93,6 +93,10 @@ pub struct McOptions {
     /// outside sample per side, and the closing faces lie half a sample
     /// beyond the border samples. Without it, surfaces end open at the border.
     pub close_border: bool,
+    /// Only the mesh: no grouping, per-group figures or forest (the
+    /// surface's `triangle_groups`, `groups` and `forest` stay empty). For
+    /// callers that pass the mesh on and never cut it by group.
+    pub mesh_only: bool,
 }
 
 /// Figures of one group (connected surface component).
@@ -175,36 +179,62 @@ pub fn marching_cubes(
     backend: Backend<'_>,
 ) -> Result<Surface> {
     let field = Field::new(volume, iso, opts.close_border)?;
+    let grouping = !opts.mesh_only;
     let raw = match backend {
-        Backend::Cpu => cpu::marching_cubes(&field)?,
-        Backend::Gpu(g) => gpu::marching_cubes(g, &field)?,
+        Backend::Cpu => cpu::marching_cubes(&field, grouping)?,
+        Backend::Gpu(g) => gpu::marching_cubes(g, &field, grouping)?,
     };
-    Ok(finish(&field, raw))
+    Ok(if grouping {
+        finish(&field, raw)
+    } else {
+        finish_mesh(&field, raw)
+    })
+}
+
+/// The world transform of a raw surface, in place, with the winding
+/// turned where the axes reflect.
+fn world_mesh(field: &Field<'_>, positions: Vec<[f32; 3]>, triangles: Vec<[u32; 3]>) -> TriMesh {
+    let mut positions: Vec<glam::Vec3> = bytemuck::cast_vec(positions);
+    positions
+        .par_iter_mut()
+        .for_each(|p| *p = field.to_world(p.to_array()));
+    let mut triangles = triangles;
+    if field.volume().reflects() {
+        triangles.iter_mut().for_each(|t| t.swap(1, 2));
+    }
+    TriMesh {
+        positions,
+        triangles,
+        scalars: Vec::new(),
+    }
+}
+
+/// [`McOptions::mesh_only`]: the mesh, vertex edges and triangle cells;
+/// no groups, figures or forest.
+fn finish_mesh(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
+    Surface {
+        mesh: world_mesh(field, raw.positions, raw.triangles),
+        vertex_edges: raw.edges,
+        triangle_cells: raw.cells,
+        triangle_groups: Vec::new(),
+        groups: Vec::new(),
+        forest: Forest::default(),
+        grid: Grid {
+            dims: field.dims,
+            pad: field.pad,
+        },
+    }
 }
 
 /// World transform, group figures and the forest (shared by both backends).
 /// [`Forest::build`] runs alongside the (parallel) figure passes.
 pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
-    // To world coordinates in place (a vertex array is not copied).
-    let mut positions: Vec<glam::Vec3> = bytemuck::cast_vec(raw.positions);
-    let ((), blocks) = rayon::join(
-        || {
-            positions
-                .par_iter_mut()
-                .for_each(|p| *p = field.to_world(p.to_array()))
-        },
+    // To world coordinates in place (a vertex array is not copied); axes
+    // with a reflection turn the index-space winding inside out.
+    let (mesh, blocks) = rayon::join(
+        || world_mesh(field, raw.positions, raw.triangles),
         || leaf_blocks(&raw.cells, field.dims),
     );
-    // Axes with a reflection turn the index-space winding inside out.
-    let mut triangles = raw.triangles;
-    if field.volume().reflects() {
-        triangles.iter_mut().for_each(|t| t.swap(1, 2));
-    }
-    let mesh = TriMesh {
-        positions,
-        triangles,
-        scalars: Vec::new(),
-    };
     let grid = Grid {
         dims: field.dims,
         pad: field.pad,

@@ -29,6 +29,25 @@ fn mc_and_capped_cut_of_the_ct_bone() {
     let n_groups = mc["group_count"].as_u64().unwrap() as usize;
     assert_eq!(mc["groups"].as_array().unwrap().len(), n_groups);
     assert_eq!(std::fs::read_dir(&groups).unwrap().count(), n_groups);
+    // Only the mesh: the same triangles, no groups.
+    let mesh_only = tmp.path().join("mesh_only.ply");
+    let bare = ok_json(&[
+        "mc",
+        path_str(&dir.join("headsq/quarter.nhdr")),
+        "--level",
+        "1150",
+        "--no-groups",
+        "-o",
+        path_str(&mesh_only),
+        "--json",
+    ]);
+    assert_eq!(bare["triangles"], 78_792);
+    assert!(bare["group_count"].is_null());
+    assert_eq!(bare["groups"].as_array().unwrap().len(), 0);
+    assert_eq!(
+        std::fs::read(&mesh_only).unwrap(),
+        std::fs::read(&bone).unwrap()
+    );
 
     let closed = tmp.path().join("closed.ply");
     ok_json(&[

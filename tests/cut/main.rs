@@ -105,7 +105,10 @@ fn mc(vol: &Volume) -> Surface {
     marching_cubes(
         vol,
         IsoSpec::Level(0.0),
-        &McOptions { close_border: true },
+        &McOptions {
+            close_border: true,
+            ..McOptions::default()
+        },
         Backend::Cpu,
     )
     .unwrap()

@@ -193,7 +193,10 @@ fn headsq_bone_plane_and_sphere_cuts_conserve_volume() {
     let s = marching_cubes(
         &vol,
         IsoSpec::Level(1150.0),
-        &McOptions { close_border: true },
+        &McOptions {
+            close_border: true,
+            ..McOptions::default()
+        },
         Backend::Cpu,
     )
     .unwrap();

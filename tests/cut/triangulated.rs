@@ -84,6 +84,7 @@ fn triangulated_knife_caps_loops_and_leaves_open_curves_of_an_open_surface_open(
         IsoSpec::Level(0.0),
         &McOptions {
             close_border: false,
+            ..McOptions::default()
         },
         Backend::Cpu,
     )

@@ -60,4 +60,7 @@ fn torus(n: usize, big_r: f64, r: f64) -> Volume {
     Volume::new([n; 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap()
 }
 
-const CLOSE: McOptions = McOptions { close_border: true };
+const CLOSE: McOptions = McOptions {
+    close_border: true,
+    mesh_only: false,
+};

@@ -209,6 +209,26 @@ fn labels_and_non_finite_samples() {
         ),
         "{err}"
     );
+    // Checked while the rows are packed: the position is the sample's, on
+    // an open and a closed border, with and without grouping.
+    let (nx, ny) = (5, 4);
+    let (x, y, z) = (3, 2, 1);
+    let mut data = vec![0.0f32; nx * ny * 3];
+    data[x + nx * (y + ny * z)] = f32::INFINITY;
+    let bad = Volume::new([5, 4, 3], [1.0; 3], [0.0; 3], VolumeData::F32(data)).unwrap();
+    for close_border in [false, true] {
+        for mesh_only in [false, true] {
+            let opts = McOptions {
+                close_border,
+                mesh_only,
+            };
+            let err = marching_cubes(&bad, IsoSpec::Level(0.5), &opts, Backend::Cpu).unwrap_err();
+            assert!(
+                err.to_string().contains("at (3, 2, 1) is not finite"),
+                "{err}"
+            );
+        }
+    }
     assert!(matches!(
         marching_cubes(&vol, IsoSpec::Level(f32::NAN), &CLOSE, Backend::Cpu),
         Err(chisel::Error::InvalidParameter { ref name, .. }) if name == "level"
@@ -301,5 +321,30 @@ fn cpu_output_does_not_depend_on_thread_count() {
         );
         assert_eq!(one.groups, many.groups, "{threads} threads");
         assert_eq!(one.forest, many.forest, "{threads} threads");
+    }
+}
+
+#[test]
+fn mesh_only_gives_the_same_mesh_without_groups() {
+    for (k, close_border) in [false, true].into_iter().enumerate() {
+        let vol = random_volume(11 + k as u64, [13, 9, 17]);
+        let iso = IsoSpec::Level(128.0);
+        let full = McOptions {
+            close_border,
+            mesh_only: false,
+        };
+        let bare = McOptions {
+            close_border,
+            mesh_only: true,
+        };
+        let a = marching_cubes(&vol, iso, &full, Backend::Cpu).unwrap();
+        let b = marching_cubes(&vol, iso, &bare, Backend::Cpu).unwrap();
+        assert!(!a.groups.is_empty() && !a.mesh.triangles.is_empty());
+        assert_eq!(a.mesh.positions, b.mesh.positions);
+        assert_eq!(a.mesh.triangles, b.mesh.triangles);
+        assert_eq!(a.vertex_edges, b.vertex_edges);
+        assert_eq!(a.triangle_cells, b.triangle_cells);
+        assert!(b.groups.is_empty() && b.triangle_groups.is_empty());
+        assert_eq!(b.forest, chisel::foundation::Forest::default());
     }
 }

@@ -241,8 +241,8 @@ fn mc_fast_cpu_path_equals_the_chained_mirrors() {
     for (vol, iso) in &cases {
         for close in [false, true] {
             let field = Field::new(vol, *iso, close).unwrap();
-            let fast = cpu::marching_cubes(&field).unwrap();
-            let mirrored = gpu::assemble(mirror::marching_cubes(&field).unwrap());
+            let fast = cpu::marching_cubes(&field, true).unwrap();
+            let mirrored = gpu::assemble(mirror::marching_cubes(&field).unwrap(), true);
             let what = format!("{iso:?} close {close}");
             assert!(!fast.triangles.is_empty(), "{what}");
             let bits = |p: &[[f32; 3]]| -> Vec<[u32; 3]> {

@@ -100,6 +100,7 @@ fn compare(what: &str, cpu: &Surface, gpu: &Surface, tol: Tolerance) -> Result<(
 fn check(gpu: &Gpu, what: &str, vol: &Volume, iso: IsoSpec, close: bool) {
     let opts = McOptions {
         close_border: close,
+        ..McOptions::default()
     };
     let c = mc::marching_cubes(vol, iso, &opts, Backend::Cpu).unwrap();
     let g = mc::marching_cubes(vol, iso, &opts, Backend::Gpu(gpu)).unwrap();
@@ -193,9 +194,17 @@ fn mc_sentinels_and_negative_control() {
             .iter()
             .all(|p| p[..3].iter().all(|c| c.is_finite()))
     );
-    let cpu =
-        mc::marching_cubes(&vol, iso, &McOptions { close_border: true }, Backend::Cpu).unwrap();
-    let ok = mc::finish(&field, mc::gpu::assemble(raw.clone()));
+    let cpu = mc::marching_cubes(
+        &vol,
+        iso,
+        &McOptions {
+            close_border: true,
+            ..McOptions::default()
+        },
+        Backend::Cpu,
+    )
+    .unwrap();
+    let ok = mc::finish(&field, mc::gpu::assemble(raw.clone(), true));
     let tol = position_tolerance(&vol);
     compare("unchanged", &cpu, &ok, tolerance_on(gpu, &vol)).unwrap();
     // One grid coordinate off by twice the tolerance (in grid units, so the
@@ -203,7 +212,7 @@ fn mc_sentinels_and_negative_control() {
     let slack = (tol.abs + tol.rel * 64.0) / vol.spacing[1] as f32;
     let mut bad = raw.clone();
     bad.positions[7][1] += 2.0 * slack;
-    let s = mc::finish(&field, mc::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad, true));
     assert!(
         compare("off by twice the bound", &cpu, &s, tol).is_err(),
         "comparator missed a position twice the tolerance away"
@@ -211,7 +220,7 @@ fn mc_sentinels_and_negative_control() {
     // On a software adapter one ulp is already a mismatch.
     let mut bad = raw.clone();
     bad.positions[7][1] = f32::from_bits(bad.positions[7][1].to_bits() + 1);
-    let s = mc::finish(&field, mc::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad, true));
     assert!(
         compare("one ulp", &cpu, &s, Tolerance::EXACT).is_err(),
         "exact comparator missed a 1-ulp position"
@@ -220,7 +229,7 @@ fn mc_sentinels_and_negative_control() {
     let mut bad = raw;
     let t = bad.triangles.len() / 2;
     bad.triangles[t].swap(0, 1);
-    let s = mc::finish(&field, mc::gpu::assemble(bad));
+    let s = mc::finish(&field, mc::gpu::assemble(bad, true));
     assert!(
         compare("flipped", &cpu, &s, tol).is_err(),
         "comparator missed a flipped triangle"

@@ -228,12 +228,23 @@ impl Forest {
             ^ (self.leaf_positions[v].iter().step_by(line(12))).fold(0, |a, x| a ^ x.x.to_bits())
     }
 
-    /// Appends the parts' nodes and tables (their spans shifted to the
-    /// concatenation) and makes the group nodes over `runs` (one layer
-    /// node per run, in order).
+    /// Takes the first part's nodes and tables as the forest's (their spans
+    /// are already global: no copy), appends the other parts' (their spans
+    /// shifted to the concatenation) and makes the group nodes over `runs`
+    /// (one layer node per run, in order).
     fn concatenate(&mut self, parts: Vec<Part>, runs: &[LayerRun]) {
-        let total = |f: fn(&Part) -> usize| parts.iter().map(f).sum::<usize>();
-        self.layers.reserve_exact(runs.len());
+        let mut parts = parts.into_iter();
+        if let Some(p) = parts.next() {
+            self.layers = p.layers;
+            self.rows = p.rows;
+            self.cells = p.cells;
+            self.leaf_vertices = p.leaf_vertices;
+            self.leaf_positions = p.leaf_positions;
+            self.corners = p.corners;
+        }
+        let rest: Vec<Part> = parts.collect();
+        let total = |f: fn(&Part) -> usize| rest.iter().map(f).sum::<usize>();
+        self.layers.reserve_exact(total(|p| p.layers.len()));
         self.rows.reserve_exact(total(|p| p.rows.len()));
         self.cells.reserve_exact(total(|p| p.cells.len()));
         self.leaf_vertices
@@ -241,7 +252,7 @@ impl Forest {
         self.leaf_positions
             .reserve_exact(total(|p| p.leaf_positions.len()));
         self.corners.reserve_exact(total(|p| p.corners.len()));
-        for mut p in parts {
+        for mut p in rest {
             let rows = self.rows.len() as u32;
             let cells = self.cells.len() as u32;
             let vertices = self.leaf_vertices.len() as u32;
@@ -268,12 +279,10 @@ impl Forest {
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
             self.leaf_positions.extend_from_slice(&p.leaf_positions);
-            if vertices > 0 {
-                p.corners
-                    .as_flattened_mut()
-                    .iter_mut()
-                    .for_each(|v| *v += vertices);
-            }
+            p.corners
+                .as_flattened_mut()
+                .iter_mut()
+                .for_each(|v| *v += vertices);
             self.corners.extend_from_slice(&p.corners);
         }
         let mut first = 0usize;

@@ -2,12 +2,9 @@
 //! output arrays) gets its vertices and triangles written in place, and
 //! returns its one-pass union-find grouping ([`ChunkGroups`]).
 
-use rayon::prelude::*;
-
-use super::super::field::{NativeSamples, SampleVisitor, Scalar};
 use super::super::tables::{self, EDGE_OWNER, corner_offset, edge_axis};
-use super::count::{Bits, Rows, case_at, cell_word};
-use super::{NONE, T_MIN};
+use super::NONE;
+use super::scan::{Bits, LayerScan, Rows, case_at, cell_word};
 use crate::foundation::UnionFind;
 
 /// One chunk's share of the output: cell layers `z0..z1`, point layers
@@ -24,7 +21,9 @@ pub(super) struct ChunkOut<'a> {
     pub(super) edges: &'a mut [u64],
     pub(super) triangles: &'a mut [[u32; 3]],
     pub(super) cells: &'a mut [u32],
-    /// Local union-find node of each triangle.
+    /// Whether triangles are grouped.
+    pub(super) grouping: bool,
+    /// Local union-find node of each triangle; empty without grouping.
     pub(super) tri_node: &'a mut [u32],
 }
 
@@ -64,36 +63,19 @@ impl Crossings {
     }
 }
 
-/// The emit pass over all chunks (in parallel), with the samples read in
-/// the volume's native type.
-pub(super) struct RunChunks<'b, 'o> {
-    pub(super) bits: &'b Bits,
-    pub(super) outs: Vec<ChunkOut<'o>>,
-}
-
-impl SampleVisitor for RunChunks<'_, '_> {
-    type Output = Vec<ChunkGroups>;
-
-    fn visit<T: Scalar>(self, samples: NativeSamples<'_, '_, T>) -> Vec<ChunkGroups> {
-        let bits = self.bits;
-        self.outs
-            .into_par_iter()
-            .map(|out| run_chunk(samples, bits, out))
-            .collect()
-    }
-}
-
-fn run_chunk<T: Scalar>(
-    samples: NativeSamples<'_, '_, T>,
-    bits: &Bits,
-    mut out: ChunkOut<'_>,
-) -> ChunkGroups {
+/// Emits one chunk: its vertices (positions from the scan's parameters)
+/// and triangles, written in place, and its grouping.
+pub(super) fn run_chunk(bits: &Bits, layers: &[LayerScan], mut out: ChunkOut<'_>) -> ChunkGroups {
     let rows = &bits.rows;
     let (z0, z1, own_end) = (out.z0, out.z1, out.own_end);
     let mut emit = Emit {
         groups: ChunkGroups {
             uf: UnionFind::default(),
-            vertex_node: vec![NONE; out.n_vertices],
+            vertex_node: if !out.grouping {
+                Vec::new()
+            } else {
+                vec![NONE; out.n_vertices]
+            },
             first_vertex: out.first_vertex,
         },
         out: &mut out,
@@ -105,8 +87,8 @@ fn run_chunk<T: Scalar>(
     let mut vertex_rows = VertexRows::new(rows);
     let mut next_id = emit.groups.first_vertex;
     number_points(
-        &samples,
         bits,
+        layers,
         z0,
         true,
         &mut crossings[0],
@@ -121,7 +103,7 @@ fn run_chunk<T: Scalar>(
             (c1, c0)
         };
         let own = z + 1 < own_end;
-        number_points(&samples, bits, z + 1, own, upper, &mut next_id, &mut emit);
+        number_points(bits, layers, z + 1, own, upper, &mut next_id, &mut emit);
         vertex_rows.clear();
         emit_cells(bits, z, [&*lower, &*upper], &mut vertex_rows, &mut emit);
     }
@@ -131,10 +113,11 @@ fn run_chunk<T: Scalar>(
 /// Numbers the crossing edges of point layer `z` in point order (x
 /// fastest, then y; axes x < y < z within a point), a word of 64 points at
 /// a time. Records the masks and row bases in `crossings`; stores positions
-/// and edge ids when the layer is `own`.
-fn number_points<T: Scalar>(
-    samples: &NativeSamples<'_, '_, T>,
+/// (the scan's parameters, in the same order) and edge ids when the layer
+/// is `own`.
+fn number_points(
     bits: &Bits,
+    layers: &[LayerScan],
     z: usize,
     own: bool,
     crossings: &mut Crossings,
@@ -142,13 +125,16 @@ fn number_points<T: Scalar>(
     emit: &mut Emit<'_, '_>,
 ) {
     let Rows { nx, ny, words, .. } = bits.rows;
-    let level = samples.level();
+    let pair = bits.pair(z);
+    // The scan's parameters of this layer, in the same order.
+    let ts = &layers[z].ts;
+    let mut k = 0;
     let zf = z as f32;
     for y in 0..ny {
         crossings.row_base[y] = *next_id;
         let masks = &mut crossings.masks[y * words..(y + 1) * words];
         for (w, mask) in masks.iter_mut().enumerate() {
-            let [ex, ey, ez] = bits.crossings(y, z, w);
+            let [ex, ey, ez] = pair.crossings(y, w);
             *mask = [ex, ey, ez];
             *next_id += ex.count_ones() + ey.count_ones() + ez.count_ones();
             if !own {
@@ -160,9 +146,9 @@ fn number_points<T: Scalar>(
                 any &= any - 1;
                 let x = 64 * w + s as usize;
                 let point = (x + nx * (y + ny * z)) as u64;
-                let a = samples.sample(x, y, z);
-                let mut vertex = |axis: usize, b: f32| {
-                    let t = ((level - a) / (b - a)).clamp(T_MIN, 1.0 - T_MIN);
+                let mut vertex = |axis: usize| {
+                    let t = ts[k];
+                    k += 1;
                     let mut u = [x as f32, y as f32, zf];
                     u[axis] += t;
                     emit.out.positions[emit.n_positions] = u;
@@ -170,13 +156,13 @@ fn number_points<T: Scalar>(
                     emit.n_positions += 1;
                 };
                 if ex >> s & 1 == 1 {
-                    vertex(0, samples.sample(x + 1, y, z));
+                    vertex(0);
                 }
                 if ey >> s & 1 == 1 {
-                    vertex(1, samples.sample(x, y + 1, z));
+                    vertex(1);
                 }
                 if ez >> s & 1 == 1 {
-                    vertex(2, samples.sample(x, y, z + 1));
+                    vertex(2);
                 }
             }
         }
@@ -272,7 +258,9 @@ fn emit_cells(
     let table = tables::table();
     let (cx, cy) = (nx - 1, ny - 1);
     for y in 0..cy {
-        let r = bits.cell_rows(y, z);
+        let Some(r) = bits.pair(z).cell_rows(y) else {
+            break;
+        };
         let mut held = false;
         let offsets = vertex_rows.edge_offsets(y);
         for w in 0..words {
@@ -290,11 +278,12 @@ fn emit_cells(
                 for tri in table.case(case_at(&lo, &hi, s)) {
                     let id = |e: u8| ids[offsets[e as usize]];
                     let v = [id(tri[0]), id(tri[1]), id(tri[2])];
-                    let node = join_group(&mut emit.groups, v);
                     let i = emit.n_triangles;
+                    if emit.out.grouping {
+                        emit.out.tri_node[i] = join_group(&mut emit.groups, v);
+                    }
                     emit.out.triangles[i] = v;
                     emit.out.cells[i] = cell;
-                    emit.out.tri_node[i] = node;
                     emit.n_triangles += 1;
                 }
             }

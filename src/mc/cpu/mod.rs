@@ -1,14 +1,19 @@
 //! CPU marching cubes with one-pass grouping (seed 004 §1).
 //!
-//! Two passes over the grid, each parallel over z layers (rayon):
-//! - *count*: the inside flags of every layer as bit rows (64 points per
-//!   `u64`, read once from the volume's native type by
-//!   [`Field::inside_row`]; 1 bit per sample kept), and per layer the number
-//!   of vertices and triangles. Whole words of points or cells that are all
-//!   inside or all outside cost one test. The exclusive sums give every
-//!   layer its first vertex and triangle id, so
+//! Two passes over the grid, each parallel (rayon):
+//! - *scan* (`scan::scan`), over slabs of z layers: the inside flags of
+//!   every layer as bit rows (64 points per `u64`, read once from the
+//!   volume's native type by [`Field::inside_row`], each row checked
+//!   finite while it is in cache; 1 bit per sample kept). Right after layer
+//!   `z + 1` is packed, layer `z` is scanned while the samples of both are
+//!   still in cache: the interpolation parameter of each of its vertices,
+//!   in numbering order, and the number of triangles of its cell layer.
+//!   Whole words of points or cells that are all inside or all outside
+//!   cost one test. The exclusive sums give every layer its first vertex
+//!   and triangle id, so
 //! - *emit* writes straight into the output arrays, in chunks of z layers
-//!   of about equal work, one task per chunk. Inside a chunk, layer by layer:
+//!   of about equal work, one task per chunk, and reads no samples. Inside
+//!   a chunk, layer by layer:
 //! 1. *points*: every sample point `p` owns its +x, +y, +z grid edges; each
 //!    crossing edge becomes one vertex, numbered in point order (x fastest,
 //!    then y, then z; axes x < y < z within a point) — the same numbering the
@@ -26,18 +31,18 @@
 //! `t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN)`,
 //! `u[axis] = f32(p[axis]) + t`, with `a` the sample at the edge's lower
 //! end `p` and `b` at `p + e_axis` ([`NativeSamples::sample`](super::field::NativeSamples::sample), the volume
-//! read in its own type, only where an edge crosses). The clamp
+//! read in its own type, only where an edge crosses; `t` by the scan). The clamp
 //! ([`T_MIN`]) keeps every vertex strictly inside its edge, so no triangle
 //! has zero area (see there).
 
-mod count;
 mod emit;
+mod scan;
 mod stitch;
 
 use rayon::prelude::*;
 
-use count::{Bits, count_triangles, count_vertices};
-use emit::{ChunkOut, RunChunks};
+use emit::{ChunkGroups, ChunkOut, run_chunk};
+use scan::{Bits, scan};
 use stitch::stitch;
 
 /// Least interpolation parameter, in grid steps: `2⁻¹⁰`. A sample equal to
@@ -52,10 +57,10 @@ use stitch::stitch;
 /// below 2¹⁴ ([`super::field::MAX_AXIS_SAMPLES`]).
 pub const T_MIN: f32 = 1.0 / 1024.0;
 
+use super::exclusive_offsets;
 use super::field::Field;
-use super::{exclusive_offsets, tables};
 use crate::Result;
-use crate::foundation::alloc::filled;
+use crate::foundation::alloc::zeroed;
 
 /// Index-space output of one marching-cubes run, before world transform.
 #[derive(Debug, Default)]
@@ -76,38 +81,32 @@ pub struct RawSurface {
 
 const NONE: u32 = u32::MAX;
 
-/// Marching cubes of `field` on the CPU; see the module docs. Errors when
-/// the surface has 2³² − 1 or more vertices or triangles.
-pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
+/// Marching cubes of `field` on the CPU; see the module docs. Without
+/// `grouping` the triangles get no groups (`groups` empty, `n_groups` 0).
+/// Errors when the surface has 2³² − 1 or more vertices or triangles.
+pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
     if field.dims.iter().any(|&d| d < 2) {
         return Ok(RawSurface::default());
     }
-    let bits = Bits::load(field)?;
+    let (bits, layers) = scan(field)?;
     let nz = field.dims[2];
-    let table = tables::table();
     // Vertices of point layer z, triangles of cell layer z (none on the top).
-    let counts: Vec<(u64, u64)> = (0..nz)
-        .into_par_iter()
-        .map(|z| {
-            let tris = if z + 1 < nz {
-                count_triangles(&bits, z, table)
-            } else {
-                0
-            };
-            (count_vertices(&bits, z), tris)
-        })
+    let counts: Vec<(u64, u64)> = layers
+        .iter()
+        .map(|l| (l.ts.len() as u64, l.triangles))
         .collect();
     let vbase = exclusive_offsets(counts.iter().map(|c| c.0), "vertices")?;
     let tbase = exclusive_offsets(counts.iter().map(|c| c.1), "triangles")?;
     let (n_v, n_t) = (vbase[nz] as usize, tbase[nz] as usize);
     let chunks = chunk_bounds(&bits, &counts);
 
-    let mut positions = filled("marching cubes: vertex positions", n_v, [0f32; 3])?;
-    let mut edges = filled("marching cubes: vertex edge ids", n_v, 0u64)?;
-    let mut triangles = filled("marching cubes: triangles", n_t, [0u32; 3])?;
-    let mut cells = filled("marching cubes: triangle cells", n_t, 0u32)?;
+    let mut positions = zeroed("marching cubes: vertex positions", n_v)?;
+    let mut edges = zeroed("marching cubes: vertex edge ids", n_v)?;
+    let mut triangles = zeroed("marching cubes: triangles", n_t)?;
+    let mut cells = zeroed("marching cubes: triangle cells", n_t)?;
     // Union-find node of each triangle, then its group.
-    let mut groups = filled("marching cubes: triangle groups", n_t, 0u32)?;
+    let n_g = if grouping { n_t } else { 0 };
+    let mut groups = zeroed("marching cubes: triangle groups", n_g)?;
     let mut outs = Vec::with_capacity(chunks.len());
     {
         let (mut p, mut e) = (positions.as_mut_slice(), edges.as_mut_slice());
@@ -124,7 +123,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
             let (e0, e1) = std::mem::take(&mut e).split_at_mut(nv);
             let (t0, t1) = std::mem::take(&mut t).split_at_mut(nt);
             let (c0, c1) = std::mem::take(&mut c).split_at_mut(nt);
-            let (g0, g1) = std::mem::take(&mut g).split_at_mut(nt);
+            let (g0, g1) = std::mem::take(&mut g).split_at_mut(if grouping { nt } else { 0 });
             (p, e, t, c, g) = (p1, e1, t1, c1, g1);
             outs.push(ChunkOut {
                 z0,
@@ -136,12 +135,20 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<RawSurface> {
                 edges: e0,
                 triangles: t0,
                 cells: c0,
+                grouping,
                 tri_node: g0,
             });
         }
     }
-    let chunk_groups = field.visit_samples(RunChunks { bits: &bits, outs });
-    let n_groups = stitch(&chunk_groups, &chunks, &vbase, &tbase, &mut groups);
+    let chunk_groups: Vec<ChunkGroups> = outs
+        .into_par_iter()
+        .map(|out| run_chunk(&bits, &layers, out))
+        .collect();
+    let n_groups = if grouping {
+        stitch(&chunk_groups, &chunks, &vbase, &tbase, &mut groups)
+    } else {
+        0
+    };
     Ok(RawSurface {
         positions,
         edges,

@@ -39,17 +39,34 @@ pub(super) struct Part {
     pub(super) leaf_vertices: Vec<u32>,
     pub(super) leaf_positions: Vec<Vec3>,
     pub(super) corners: Vec<[u32; 3]>,
-    /// Per mesh vertex: tag of the last leaf that listed it (its first
-    /// triangle position + 1) and its index in `leaf_vertices` there.
+    /// Per mesh vertex `first_vertex + i` of the part's vertex range: tag of
+    /// the last leaf that listed it (its first triangle position + 1) and
+    /// its index in `leaf_vertices` there.
     pub(super) seen: Vec<[u32; 2]>,
+    /// The least vertex id of the part's triangles.
+    pub(super) first_vertex: u32,
     /// Scratch of the counting sort: bucket starts, sorted ids.
     pub(super) buckets: Vec<u32>,
     pub(super) sorted: Vec<u32>,
 }
 
 impl Part {
-    /// An empty part for `n_triangles` triangles of a mesh of `n_vertices`.
-    pub(super) fn new(n_vertices: usize, n_triangles: usize) -> Part {
+    /// An empty part for the triangles `tris` of `mesh`: its vertex table
+    /// spans only the ids they use (a part of a marching-cubes surface
+    /// covers a slab of layers, so the parts' tables together are about
+    /// one table over the mesh's vertices, not one each).
+    pub(super) fn new(mesh: MeshView<'_>, tris: &[u32]) -> Part {
+        let (lo, hi) = tris
+            .iter()
+            .flat_map(|&t| mesh.triangles[t as usize])
+            .fold((u32::MAX, 0), |(lo, hi), v| (lo.min(v), hi.max(v)));
+        // No triangles: an empty range.
+        let (first_vertex, n_vertices) = if lo > hi {
+            (0, 0)
+        } else {
+            (lo, (hi - lo) as usize + 1)
+        };
+        let n_triangles = tris.len();
         Part {
             layers: Vec::new(),
             rows: Vec::new(),
@@ -58,6 +75,7 @@ impl Part {
             leaf_positions: Vec::with_capacity(n_triangles),
             corners: Vec::with_capacity(n_triangles),
             seen: vec![[0; 2]; n_vertices],
+            first_vertex,
             buckets: Vec::new(),
             sorted: Vec::new(),
         }
@@ -171,7 +189,7 @@ impl Part {
         let start = self.leaf_vertices.len();
         for &t in tris {
             for v in mesh.triangles[t as usize] {
-                let seen = &mut self.seen[v as usize];
+                let seen = &mut self.seen[(v - self.first_vertex) as usize];
                 if seen[0] != tag {
                     seen[0] = tag;
                     self.leaf_vertices.push(v);
@@ -181,16 +199,15 @@ impl Part {
         sort_nearly_sorted(&mut self.leaf_vertices[start..]);
         let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
-            self.seen[v as usize][1] = (start + i) as u32;
+            self.seen[(v - self.first_vertex) as usize][1] = (start + i) as u32;
             let p = mesh.positions[v as usize];
             self.leaf_positions.push(p);
             lo = lo.min(p.into());
             hi = hi.max(p.into());
         }
-        self.corners.extend(
-            tris.iter()
-                .map(|&t| mesh.triangles[t as usize].map(|v| self.seen[v as usize][1])),
-        );
+        self.corners.extend(tris.iter().map(|&t| {
+            mesh.triangles[t as usize].map(|v| self.seen[(v - self.first_vertex) as usize][1])
+        }));
         CellNode {
             x: 0,
             bbox: Aabb {

@@ -191,7 +191,7 @@ impl Forest {
         let parts: Vec<Part> = jobs
             .into_par_iter()
             .map(|(slice, runs)| {
-                let mut part = Part::new(n_vertices, slice.len());
+                let mut part = Part::new(mesh, slice);
                 let base = runs[0].start;
                 for r in runs {
                     part.layer(

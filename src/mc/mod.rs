@@ -465,20 +465,32 @@ fn boundary_edges(
         return out;
     }
     let [nx, ny, nz] = grid.dims;
-    let planes = |key: u64| -> u8 {
-        let (point, axis) = ((key / 3) as usize, (key % 3) as usize);
-        let c = [point % nx, (point / nx) % ny, point / (nx * ny)];
-        let d = [nx, ny, nz];
-        let mut m = 0u8;
-        for a in 0..3 {
-            if a != axis {
-                m |= u8::from(c[a] == 0) << (2 * a);
-                m |= u8::from(c[a] == d[a] - 1) << (2 * a + 1);
-            }
-        }
-        m
-    };
-    let mask: Vec<u8> = edges.par_iter().map(|&k| planes(k)).collect();
+    let d = [nx, ny, nz];
+    // Vertices come in point order, so consecutive keys mostly share a grid
+    // row: a key's row is decoded (two divisions) only when it changes.
+    let mask: Vec<u8> = edges
+        .par_chunks(FIGURE_CHUNK)
+        .flat_map_iter(|keys| {
+            // Points `row.0..row.0 + nx` form the current row, at (y, z) = row.1.
+            let mut row = (usize::MAX, [0usize; 2]);
+            keys.iter().map(move |&key| {
+                let (point, axis) = ((key / 3) as usize, (key % 3) as usize);
+                if !(row.0..row.0.saturating_add(nx)).contains(&point) {
+                    let q = point / nx;
+                    row = (q * nx, [q % ny, q / ny]);
+                }
+                let c = [point - row.0, row.1[0], row.1[1]];
+                let mut m = 0u8;
+                for a in 0..3 {
+                    if a != axis {
+                        m |= u8::from(c[a] == 0) << (2 * a);
+                        m |= u8::from(c[a] == d[a] - 1) << (2 * a + 1);
+                    }
+                }
+                m
+            })
+        })
+        .collect();
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
     for (t, &g) in mesh.triangles.iter().zip(groups) {
         for k in 0..3 {

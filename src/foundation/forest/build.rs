@@ -94,18 +94,26 @@ impl Part {
         self.sort_by_cell(cells, tris, run.z as usize * grid.layer, grid.layer);
         let row_start = self.rows.len() as u32;
         let mut lbox = Aabb::EMPTY;
+        let key_of = |i: usize| cells[tris[i] as usize];
         let mut i = 0;
         while i < tris.len() {
-            let row = cells[tris[i] as usize] as usize / grid.cx;
+            let row = key_of(i) as usize / grid.cx;
+            // Keys of the row: `row_start..row_end` (no division per triangle).
+            let row_start = (row * grid.cx) as u32;
+            let row_end = row_start + grid.cx as u32;
             let cell_start = self.cells.len() as u32;
             let mut rbox = Aabb::EMPTY;
-            while i < tris.len() && cells[tris[i] as usize] as usize / grid.cx == row {
-                let key = cells[tris[i] as usize];
-                let end = i + tris[i..].partition_point(|&t| cells[t as usize] == key);
+            while i < tris.len() && key_of(i) < row_end {
+                let key = key_of(i);
+                // A leaf holds a few dozen triangles: a linear scan.
+                let mut end = i + 1;
+                while end < tris.len() && key_of(end) == key {
+                    end += 1;
+                }
                 let leaf = self.leaf(mesh, &tris[i..end], run.start + i);
                 rbox = rbox.union(leaf.bbox);
                 self.cells.push(CellNode {
-                    x: (key as usize % grid.cx) as u32,
+                    x: key - row_start,
                     triangles: Span {
                         start: (run.start + i) as u32,
                         end: (run.start + end) as u32,

@@ -166,7 +166,12 @@ fn run() -> Result<(), Error> {
         "rows": rows,
         "peak_memory_512": memory,
     });
-    let path = out_dir.join("report.json");
+    // The smoke run keeps its report apart from a full run's.
+    let path = out_dir.join(if quick() {
+        "smoke-report.json"
+    } else {
+        "report.json"
+    });
     std::fs::write(&path, serde_json::to_string_pretty(&report)?)?;
     eprintln!("mc_peers: report {}", path.display());
     Ok(())

@@ -188,34 +188,32 @@ impl Part {
         tris.copy_from_slice(&self.sorted);
     }
 
-    /// Appends the leaf's distinct vertices (ascending) and its triangles'
-    /// corners; returns a leaf node holding its box and vertex span (the
-    /// box of the distinct vertices, which is that of the triangles).
-    /// `first` is the position of the leaf's first triangle in the order.
+    /// Appends the leaf's distinct vertices (in order of first use by its
+    /// triangles, with their positions) and its triangles' corners, in one
+    /// pass over the triangles; returns a leaf node holding its box and
+    /// vertex span (the box of the distinct vertices, which is that of the
+    /// triangles). `first` is the position of the leaf's first triangle in
+    /// the order.
     fn leaf(&mut self, mesh: MeshView<'_>, tris: &[u32], first: usize) -> CellNode {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
+        let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for &t in tris {
-            for v in mesh.triangles[t as usize] {
+            let mut corner = [0u32; 3];
+            for (c, v) in corner.iter_mut().zip(mesh.triangles[t as usize]) {
                 let seen = &mut self.seen[(v - self.first_vertex) as usize];
                 if seen[0] != tag {
-                    seen[0] = tag;
+                    *seen = [tag, self.leaf_vertices.len() as u32];
                     self.leaf_vertices.push(v);
+                    let p = mesh.positions[v as usize];
+                    self.leaf_positions.push(p);
+                    lo = lo.min(p.into());
+                    hi = hi.max(p.into());
                 }
+                *c = seen[1];
             }
+            self.corners.push(corner);
         }
-        sort_nearly_sorted(&mut self.leaf_vertices[start..]);
-        let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-        for (i, &v) in self.leaf_vertices[start..].iter().enumerate() {
-            self.seen[(v - self.first_vertex) as usize][1] = (start + i) as u32;
-            let p = mesh.positions[v as usize];
-            self.leaf_positions.push(p);
-            lo = lo.min(p.into());
-            hi = hi.max(p.into());
-        }
-        self.corners.extend(tris.iter().map(|&t| {
-            mesh.triangles[t as usize].map(|v| self.seen[(v - self.first_vertex) as usize][1])
-        }));
         CellNode {
             x: 0,
             bbox: Aabb {
@@ -229,25 +227,6 @@ impl Part {
             },
             next: u32::MAX,
         }
-    }
-}
-
-/// Sorts ascending, by insertion when short: a leaf's vertices arrive
-/// nearly in order (its triangles are in cell order and marching-cubes
-/// vertex ids follow the grid).
-fn sort_nearly_sorted(v: &mut [u32]) {
-    if v.len() > 128 {
-        v.sort_unstable();
-        return;
-    }
-    for i in 1..v.len() {
-        let x = v[i];
-        let mut j = i;
-        while j > 0 && v[j - 1] > x {
-            v[j] = v[j - 1];
-            j -= 1;
-        }
-        v[j] = x;
     }
 }
 

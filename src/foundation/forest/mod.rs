@@ -124,7 +124,9 @@ pub struct Forest {
     /// triangle's winding: a query evaluates each vertex of a leaf once and
     /// tests the leaf's triangles from a contiguous table.
     pub corners: Vec<[u32; 3]>,
-    /// Per leaf, its distinct mesh vertex ids, ascending.
+    /// Per leaf, its distinct mesh vertex ids, in order of first use by
+    /// the leaf's triangles (in `triangles` order, corners in winding
+    /// order).
     pub leaf_vertices: Vec<u32>,
     /// The positions of `leaf_vertices` (a copy, so that a query reads each
     /// leaf's vertices as one contiguous run instead of gathering them).

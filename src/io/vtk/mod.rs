@@ -23,6 +23,29 @@ use super::text::{Endian, Num, Scanner, clip};
 use crate::volume::VolumeData;
 use crate::{Error, Position, Result};
 
+/// Skips the lines of a `METADATA` block up to and including the first
+/// blank one (VTK 9 writes `INFORMATION` entries there).
+fn skip_metadata_lines(sc: &mut Scanner) {
+    while let Some((_, line)) = sc.line() {
+        if line.iter().all(u8::is_ascii_whitespace) {
+            break;
+        }
+    }
+}
+
+/// After the values of an ASCII array: the `METADATA` block that may
+/// follow it, skipped.
+fn skip_array_metadata(sc: &mut Scanner) -> Result<()> {
+    if sc
+        .peek()
+        .is_some_and(|t| t.eq_ignore_ascii_case(b"METADATA"))
+    {
+        sc.next("METADATA")?;
+        skip_metadata_lines(sc);
+    }
+    Ok(())
+}
+
 /// The data type named `name` (VTK legacy spelling, or a `vtktype*` name).
 fn vtk_type(sc: &Scanner, at: usize, name: &str) -> Result<Num> {
     Ok(match name.to_ascii_lowercase().as_str() {

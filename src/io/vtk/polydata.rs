@@ -19,7 +19,9 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::super::text::{Endian, Num, Scanner, clip, fan};
-use super::{field_name, header, scalars_header, vtk_type};
+use super::{
+    field_name, header, scalars_header, skip_array_metadata, skip_metadata_lines, vtk_type,
+};
 use crate::mesh::ScalarField;
 use crate::{Result, TriMesh};
 
@@ -199,11 +201,7 @@ impl Reader<'_> {
             "FIELD" => self.field(at),
             "METADATA" => {
                 self.sc.skip_line();
-                while let Some((_, line)) = self.sc.line() {
-                    if line.iter().all(u8::is_ascii_whitespace) {
-                        break;
-                    }
-                }
+                skip_metadata_lines(&mut self.sc);
                 Ok(())
             }
             _ => Err(self.sc.error(
@@ -455,18 +453,8 @@ impl Reader<'_> {
             if keep {
                 self.scalars.push(ScalarField { name, values });
             }
-            if self.binary.is_none()
-                && self
-                    .sc
-                    .peek()
-                    .is_some_and(|t| t.eq_ignore_ascii_case(b"METADATA"))
-            {
-                self.sc.next("METADATA")?;
-                while let Some((_, line)) = self.sc.line() {
-                    if line.iter().all(u8::is_ascii_whitespace) {
-                        break;
-                    }
-                }
+            if self.binary.is_none() {
+                skip_array_metadata(&mut self.sc)?;
             }
         }
         Ok(())

@@ -23,7 +23,7 @@ use super::super::saturating_product;
 use super::super::text::{Endian, Num, Scanner, clip};
 use super::{
     check_samples_budget, empty_samples, header, legacy_type_name, push_binary, push_text,
-    scalars_header, vtk_type,
+    scalars_header, skip_array_metadata, skip_metadata_lines, vtk_type,
 };
 use crate::volume::{IDENTITY_AXES, VolumeData};
 use crate::{Error, Result, Volume};
@@ -287,11 +287,7 @@ impl Reader<'_> {
             "FIELD" => self.field(),
             "METADATA" => {
                 self.sc.skip_line();
-                while let Some((_, line)) = self.sc.line() {
-                    if line.iter().all(u8::is_ascii_whitespace) {
-                        break;
-                    }
-                }
+                skip_metadata_lines(&mut self.sc);
                 Ok(())
             }
             _ => Err(self.sc.error(
@@ -362,18 +358,8 @@ impl Reader<'_> {
             self.end_header_line();
             self.note("FIELD", name);
             self.skip_values(aat, "field values", num, comps.saturating_mul(tuples))?;
-            if self.binary.is_none()
-                && self
-                    .sc
-                    .peek()
-                    .is_some_and(|t| t.eq_ignore_ascii_case(b"METADATA"))
-            {
-                self.sc.next("METADATA")?;
-                while let Some((_, line)) = self.sc.line() {
-                    if line.iter().all(u8::is_ascii_whitespace) {
-                        break;
-                    }
-                }
+            if self.binary.is_none() {
+                skip_array_metadata(&mut self.sc)?;
             }
         }
         Ok(())

@@ -52,6 +52,7 @@ pub mod render;
 pub mod tissue;
 pub mod vertex_normals;
 pub mod volume;
+pub mod volume_scan;
 pub mod voxel;
 
 pub use error::{Error, Position, Refusal, Result};

@@ -14,7 +14,7 @@ use super::{Global, ViewAxes};
 use crate::hull::{ConvexHull, CoplanarPolicy, HullOptions, HullSummary, Order};
 use crate::polyhedron::{Zkh, background_components};
 use crate::render::RenderOptions;
-use crate::voxel::{CandidateKind, Component, DigitalObject, Selection};
+use crate::voxel::{CandidateKind, Component, DigitalObject, ObjectFigures, Selection};
 
 /// Candidate voxels for hull vertices at voxel centres (§4.1.2–4.1.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -157,25 +157,6 @@ impl HullArgs {
     }
 }
 
-/// The report's `object` entry: voxels, boundary facets, inclusive voxel
-/// bounding box (source indices).
-#[derive(Debug, Serialize)]
-pub struct ObjectFigures {
-    voxels: u64,
-    boundary_facets: u64,
-    voxel_bbox: ([i64; 3], [i64; 3]),
-}
-
-impl ObjectFigures {
-    pub(super) fn of(object: &DigitalObject) -> Self {
-        ObjectFigures {
-            voxels: object.n_voxels(),
-            boundary_facets: object.n_boundary_facets(),
-            voxel_bbox: object.voxel_bbox(),
-        }
-    }
-}
-
 /// The report of `chisel hull`.
 #[derive(Debug, Serialize)]
 pub struct HullReport<'a> {
@@ -310,7 +291,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         volume: &args.volume,
         dims: volume.dims,
         selection: args.select.figures(),
-        object: ObjectFigures::of(&object),
+        object: object.figures(),
         candidates: Candidates {
             kind,
             count: candidates.len(),

@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::hull::{HullArgs, ObjectFigures, SelectArgs, SelectionFigures};
+use super::hull::{HullArgs, SelectArgs, SelectionFigures};
 use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes};
 use crate::gpu::Backend;
@@ -23,7 +23,7 @@ use crate::polyhedron::{
     PolyhedrizeOptions, Polyhedron, PolyhedronSummary, ZkhReport, polyhedrize,
 };
 use crate::render::RenderOptions;
-use crate::voxel::{BoundaryTopology, DigitalObject, marching_cubes_integers};
+use crate::voxel::{BoundaryTopology, DigitalObject, ObjectFigures, marching_cubes_integers};
 
 /// The report of `chisel polyhedrize`.
 #[derive(Debug, Serialize)]
@@ -327,7 +327,7 @@ pub fn run(global: &Global, args: &Args) -> anyhow::Result<()> {
         dims: volume.dims,
         slice: args.slice,
         selection: args.select.figures(),
-        object: ObjectFigures::of(&object),
+        object: object.figures(),
         topology,
         backend: backend.name(),
         adapter: gpu.as_ref().map(|g| g.describe()),

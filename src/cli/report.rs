@@ -1,35 +1,18 @@
-//! Reports: one typed serde struct per command ([`Report`]), printed with
-//! `--json`, written atomically with `--report`, shown as text otherwise —
-//! all through [`emit`] and [`write`]. Every report starts with its
-//! `schema`, `chisel.<command>/<version>`: the version goes up when a
-//! field changes meaning or goes away (new fields keep it).
+//! Printing and writing reports ([`crate::foundation::report`]): printed
+//! with `--json`, written atomically with `--report`, shown as text
+//! otherwise — all through [`emit`] and [`write`].
 
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
 use serde_json::Value;
 
-/// A command's report.
-pub trait Report: Serialize {
-    /// `chisel.<command>/<version>`.
-    const SCHEMA: &'static str;
-}
-
-/// A report with its schema as the first field.
-#[derive(Serialize)]
-struct Versioned<'a, R> {
-    schema: &'static str,
-    #[serde(flatten)]
-    report: &'a R,
-}
+pub use crate::foundation::report::Report;
+use crate::foundation::report::Versioned;
 
 /// The report as pretty JSON: its schema first, then the fields in the
 /// struct's order.
 pub fn to_json<R: Report>(report: &R) -> anyhow::Result<String> {
-    Ok(serde_json::to_string_pretty(&Versioned {
-        schema: R::SCHEMA,
-        report,
-    })?)
+    Ok(crate::foundation::report::to_json(report)?)
 }
 
 /// Writes `report` as pretty JSON to `path` (atomically).
@@ -88,10 +71,7 @@ pub fn emit<R: Report>(
     if json {
         println!("{}", to_json(report)?);
     } else if show == Show::Always {
-        let value = serde_json::to_value(Versioned {
-            schema: R::SCHEMA,
-            report,
-        })?;
+        let value = serde_json::to_value(Versioned::new(report))?;
         print!("{}", to_text(&value));
     }
     if let Some(path) = path {

@@ -7,13 +7,15 @@
 //!   the crate's spatial index (cutting, self-intersection, marching cubes);
 //! - [`exact`]: exact integer geometry (i64 vectors with i128 products, gcd,
 //!   orientation) and exact orientation signs of f64 points;
-//! - [`fs`]: atomic file writes and output path checks.
+//! - [`fs`]: atomic file writes and output path checks;
+//! - [`report`]: the typed JSON reports of operations (a schema each).
 
 pub mod aabb;
 pub mod alloc;
 pub mod exact;
 pub mod forest;
 pub mod fs;
+pub mod report;
 pub mod union_find;
 
 pub use aabb::Aabb;

@@ -20,6 +20,15 @@ use crate::volume::{Volume, VolumeData, analysis::label_6_connected};
 pub use corners::CandidateKind;
 pub use topology::BoundaryTopology;
 
+/// A digital object in figures: voxels, boundary facets (2-cells between
+/// S and its complement), inclusive voxel bounding box (source indices).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ObjectFigures {
+    pub voxels: u64,
+    pub boundary_facets: u64,
+    pub voxel_bbox: ([i64; 3], [i64; 3]),
+}
+
 /// Combinatorial coordinates of the centre of voxel `v` (voxel indices).
 pub fn voxel_centre(v: [i64; 3]) -> [i64; 3] {
     v.map(|c| 2 * c + 1)
@@ -242,6 +251,16 @@ impl DigitalObject {
     /// Number of voxels (3-cells) in S.
     pub fn n_voxels(&self) -> u64 {
         self.n_voxels
+    }
+
+    /// Voxels, boundary facets and voxel box: the `object` entry of the
+    /// hull, scan and polyhedrize reports.
+    pub fn figures(&self) -> ObjectFigures {
+        ObjectFigures {
+            voxels: self.n_voxels(),
+            boundary_facets: self.n_boundary_facets(),
+            voxel_bbox: self.voxel_bbox(),
+        }
     }
 
     /// Inclusive voxel-index bounding box of S in the source volume.

@@ -119,6 +119,10 @@ pub enum Error {
     #[error(transparent)]
     Refused(#[from] Refusal),
     /// A broken internal invariant: a bug in chisel, never the input's fault.
+    /// The caller stopped the operation (its progress callback said so,
+    /// or Ctrl-C in Python).
+    #[error("{what}: stopped by the caller")]
+    Cancelled { what: String },
     #[error("internal error (a bug in chisel, please report it): {0}")]
     Internal(String),
     /// An error inside one part of a larger input: `context` says which

@@ -192,3 +192,61 @@ pub(crate) fn select(instance: &wgpu::Instance, choice: &AdapterChoice) -> Resul
         },
     })
 }
+
+/// The adapters and the one a choice opens: `chisel info`,
+/// `chisel.gpu_info()`.
+#[derive(Debug, serde::Serialize)]
+pub struct InfoReport {
+    /// chisel's version.
+    chisel: &'static str,
+    /// `--adapter` / `CHISEL_ADAPTER` as given.
+    requested: String,
+    adapters: Vec<AdapterReport>,
+    chosen: Chosen,
+}
+
+impl crate::foundation::report::Report for InfoReport {
+    const SCHEMA: &'static str = "chisel.info/1";
+}
+
+/// The adapter chosen, or why none could be opened.
+#[derive(Debug, serde::Serialize)]
+#[serde(untagged)]
+pub enum Chosen {
+    Opened {
+        name: String,
+        description: String,
+        features: super::GpuFeatures,
+        max_binding_bytes: u64,
+    },
+    Failed {
+        error: String,
+    },
+}
+
+/// The [`InfoReport`] of `choice`, and the device it opened (or why not).
+pub fn info(choice: AdapterChoice) -> (InfoReport, Result<super::Gpu>) {
+    let instance = super::instance();
+    let adapters = adapter_reports(&instance);
+    let chosen = super::Gpu::with_options(super::GpuOptions {
+        adapter: Some(choice.clone()),
+        ..Default::default()
+    });
+    let report = InfoReport {
+        chisel: env!("CARGO_PKG_VERSION"),
+        requested: choice.to_string(),
+        adapters,
+        chosen: match &chosen {
+            Ok(gpu) => Chosen::Opened {
+                name: gpu.info.name.clone(),
+                description: gpu.describe(),
+                features: gpu.features,
+                max_binding_bytes: gpu.max_binding_bytes(),
+            },
+            Err(e) => Chosen::Failed {
+                error: e.to_string(),
+            },
+        },
+    };
+    (report, chosen)
+}

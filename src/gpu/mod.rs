@@ -16,7 +16,7 @@ mod registry;
 mod spec;
 mod timing;
 
-pub use adapter::{AdapterChoice, AdapterReport, adapter_reports};
+pub use adapter::{AdapterChoice, AdapterReport, Chosen, InfoReport, adapter_reports, info};
 pub use backend::Backend;
 pub use buffer::{GpuArray, Staged, UniformBuffer, chunk_ranges, row_chunks};
 pub use pass::{Binder, BoundKernel};

@@ -1,0 +1,32 @@
+//! `chisel._chisel`: the engine's operations on numpy arrays, with the GIL
+//! released while they run. The Python package (`python/chisel/`) wraps
+//! these functions in dataclasses, reports and the Dask batch; users call
+//! that package, not this module (docs/python.md).
+//!
+//! Axis order: a volume crosses this boundary as a C-ordered numpy array of
+//! shape `(nz, ny, nx)` — `array[k, j, i]` is the engine's sample
+//! `(x = i, y = j, z = k)`, x fastest in memory — with `spacing`, `origin`
+//! and the rows of `axes` in the engine's (x, y, z) order.
+
+mod arrays;
+mod errors;
+mod gpu;
+mod io;
+mod mc;
+mod scan;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _chisel(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(gpu::gpu_info, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(io::read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(io::write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(mc::marching_cubes, m)?)?;
+    m.add_function(wrap_pyfunction!(scan::scan, m)?)?;
+    m.add_function(wrap_pyfunction!(scan::scan_file, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,208 @@
+//! The large-volume hull scan (`chisel scan`) of a numpy volume or of a
+//! file: the report as JSON, equal to `chisel scan --json` but for
+//! `timings_s`. `progress(done, total)` runs after each structure, with
+//! the GIL held; an exception it raises, or Ctrl-C, stops the scan.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use chisel::foundation::report::to_json;
+use chisel::hull::{CoplanarPolicy, HullOptions, Order};
+use chisel::io::ReadOptions;
+use chisel::volume::Volume;
+use chisel::volume_scan::{ScanInput, ScanOptions};
+use chisel::voxel::CandidateKind;
+use chisel::{Error, Result};
+use pyo3::prelude::*;
+
+use crate::arrays::{Frame, volume_from};
+
+/// The options as the command line names them.
+fn options(
+    level: Option<f64>,
+    labels: bool,
+    min_voxels: u64,
+    corners: &str,
+    vertices: &str,
+    coplanar: &str,
+    order: &str,
+) -> Result<ScanOptions> {
+    let level = match (level, labels) {
+        (Some(t), false) => Some(t),
+        (None, true) => None,
+        _ => {
+            return Err(Error::param(
+                "level, labels",
+                format!("{level:?}, {labels}"),
+                "give a level or labels=True, not both",
+            ));
+        }
+    };
+    let candidates = match (vertices, corners) {
+        ("corners", _) => CandidateKind::ConvexCorners,
+        ("voxels", "local6") => CandidateKind::Local6,
+        ("voxels", "local18") => CandidateKind::Local18,
+        ("voxels", "local26") => CandidateKind::Local26,
+        ("voxels", "convex") => CandidateKind::ConvexVoxels,
+        ("voxels", other) => {
+            return Err(Error::unknown(
+                "corners",
+                other,
+                ["local6", "local18", "local26", "convex"],
+            ));
+        }
+        (other, _) => return Err(Error::unknown("vertices", other, ["voxels", "corners"])),
+    };
+    let coplanar = match coplanar {
+        "merge" => CoplanarPolicy::Merge,
+        "visible" => CoplanarPolicy::Visible,
+        "invisible" => CoplanarPolicy::Invisible,
+        other => {
+            return Err(Error::unknown(
+                "coplanar",
+                other,
+                ["merge", "visible", "invisible"],
+            ));
+        }
+    };
+    let order = match order {
+        "furthest" => Order::Furthest,
+        "extreme" => Order::ExtremeFirst,
+        "lexicographic" => Order::Lexicographic,
+        other => {
+            return Err(Error::unknown(
+                "order",
+                other,
+                ["furthest", "extreme", "lexicographic"],
+            ));
+        }
+    };
+    Ok(ScanOptions {
+        level,
+        min_voxels,
+        candidates,
+        hull: HullOptions { coplanar, order },
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+/// Runs the scan with the GIL released, calling `progress` (and checking
+/// for Ctrl-C) with the GIL after each structure.
+fn run(
+    py: Python<'_>,
+    path: &Path,
+    volume: Result<(Volume, f64)>,
+    options: Result<ScanOptions>,
+    backend: &str,
+    adapter: Option<&str>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<String> {
+    let mut stopped: Option<PyErr> = None;
+    let result = py.detach(|| -> Result<String> {
+        let (volume, read_s) = volume?;
+        let options = options?;
+        let t = Instant::now();
+        let gpu = crate::gpu::backend(backend, adapter)?;
+        let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
+        let input = ScanInput {
+            path,
+            read_s,
+            gpu: gpu.as_deref(),
+            adapter_s,
+        };
+        let report = chisel::volume_scan::scan(&volume, input, &options, &mut |done, total| {
+            Python::attach(|py| {
+                let outcome = py.check_signals().and_then(|()| match &progress {
+                    Some(f) => f.call1(py, (done, total)).map(|_| ()),
+                    None => Ok(()),
+                });
+                outcome.map_err(|e| {
+                    stopped = Some(e);
+                    Error::Cancelled {
+                        what: format!("{}: scan", path.display()),
+                    }
+                })
+            })
+        })?;
+        to_json(&report)
+    });
+    match (result, stopped) {
+        (Ok(json), _) => Ok(json),
+        (Err(_), Some(e)) => Err(e),
+        (Err(e), None) => Err(crate::errors::to_py(e)),
+    }
+}
+
+/// Scans a numpy volume; `name` stands for its path in the report.
+#[pyfunction]
+#[pyo3(signature = (array, frame, name, level = None, labels = false, min_voxels = 1, corners = "local26", vertices = "voxels", coplanar = "merge", order = "furthest", backend = "cpu", adapter = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn scan(
+    py: Python<'_>,
+    array: &Bound<'_, PyAny>,
+    frame: Frame,
+    name: PathBuf,
+    level: Option<f64>,
+    labels: bool,
+    min_voxels: u64,
+    corners: &str,
+    vertices: &str,
+    coplanar: &str,
+    order: &str,
+    backend: &str,
+    adapter: Option<String>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<String> {
+    let volume = volume_from(array, frame)?;
+    let options = options(
+        level, labels, min_voxels, corners, vertices, coplanar, order,
+    );
+    run(
+        py,
+        &name,
+        Ok((volume, 0.0)),
+        options,
+        backend,
+        adapter.as_deref(),
+        progress,
+    )
+}
+
+/// Reads and scans a volume file (a DICOM directory with `series`): the
+/// report of `chisel scan PATH --json` with these options.
+#[pyfunction]
+#[pyo3(signature = (path, level = None, labels = false, min_voxels = 1, corners = "local26", vertices = "voxels", coplanar = "merge", order = "furthest", backend = "cpu", adapter = None, series = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn scan_file(
+    py: Python<'_>,
+    path: PathBuf,
+    level: Option<f64>,
+    labels: bool,
+    min_voxels: u64,
+    corners: &str,
+    vertices: &str,
+    coplanar: &str,
+    order: &str,
+    backend: &str,
+    adapter: Option<String>,
+    series: Option<String>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<String> {
+    let options = options(
+        level, labels, min_voxels, corners, vertices, coplanar, order,
+    );
+    let volume = py.detach(|| {
+        let t = Instant::now();
+        chisel::io::read_volume_with(&path, &ReadOptions { series })
+            .map(|(v, _)| (v, t.elapsed().as_secs_f64()))
+    });
+    run(
+        py,
+        &path,
+        volume,
+        options,
+        backend,
+        adapter.as_deref(),
+        progress,
+    )
+}

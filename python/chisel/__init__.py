@@ -246,6 +246,7 @@ __all__ = [
     "marching_cubes",
     "scan",
     "scan_file",
+    "batch",
     "ChiselError",
     "IoError",
     "FormatError",
@@ -256,3 +257,6 @@ __all__ = [
     "CancelledError",
     "InternalError",
 ]
+
+# `chisel.batch`: scans over many files (Dask).
+from . import batch  # noqa: E402

@@ -24,9 +24,11 @@ fn samples<T: Element + Copy>(array: &Bound<'_, PyArray3<T>>) -> (Vec<T>, [usize
     let ro = array.readonly();
     let shape = ro.shape();
     let dims = [shape[2], shape[1], shape[0]];
+    // `as_slice` also takes an F-ordered buffer (memory order, z fastest):
+    // only a C-ordered one is the engine's order.
     let data = match ro.as_slice() {
-        Ok(slice) => slice.to_vec(),
-        Err(_) => ro.as_array().iter().copied().collect(),
+        Ok(slice) if ro.is_c_contiguous() => slice.to_vec(),
+        _ => ro.as_array().iter().copied().collect(),
     };
     (data, dims)
 }

@@ -1,0 +1,64 @@
+"""chisel.batch: one Dask task per volume on a LocalCluster of 2 worker
+processes over 9 volumes (the shared CT, MR, label and 2-D images plus
+four generated phantoms in four formats) and one broken file: results
+equal the serial loop's and the command line's, in input order."""
+
+import pytest
+
+import chisel
+from conftest import phantoms
+
+OPTIONS = dict(level=5, min_voxels=20)
+
+
+def without_timings(report):
+    return {k: v for k, v in report.items() if k != "timings_s"}
+
+
+@pytest.fixture(scope="module")
+def paths(tmp_path_factory):
+    from conftest import DATA, need
+
+    shared = [
+        need(DATA / n)
+        for n in (
+            "headsq/quarter.nhdr",
+            "froggy/frogtissue.mhd",
+            "HeadMRVolume.mhd",
+            "foot/foot.mha",
+        )
+    ]
+    folder = tmp_path_factory.mktemp("phantoms")
+    broken = folder / "broken.mha"
+    broken.write_text("ObjectType = Image\nNDims = 3\nDimSize = 4 4\n")
+    made = phantoms(folder)
+    return shared[:2] + [broken] + shared[2:] + made
+
+
+def test_serial_batch_reports_every_file_in_order(paths, cli):
+    reports = chisel.batch.scan(paths, **OPTIONS)
+    assert [r["volume"] for r in reports] == [str(p) for p in paths]
+    failed = [r for r in reports if "error" in r]
+    assert len(failed) == 1 and failed[0]["volume"].endswith("broken.mha")
+    assert failed[0]["error"]["type"] == "FormatError"
+    assert "line 4: expected an `ElementDataFile" in failed[0]["error"]["message"]
+    # Each report is what `chisel scan PATH --json` prints for that file.
+    for path, report in zip(paths[:2], reports[:2]):
+        theirs = cli("scan", path, "--level", "5", "--min-voxels", "20", "--backend", "cpu")
+        assert without_timings(report) == without_timings(theirs)
+    table = chisel.batch.table(reports)
+    rows = table.to_dict("records") if hasattr(table, "to_dict") else table
+    assert sum(isinstance(r["error"], str) for r in rows) == 1
+    assert len(rows) == 1 + sum(len(r["rows"]) for r in reports if "rows" in r)
+
+
+def test_local_cluster_equals_the_serial_loop(paths):
+    distributed = pytest.importorskip("distributed")
+    serial = chisel.batch.scan(paths, **OPTIONS)
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        assert len(client.scheduler_info()["workers"]) == 2
+        parallel = chisel.batch.scan(paths, client=client, **OPTIONS)
+    assert [without_timings(r) for r in parallel] == [without_timings(r) for r in serial]
+    assert sum("rows" in r for r in parallel) == len(paths) - 1

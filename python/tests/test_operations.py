@@ -130,3 +130,43 @@ def test_the_gil_is_released_while_the_engine_works(data):
     # With the GIL held the spinning thread could not count while the
     # engine ran; released, it counts many times.
     assert during > 1000, during
+
+
+def test_ctrl_c_stops_a_scan_between_structures(data):
+    import _thread
+
+    path = data("froggy/frogtissue.mhd")
+    seen = []
+
+    def progress(done, total):
+        seen.append(done)
+        if done == 1:
+            _thread.interrupt_main()  # what Ctrl-C does: SIGINT pending in the main thread
+
+    with pytest.raises(KeyboardInterrupt):
+        chisel.scan_file(path, labels=True, min_voxels=500, progress=progress)
+    # Stopped at the check after the structure the signal arrived in.
+    assert seen == [1] or seen == [1, 2], seen
+
+
+def test_the_readme_example_runs_as_written(tmp_path, data):
+    import os
+    import re
+    import subprocess
+    import sys
+
+    from conftest import DATA, REPO
+
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## Python") :]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    # The example's paths are relative to the repository root: ../shared/data.
+    cwd = tmp_path / "repo"
+    cwd.mkdir()
+    (tmp_path / "shared").symlink_to(DATA.parent, target_is_directory=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=cwd, capture_output=True, text=True, env=os.environ
+    )
+    assert out.returncode == 0, out.stderr
+    assert (cwd / "bone.ply").exists()
+    assert "(39420, 3) 76" in out.stdout

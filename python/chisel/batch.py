@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from typing import Iterable, List, Optional
 
-from . import scan_file
+from .hulls import scan_file
 from .errors import ChiselError
 
 GPU_RESOURCE = "GPU"

@@ -2,12 +2,12 @@
 //! sample type the engine reads, meshes as `float32[N, 3]` vertices and
 //! `uint32[M, 3]` triangles. Outputs hand their buffers to numpy (no copy).
 
-use chisel::volume::{Space, Volume, VolumeData};
+use chisel::volume::{Samples, Space, Volume, VolumeData, VolumeView};
 use chisel::{Error, TriMesh};
 use numpy::ndarray::Array3;
 use numpy::{
     Element, IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2,
-    PyUntypedArrayMethods,
+    PyReadonlyArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -19,53 +19,161 @@ use crate::errors::IntoPy;
 pub type Frame = ([f64; 3], [f64; 3], [[f64; 3]; 3], Option<String>);
 
 /// The samples of a 3-D array in the engine's order (x fastest): the
-/// buffer itself when the array is C-contiguous, else one copy in C order.
-fn samples<T: Element + Copy>(array: &Bound<'_, PyArray3<T>>) -> (Vec<T>, [usize; 3]) {
-    let ro = array.readonly();
-    let shape = ro.shape();
-    let dims = [shape[2], shape[1], shape[0]];
-    // `as_slice` also takes an F-ordered buffer (memory order, z fastest):
-    // only a C-ordered one is the engine's order.
-    let data = match ro.as_slice() {
-        Ok(slice) if ro.is_c_contiguous() => slice.to_vec(),
-        _ => ro.as_array().iter().copied().collect(),
-    };
-    (data, dims)
+/// array itself, read in place, when it is C-ordered, else one copy in C
+/// order (F-ordered arrays, strided views).
+#[derive(Debug)]
+enum Buf<'py, T: Element> {
+    InPlace(PyReadonlyArray3<'py, T>),
+    Copied(Vec<T>),
 }
 
-/// The engine's volume of a numpy array of shape `(nz, ny, nx)`.
-pub fn volume_from(array: &Bound<'_, PyAny>, frame: Frame) -> PyResult<Volume> {
-    macro_rules! try_type {
-        ($t:ty, $variant:ident) => {
-            if let Ok(a) = array.cast::<PyArray3<$t>>() {
-                let (data, dims) = samples(a);
-                return build(dims, VolumeData::$variant(data), frame);
-            }
+impl<'py, T: Element + Copy> Buf<'py, T> {
+    fn of(array: &Bound<'py, PyArray3<T>>) -> Self {
+        let ro = array.readonly();
+        // `as_slice` also takes an F-ordered buffer (memory order, z
+        // fastest): only a C-ordered one is the engine's order.
+        if ro.is_c_contiguous() && ro.as_slice().is_ok() {
+            Buf::InPlace(ro)
+        } else {
+            Buf::Copied(ro.as_array().iter().copied().collect())
+        }
+    }
+
+    /// The samples; empty only if the array changed layout since (then
+    /// the volume's sample count check fails, with an error).
+    fn slice(&self) -> &[T] {
+        match self {
+            Buf::InPlace(a) => a.as_slice().unwrap_or(&[]),
+            Buf::Copied(v) => v,
+        }
+    }
+
+    fn into_vec(self) -> Vec<T> {
+        match self {
+            Buf::InPlace(a) => a.as_slice().map(<[T]>::to_vec).unwrap_or_default(),
+            Buf::Copied(v) => v,
+        }
+    }
+}
+
+/// A numpy volume held for the length of a call: its samples (in place
+/// where the layout allows), dims and frame.
+#[derive(Debug)]
+pub struct HeldVolume<'py> {
+    dims: [usize; 3],
+    frame: Frame,
+    data: Held<'py>,
+}
+
+#[derive(Debug)]
+enum Held<'py> {
+    U8(Buf<'py, u8>),
+    I8(Buf<'py, i8>),
+    U16(Buf<'py, u16>),
+    I16(Buf<'py, i16>),
+    U32(Buf<'py, u32>),
+    I32(Buf<'py, i32>),
+    F32(Buf<'py, f32>),
+    F64(Buf<'py, f64>),
+}
+
+impl<'py> HeldVolume<'py> {
+    /// Holds a numpy array of shape `(nz, ny, nx)` and its frame.
+    pub fn of(array: &Bound<'py, PyAny>, frame: Frame) -> PyResult<Self> {
+        macro_rules! try_type {
+            ($t:ty, $variant:ident) => {
+                if let Ok(a) = array.cast::<PyArray3<$t>>() {
+                    let shape = a.shape();
+                    return Ok(HeldVolume {
+                        dims: [shape[2], shape[1], shape[0]],
+                        frame,
+                        data: Held::$variant(Buf::of(a)),
+                    });
+                }
+            };
+        }
+        try_type!(u8, U8);
+        try_type!(i8, I8);
+        try_type!(u16, U16);
+        try_type!(i16, I16);
+        try_type!(u32, U32);
+        try_type!(i32, I32);
+        try_type!(f32, F32);
+        try_type!(f64, F64);
+        if let Ok(a) = array.cast::<PyArray3<bool>>() {
+            let shape = a.shape();
+            let data = a
+                .readonly()
+                .as_array()
+                .iter()
+                .map(|&b| u8::from(b))
+                .collect();
+            return Ok(HeldVolume {
+                dims: [shape[2], shape[1], shape[0]],
+                frame,
+                data: Held::U8(Buf::Copied(data)),
+            });
+        }
+        let described = array
+            .getattr("dtype")
+            .map(|d| format!("an array of {d} with shape {}", shape_of(array)))
+            .unwrap_or_else(|_| format!("a {}", array.get_type()));
+        Err(crate::errors::to_py(Error::param(
+            "array",
+            described,
+            "a volume is a 3-D numpy array (nz, ny, nx) of bool, uint8, int8, uint16, int16, \
+             uint32, int32, float32 or float64",
+        )))
+    }
+
+    /// The samples as the engine's borrowed volume, checked as
+    /// [`Volume::new`] and [`Volume::with_frame`] check.
+    pub fn view(&self) -> PyResult<VolumeView<'_>> {
+        let (spacing, origin, axes, space) = &self.frame;
+        let samples = match &self.data {
+            Held::U8(b) => Samples::U8(b.slice()),
+            Held::I8(b) => Samples::I8(b.slice()),
+            Held::U16(b) => Samples::U16(b.slice()),
+            Held::I16(b) => Samples::I16(b.slice()),
+            Held::U32(b) => Samples::U32(b.slice()),
+            Held::I32(b) => Samples::I32(b.slice()),
+            Held::F32(b) => Samples::F32(b.slice()),
+            Held::F64(b) => Samples::F64(b.slice()),
         };
+        VolumeView::new(
+            self.dims,
+            *spacing,
+            *origin,
+            *axes,
+            space_of(space)?,
+            samples,
+        )
+        .py_err()
     }
-    try_type!(u8, U8);
-    try_type!(i8, I8);
-    try_type!(u16, U16);
-    try_type!(i16, I16);
-    try_type!(u32, U32);
-    try_type!(i32, I32);
-    try_type!(f32, F32);
-    try_type!(f64, F64);
-    if let Ok(a) = array.cast::<PyArray3<bool>>() {
-        let (data, dims) = samples(a);
-        let data = data.into_iter().map(u8::from).collect();
-        return build(dims, VolumeData::U8(data), frame);
+
+    /// The engine's owned volume (a copy of samples held in place).
+    pub fn into_volume(self) -> PyResult<Volume> {
+        let data = match self.data {
+            Held::U8(b) => VolumeData::U8(b.into_vec()),
+            Held::I8(b) => VolumeData::I8(b.into_vec()),
+            Held::U16(b) => VolumeData::U16(b.into_vec()),
+            Held::I16(b) => VolumeData::I16(b.into_vec()),
+            Held::U32(b) => VolumeData::U32(b.into_vec()),
+            Held::I32(b) => VolumeData::I32(b.into_vec()),
+            Held::F32(b) => VolumeData::F32(b.into_vec()),
+            Held::F64(b) => VolumeData::F64(b.into_vec()),
+        };
+        let (spacing, origin, axes, space) = self.frame;
+        let space = space_of(&space)?;
+        Volume::new(self.dims, spacing, origin, data)
+            .and_then(|v| v.with_frame(axes, space))
+            .py_err()
     }
-    let described = array
-        .getattr("dtype")
-        .map(|d| format!("an array of {d} with shape {}", shape_of(array)))
-        .unwrap_or_else(|_| format!("a {}", array.get_type()));
-    Err(crate::errors::to_py(Error::param(
-        "array",
-        described,
-        "a volume is a 3-D numpy array (nz, ny, nx) of bool, uint8, int8, uint16, int16, \
-         uint32, int32, float32 or float64",
-    )))
+}
+
+/// The engine's owned volume of a numpy array of shape `(nz, ny, nx)`.
+pub fn volume_from(array: &Bound<'_, PyAny>, frame: Frame) -> PyResult<Volume> {
+    HeldVolume::of(array, frame)?.into_volume()
 }
 
 fn shape_of(array: &Bound<'_, PyAny>) -> String {
@@ -75,23 +183,17 @@ fn shape_of(array: &Bound<'_, PyAny>) -> String {
         .unwrap_or_else(|_| "?".into())
 }
 
-fn build(dims: [usize; 3], data: VolumeData, frame: Frame) -> PyResult<Volume> {
-    let (spacing, origin, axes, space) = frame;
-    let space = match space.as_deref() {
-        None => None,
-        Some("LPS") => Some(Space::Lps),
-        Some("RAS") => Some(Space::Ras),
-        Some(other) => {
-            return Err(crate::errors::to_py(Error::unknown(
-                "space",
-                other,
-                ["LPS", "RAS"],
-            )));
-        }
-    };
-    Volume::new(dims, spacing, origin, data)
-        .and_then(|v| v.with_frame(axes, space))
-        .py_err()
+fn space_of(space: &Option<String>) -> PyResult<Option<Space>> {
+    match space.as_deref() {
+        None => Ok(None),
+        Some("LPS") => Ok(Some(Space::Lps)),
+        Some("RAS") => Ok(Some(Space::Ras)),
+        Some(other) => Err(crate::errors::to_py(Error::unknown(
+            "space",
+            other,
+            ["LPS", "RAS"],
+        ))),
+    }
 }
 
 /// A volume as `(array, spacing, origin, axes, space)`; the array owns

@@ -9,11 +9,17 @@
 //! and the rows of `axes` in the engine's (x, y, z) order.
 
 mod arrays;
+mod cut;
 mod errors;
 mod gpu;
+mod hull;
 mod io;
+mod json;
 mod mc;
+mod options;
 mod scan;
+mod stats;
+mod tissue;
 
 use pyo3::prelude::*;
 
@@ -28,5 +34,11 @@ fn _chisel(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mc::marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(scan::scan, m)?)?;
     m.add_function(wrap_pyfunction!(scan::scan_file, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::volume_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::mesh_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(hull::hull, m)?)?;
+    m.add_function(wrap_pyfunction!(hull::polyhedrize, m)?)?;
+    m.add_function(wrap_pyfunction!(cut::cut, m)?)?;
+    m.add_function(wrap_pyfunction!(tissue::relax, m)?)?;
     Ok(())
 }

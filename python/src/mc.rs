@@ -7,7 +7,7 @@ use chisel::{Error, Result};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use crate::arrays::{Frame, mesh_to, volume_from};
+use crate::arrays::{Frame, HeldVolume, mesh_to};
 use crate::errors::IntoPy;
 
 /// `(vertices, triangles, triangle_groups or None, groups as JSON)`.
@@ -45,7 +45,9 @@ pub fn marching_cubes<'py>(
         )),
     }
     .py_err()?;
-    let volume = volume_from(array, frame)?;
+    // A C-ordered array is read in place, not copied.
+    let held = HeldVolume::of(array, frame)?;
+    let volume = held.view()?;
     let surface = py
         .detach(|| -> Result<_> {
             let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
@@ -54,7 +56,7 @@ pub fn marching_cubes<'py>(
                 close_border,
                 mesh_only: !groups,
             };
-            chisel::mc::marching_cubes(&volume, iso, &options, backend)
+            chisel::mc::marching_cubes(volume, iso, &options, backend)
         })
         .py_err()?;
     let figures = serde_json::to_string(&surface.groups)

@@ -7,25 +7,21 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use chisel::foundation::report::to_json;
-use chisel::hull::{CoplanarPolicy, HullOptions, Order};
 use chisel::io::ReadOptions;
 use chisel::volume::Volume;
 use chisel::volume_scan::{ScanInput, ScanOptions};
-use chisel::voxel::CandidateKind;
 use chisel::{Error, Result};
 use pyo3::prelude::*;
 
 use crate::arrays::{Frame, volume_from};
+use crate::options::HullArgs;
 
 /// The options as the command line names them.
 fn options(
     level: Option<f64>,
     labels: bool,
     min_voxels: u64,
-    corners: &str,
-    vertices: &str,
-    coplanar: &str,
-    order: &str,
+    hull: HullArgs<'_>,
 ) -> Result<ScanOptions> {
     let level = match (level, labels) {
         (Some(t), false) => Some(t),
@@ -38,54 +34,15 @@ fn options(
             ));
         }
     };
-    let candidates = match (vertices, corners) {
-        ("corners", _) => CandidateKind::ConvexCorners,
-        ("voxels", "local6") => CandidateKind::Local6,
-        ("voxels", "local18") => CandidateKind::Local18,
-        ("voxels", "local26") => CandidateKind::Local26,
-        ("voxels", "convex") => CandidateKind::ConvexVoxels,
-        ("voxels", other) => {
-            return Err(Error::unknown(
-                "corners",
-                other,
-                ["local6", "local18", "local26", "convex"],
-            ));
-        }
-        (other, _) => return Err(Error::unknown("vertices", other, ["voxels", "corners"])),
-    };
-    let coplanar = match coplanar {
-        "merge" => CoplanarPolicy::Merge,
-        "visible" => CoplanarPolicy::Visible,
-        "invisible" => CoplanarPolicy::Invisible,
-        other => {
-            return Err(Error::unknown(
-                "coplanar",
-                other,
-                ["merge", "visible", "invisible"],
-            ));
-        }
-    };
-    let order = match order {
-        "furthest" => Order::Furthest,
-        "extreme" => Order::ExtremeFirst,
-        "lexicographic" => Order::Lexicographic,
-        other => {
-            return Err(Error::unknown(
-                "order",
-                other,
-                ["furthest", "extreme", "lexicographic"],
-            ));
-        }
-    };
+    let (candidates, hull) = hull.parse()?;
     Ok(ScanOptions {
         level,
         min_voxels,
         candidates,
-        hull: HullOptions { coplanar, order },
+        hull,
     })
 }
 
-#[allow(clippy::too_many_arguments)]
 /// Runs the scan with the GIL released, calling `progress` (and checking
 /// for Ctrl-C) with the GIL after each structure.
 fn run(
@@ -154,9 +111,13 @@ pub fn scan(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
     let volume = volume_from(array, frame)?;
-    let options = options(
-        level, labels, min_voxels, corners, vertices, coplanar, order,
-    );
+    let hull = HullArgs {
+        corners,
+        vertices,
+        coplanar,
+        order,
+    };
+    let options = options(level, labels, min_voxels, hull);
     run(
         py,
         &name,
@@ -188,9 +149,13 @@ pub fn scan_file(
     series: Option<String>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let options = options(
-        level, labels, min_voxels, corners, vertices, coplanar, order,
-    );
+    let hull = HullArgs {
+        corners,
+        vertices,
+        coplanar,
+        order,
+    };
+    let options = options(level, labels, min_voxels, hull);
     let volume = py.detach(|| {
         let t = Instant::now();
         chisel::io::read_volume_with(&path, &ReadOptions { series })

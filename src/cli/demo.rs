@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use super::Global;
 use super::relax::{
-    BoneCutFigures, Crossings, Job, NetworkFigures, Overshoot, SkinSpline, before_mesh,
-    bone_before_after, run_job, skin_spline, write_preview,
+    Crossings, NetworkFigures, Overshoot, SkinSpline, before_mesh, bone_before_after, run_job,
+    skin_spline, write_preview,
 };
 use super::report::{Report, Show};
 use glam::Vec3;
@@ -28,11 +28,11 @@ use crate::gpu::Backend;
 use crate::gpu::GpuFeatures;
 use crate::mc::McOptions;
 use crate::render::{Facing, View};
-use crate::tissue::RelaxReport;
 use crate::tissue::ct::CtFigures;
 use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, Stiffness};
 use crate::tissue::phantom::{ct_demo_plan, ct_head_phantom};
+use crate::tissue::{BoneCutFigures, Job, RelaxReport};
 use crate::tissue::{CtLayers, CtParams, Fragments, NetworkParams, RelaxOptions, Solver};
 
 /// Arguments of `chisel demo`.

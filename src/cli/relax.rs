@@ -8,15 +8,11 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use std::collections::BTreeMap;
-
 use serde::Serialize;
 
 use super::report::{Report, ReportArgs, Show};
 use super::{BackendChoice, Global, ViewAxes, vec3_arg};
-use crate::cut::CutStats;
 use crate::tissue::ct::CtFigures;
-use crate::tissue::fragments::PieceInfo;
 use glam::Vec3;
 
 use crate::gpu::Backend;
@@ -26,8 +22,8 @@ use crate::tissue::ct::{CT_BENDING, CT_SUBCUTIS_DEPTH};
 use crate::tissue::network::{Material, SpringClass, Stiffness};
 use crate::tissue::stepper::bone_displacements;
 use crate::tissue::{
-    CtParams, Dynamics, Fragments, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver,
-    SpringNetwork, Status, cut_bone, layers_from_ct,
+    BoneCutFigures, CtParams, Dynamics, Fragments, Job, NetworkParams, Plan, RelaxOptions,
+    RelaxReport, Solver, SpringNetwork, Status, layers_from_ct,
 };
 
 /// Arguments of `chisel relax`.
@@ -132,61 +128,6 @@ pub struct Args {
     report: ReportArgs,
 }
 
-/// A relaxation's inputs, ready to run.
-pub struct Job {
-    pub skin: TriMesh,
-    /// The bone mesh after the plan's cuts (`None`: the scaled skin).
-    pub bone: Option<TriMesh>,
-    pub network: SpringNetwork,
-    pub plan: Plan,
-    pub fragments: Fragments,
-    /// What the plan's cuts did (`None` without cuts).
-    pub cut: Option<BoneCutFigures>,
-}
-
-impl Job {
-    /// Cuts `bone` with the plan's knives (fragments named after the cuts,
-    /// merged with `fragments`) and builds the network over the result.
-    pub fn build(
-        skin: TriMesh,
-        bone: Option<TriMesh>,
-        plan: Plan,
-        mut fragments: Fragments,
-        params: &NetworkParams,
-    ) -> anyhow::Result<Job> {
-        let (bone, cut) = match (bone, plan.cuts.is_empty()) {
-            (bone, true) => (bone, None),
-            (None, false) => anyhow::bail!(
-                "the plan cuts the bone ({} `[[cut]]`), which needs a bone mesh (--bone-mesh or --ct)",
-                plan.cuts.len()
-            ),
-            (Some(b), false) => {
-                let cut = cut_bone(&b, &plan.cuts, plan.source.as_deref())?;
-                let report = BoneCutFigures {
-                    fragments: cut
-                        .fragments
-                        .iter()
-                        .map(|(k, v)| (k.clone(), v.len()))
-                        .collect(),
-                    pieces: cut.pieces,
-                    knives: cut.stats,
-                };
-                fragments.extend(cut.fragments);
-                (Some(cut.mesh), Some(report))
-            }
-        };
-        let network = SpringNetwork::build(&skin, bone.as_ref(), params)?;
-        Ok(Job {
-            skin,
-            bone,
-            network,
-            plan,
-            fragments,
-            cut,
-        })
-    }
-}
-
 /// Runs `job` on `backend`, with a spinner, returning the report.
 pub fn run_job(
     global: &Global,
@@ -194,7 +135,6 @@ pub fn run_job(
     opts: &RelaxOptions,
     backend: Backend<'_>,
 ) -> anyhow::Result<RelaxReport> {
-    let resolved = job.plan.resolve(&job.network, &job.fragments)?;
     let spinner = if global.quiet {
         indicatif::ProgressBar::hidden()
     } else {
@@ -206,7 +146,7 @@ pub fn run_job(
         backend.name()
     ));
     spinner.enable_steady_tick(std::time::Duration::from_millis(120));
-    let report = crate::tissue::relax(&job.network, &resolved, opts, backend);
+    let report = job.run(opts, backend);
     spinner.finish_and_clear();
     Ok(report?)
 }
@@ -391,15 +331,6 @@ pub fn spline_path(path: &Path) -> PathBuf {
         .extension()
         .map_or_else(String::new, |e| format!(".{}", e.to_string_lossy()));
     path.with_file_name(format!("{stem}_spline{ext}"))
-}
-
-/// What the plan's cuts did to the bone: its pieces, the vertices of each
-/// named fragment, and per cut what the scalpel did.
-#[derive(Debug, Serialize)]
-pub struct BoneCutFigures {
-    pieces: Vec<PieceInfo>,
-    fragments: BTreeMap<String, usize>,
-    knives: Vec<CutStats>,
 }
 
 /// The report's `network` figures: node, free-node and spring counts, the

@@ -9,8 +9,8 @@
 //! mirror and the GPU kernels see bit-identical inputs.
 
 use super::IsoSpec;
-use crate::volume::VolumeData;
-use crate::{Error, Result, Volume};
+use crate::volume::{Samples, VolumeView};
+use crate::{Error, Result};
 
 /// Most samples per axis of the (padded) grid: `2¹⁴`, below which f32
 /// grid coordinates resolve [`super::cpu::T_MIN`].
@@ -19,7 +19,7 @@ pub const MAX_AXIS_SAMPLES: usize = 1 << 14;
 /// A volume prepared for marching cubes.
 #[derive(Debug)]
 pub struct Field<'a> {
-    volume: &'a Volume,
+    volume: VolumeView<'a>,
     iso: IsoSpec,
     /// 1 when the border is closed (one outside sample added per side), else 0.
     pub pad: usize,
@@ -35,7 +35,12 @@ impl<'a> Field<'a> {
     /// load, row by row as it packs them ([`Field::check_finite_row`]), and
     /// by [`Field::check_finite`] (a pass of its own) before the GPU path
     /// converts them.
-    pub fn new(volume: &'a Volume, iso: IsoSpec, close_border: bool) -> Result<Self> {
+    pub fn new(
+        volume: impl Into<VolumeView<'a>>,
+        iso: IsoSpec,
+        close_border: bool,
+    ) -> Result<Self> {
+        let volume = volume.into();
         let level = match iso {
             IsoSpec::Level(l) if l.is_finite() => l,
             IsoSpec::Level(l) => {
@@ -104,9 +109,9 @@ impl<'a> Field<'a> {
         }
         let nx = self.volume.dims[0];
         let start = self.volume.index(0, j, k);
-        let bad = match &self.volume.data {
-            VolumeData::F32(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
-            VolumeData::F64(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
+        let bad = match self.volume.data {
+            Samples::F32(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
+            Samples::F64(v) => first_non_finite(&v[start..start + nx], |x| x.is_finite()),
             _ => None,
         };
         match bad {
@@ -126,8 +131,8 @@ impl<'a> Field<'a> {
     }
 
     /// The volume behind the field.
-    pub fn volume(&self) -> &Volume {
-        self.volume
+    pub fn volume(&self) -> &VolumeView<'a> {
+        &self.volume
     }
 
     /// Fills `out` (`dims[0]·dims[1]` values) with layer `z` of the padded
@@ -219,15 +224,15 @@ impl<'a> Field<'a> {
                 }
             };
         }
-        match &self.volume.data {
-            VolumeData::U8(v) => convert!(v),
-            VolumeData::I8(v) => convert!(v),
-            VolumeData::U16(v) => convert!(v),
-            VolumeData::I16(v) => convert!(v),
-            VolumeData::U32(v) => convert!(v),
-            VolumeData::I32(v) => convert!(v),
-            VolumeData::F32(v) => convert!(v),
-            VolumeData::F64(v) => convert!(v),
+        match self.volume.data {
+            Samples::U8(v) => convert!(v),
+            Samples::I8(v) => convert!(v),
+            Samples::U16(v) => convert!(v),
+            Samples::I16(v) => convert!(v),
+            Samples::U32(v) => convert!(v),
+            Samples::I32(v) => convert!(v),
+            Samples::F32(v) => convert!(v),
+            Samples::F64(v) => convert!(v),
         }
     }
 
@@ -319,15 +324,15 @@ impl<'a> Field<'a> {
                 }
             }};
         }
-        match &self.volume.data {
-            VolumeData::U8(v) => exact_int!(v, u8),
-            VolumeData::I8(v) => exact_int!(v, i8),
-            VolumeData::U16(v) => exact_int!(v, u16),
-            VolumeData::I16(v) => exact_int!(v, i16),
-            VolumeData::U32(v) => general!(v),
-            VolumeData::I32(v) => general!(v),
-            VolumeData::F32(v) => general!(v),
-            VolumeData::F64(v) => general!(v),
+        match self.volume.data {
+            Samples::U8(v) => exact_int!(v, u8),
+            Samples::I8(v) => exact_int!(v, i8),
+            Samples::U16(v) => exact_int!(v, u16),
+            Samples::I16(v) => exact_int!(v, i16),
+            Samples::U32(v) => general!(v),
+            Samples::I32(v) => general!(v),
+            Samples::F32(v) => general!(v),
+            Samples::F64(v) => general!(v),
         }
     }
 
@@ -366,15 +371,15 @@ impl<'a> Field<'a> {
     /// Calls `visitor` with [`NativeSamples`] of the volume's scalar type:
     /// one type dispatch for a whole pass instead of one per sample.
     pub fn visit_samples<V: SampleVisitor>(&self, visitor: V) -> V::Output {
-        match &self.volume.data {
-            VolumeData::U8(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::I8(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::U16(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::I16(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::U32(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::I32(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::F32(v) => visitor.visit(NativeSamples::new(self, v)),
-            VolumeData::F64(v) => visitor.visit(NativeSamples::new(self, v)),
+        match self.volume.data {
+            Samples::U8(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::I8(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::U16(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::I16(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::U32(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::I32(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::F32(v) => visitor.visit(NativeSamples::new(self, v)),
+            Samples::F64(v) => visitor.visit(NativeSamples::new(self, v)),
         }
     }
 
@@ -396,20 +401,20 @@ impl<'a> Field<'a> {
                 }
             };
         }
-        match &self.volume.data {
-            VolumeData::U8(v) => convert!(v),
-            VolumeData::I8(v) => convert!(v),
-            VolumeData::U16(v) => convert!(v),
-            VolumeData::I16(v) => convert!(v),
-            VolumeData::U32(v) => convert!(v),
-            VolumeData::I32(v) => convert!(v),
-            VolumeData::F32(v) => convert!(v),
-            VolumeData::F64(v) => convert!(v),
+        match self.volume.data {
+            Samples::U8(v) => convert!(v),
+            Samples::I8(v) => convert!(v),
+            Samples::U16(v) => convert!(v),
+            Samples::I16(v) => convert!(v),
+            Samples::U32(v) => convert!(v),
+            Samples::I32(v) => convert!(v),
+            Samples::F32(v) => convert!(v),
+            Samples::F64(v) => convert!(v),
         }
     }
 
     /// World position of index-space point `u` (padded grid):
-    /// [`Volume::world`] of `u − pad`, evaluated in f64 and rounded to f32.
+    /// [`VolumeView::world`] of `u − pad`, evaluated in f64 and rounded to f32.
     pub fn to_world(&self, u: [f32; 3]) -> glam::Vec3 {
         let w = self.volume.world(u.map(|x| f64::from(x) - self.pad as f64));
         glam::Vec3::new(w[0] as f32, w[1] as f32, w[2] as f32)

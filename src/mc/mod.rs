@@ -45,7 +45,8 @@ pub use field::Field;
 
 use crate::foundation::{Aabb, Forest};
 use crate::gpu::Backend;
-use crate::{Result, TriMesh, Volume};
+use crate::volume::VolumeView;
+use crate::{Result, TriMesh};
 
 /// The host prefix sum between the passes, for every marching-cubes path
 /// (the fast CPU path, the mirrors and the GPU passes): exclusive offsets of
@@ -171,9 +172,10 @@ impl Surface {
     }
 }
 
-/// Marching cubes of `volume` on `backend`, with grouping and the forest.
-pub fn marching_cubes(
-    volume: &Volume,
+/// Marching cubes of `volume` (a [`crate::Volume`], or a [`VolumeView`] of
+/// samples read in place) on `backend`, with grouping and the forest.
+pub fn marching_cubes<'a>(
+    volume: impl Into<VolumeView<'a>>,
     iso: IsoSpec,
     opts: &McOptions,
     backend: Backend<'_>,

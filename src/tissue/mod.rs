@@ -38,6 +38,7 @@ pub mod ct;
 pub mod explicit;
 pub mod fragments;
 pub mod gpu;
+mod job;
 mod kdtree;
 pub mod network;
 pub mod oracle;
@@ -49,6 +50,7 @@ pub mod stepper;
 
 pub use ct::{CtLayers, CtParams, layers_from_ct};
 pub use fragments::{BoneCut, CutBone, Fragments, KnifeSpec, cut_bone};
+pub use job::{BoneCutFigures, Job};
 pub use network::{
     Material, NetworkParams, Spring, SpringClass, SpringNetwork, Stiffness, StiffnessRegion,
     default_origin,

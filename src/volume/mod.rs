@@ -94,6 +94,20 @@ impl VolumeData {
         self.len() == 0
     }
 
+    /// The samples, borrowed.
+    pub fn samples(&self) -> Samples<'_> {
+        match self {
+            VolumeData::U8(v) => Samples::U8(v),
+            VolumeData::I8(v) => Samples::I8(v),
+            VolumeData::U16(v) => Samples::U16(v),
+            VolumeData::I16(v) => Samples::I16(v),
+            VolumeData::U32(v) => Samples::U32(v),
+            VolumeData::I32(v) => Samples::I32(v),
+            VolumeData::F32(v) => Samples::F32(v),
+            VolumeData::F64(v) => Samples::F64(v),
+        }
+    }
+
     /// Element type.
     pub fn scalar_type(&self) -> ScalarType {
         match self {
@@ -239,37 +253,7 @@ impl Volume {
         origin: [f64; 3],
         data: VolumeData,
     ) -> crate::Result<Self> {
-        let n = dims
-            .iter()
-            .try_fold(1usize, |acc, &d| acc.checked_mul(d))
-            .ok_or_else(|| {
-                crate::Error::param(
-                    "dims",
-                    format!("{dims:?}"),
-                    "the sample count overflows usize",
-                )
-            })?;
-        if n != data.len() {
-            return Err(crate::Error::mismatch(
-                format!("samples of a {dims:?} volume"),
-                n,
-                data.len(),
-            ));
-        }
-        if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
-            return Err(crate::Error::param(
-                "spacing",
-                format!("{spacing:?}"),
-                "must be positive and finite",
-            ));
-        }
-        if origin.iter().any(|o| !o.is_finite()) {
-            return Err(crate::Error::param(
-                "origin",
-                format!("{origin:?}"),
-                "must be finite",
-            ));
-        }
+        check_grid(dims, data.len(), spacing, origin)?;
         Ok(Volume {
             dims,
             spacing,
@@ -285,20 +269,7 @@ impl Volume {
     /// Errors: axes that are not finite unit vectors, mutually orthogonal
     /// within [`AXES_TOLERANCE`] (sheared grids are not represented).
     pub fn with_frame(mut self, axes: [[f64; 3]; 3], space: Option<Space>) -> crate::Result<Self> {
-        for i in 0..3 {
-            for j in 0..3 {
-                let dot: f64 = (0..3).map(|c| axes[i][c] * axes[j][c]).sum();
-                let want = if i == j { 1.0 } else { 0.0 };
-                if !dot.is_finite() || (dot - want).abs() > AXES_TOLERANCE {
-                    return Err(crate::Error::param(
-                        "axes",
-                        format!("{axes:?}"),
-                        "must be orthonormal (unit directions at right angles; sheared grids \
-                         are not represented)",
-                    ));
-                }
-            }
-        }
+        check_axes(&axes)?;
         self.axes = axes;
         self.space = space;
         Ok(self)
@@ -306,12 +277,19 @@ impl Volume {
 
     /// World position of fractional index `(i, j, k)`.
     pub fn world(&self, index: [f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|c| {
-            self.origin[c]
-                + (0..3)
-                    .map(|k| index[k] * self.spacing[k] * self.axes[k][c])
-                    .sum::<f64>()
-        })
+        self.view().world(index)
+    }
+
+    /// The volume with its samples borrowed.
+    pub fn view(&self) -> VolumeView<'_> {
+        VolumeView {
+            dims: self.dims,
+            spacing: self.spacing,
+            origin: self.origin,
+            axes: self.axes,
+            space: self.space,
+            data: self.data.samples(),
+        }
     }
 
     /// Whether the axes include a reflection (determinant −1): surfaces
@@ -343,7 +321,7 @@ impl Volume {
 
     /// Linear index of sample `(x, y, z)`.
     pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
-        x + self.dims[0] * (y + self.dims[1] * z)
+        self.view().index(x, y, z)
     }
 
     /// Slice `z` as a volume of one sample in z (same type, spacing; origin
@@ -378,5 +356,169 @@ impl Volume {
             space: self.space,
             data,
         })
+    }
+}
+
+/// The checks of [`Volume::new`]: `n` samples for `dims`, positive finite
+/// spacing, finite origin.
+fn check_grid(
+    dims: [usize; 3],
+    n_samples: usize,
+    spacing: [f64; 3],
+    origin: [f64; 3],
+) -> crate::Result<()> {
+    let n = dims
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d))
+        .ok_or_else(|| {
+            crate::Error::param(
+                "dims",
+                format!("{dims:?}"),
+                "the sample count overflows usize",
+            )
+        })?;
+    if n != n_samples {
+        return Err(crate::Error::mismatch(
+            format!("samples of a {dims:?} volume"),
+            n,
+            n_samples,
+        ));
+    }
+    if spacing.iter().any(|s| !s.is_finite() || *s <= 0.0) {
+        return Err(crate::Error::param(
+            "spacing",
+            format!("{spacing:?}"),
+            "must be positive and finite",
+        ));
+    }
+    if origin.iter().any(|o| !o.is_finite()) {
+        return Err(crate::Error::param(
+            "origin",
+            format!("{origin:?}"),
+            "must be finite",
+        ));
+    }
+    Ok(())
+}
+
+/// The check of [`Volume::with_frame`]: orthonormal axes.
+fn check_axes(axes: &[[f64; 3]; 3]) -> crate::Result<()> {
+    for i in 0..3 {
+        for j in 0..3 {
+            let dot: f64 = (0..3).map(|c| axes[i][c] * axes[j][c]).sum();
+            let want = if i == j { 1.0 } else { 0.0 };
+            if !dot.is_finite() || (dot - want).abs() > AXES_TOLERANCE {
+                return Err(crate::Error::param(
+                    "axes",
+                    format!("{axes:?}"),
+                    "must be orthonormal (unit directions at right angles; sheared grids \
+                         are not represented)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A volume's samples, borrowed: one slice of the sample type.
+#[derive(Debug, Clone, Copy)]
+pub enum Samples<'a> {
+    U8(&'a [u8]),
+    I8(&'a [i8]),
+    U16(&'a [u16]),
+    I16(&'a [i16]),
+    U32(&'a [u32]),
+    I32(&'a [i32]),
+    F32(&'a [f32]),
+    F64(&'a [f64]),
+}
+
+impl Samples<'_> {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        match self {
+            Samples::U8(v) => v.len(),
+            Samples::I8(v) => v.len(),
+            Samples::U16(v) => v.len(),
+            Samples::I16(v) => v.len(),
+            Samples::U32(v) => v.len(),
+            Samples::I32(v) => v.len(),
+            Samples::F32(v) => v.len(),
+            Samples::F64(v) => v.len(),
+        }
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A volume whose samples are borrowed — from a [`Volume`]
+/// ([`Volume::view`]) or read in place from a caller's buffer (a numpy
+/// array in Python) — for the operations that only read samples
+/// (marching cubes).
+#[derive(Debug, Clone, Copy)]
+pub struct VolumeView<'a> {
+    /// Samples per axis `[nx, ny, nz]`.
+    pub dims: [usize; 3],
+    /// Distance between sample centres per axis.
+    pub spacing: [f64; 3],
+    /// World position of sample (0,0,0).
+    pub origin: [f64; 3],
+    /// World direction of each index axis.
+    pub axes: [[f64; 3]; 3],
+    /// The anatomical frame of the world coordinates.
+    pub space: Option<Space>,
+    /// `nx·ny·nz` samples, x fastest.
+    pub data: Samples<'a>,
+}
+
+impl<'a> VolumeView<'a> {
+    /// A view with the checks of [`Volume::new`] and [`Volume::with_frame`].
+    pub fn new(
+        dims: [usize; 3],
+        spacing: [f64; 3],
+        origin: [f64; 3],
+        axes: [[f64; 3]; 3],
+        space: Option<Space>,
+        data: Samples<'a>,
+    ) -> crate::Result<Self> {
+        check_grid(dims, data.len(), spacing, origin)?;
+        check_axes(&axes)?;
+        Ok(VolumeView {
+            dims,
+            spacing,
+            origin,
+            axes,
+            space,
+            data,
+        })
+    }
+
+    /// Linear index of sample `(x, y, z)`.
+    pub fn index(&self, x: usize, y: usize, z: usize) -> usize {
+        x + self.dims[0] * (y + self.dims[1] * z)
+    }
+
+    /// World position of fractional index `(i, j, k)`.
+    pub fn world(&self, index: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|c| {
+            self.origin[c]
+                + (0..3)
+                    .map(|k| index[k] * self.spacing[k] * self.axes[k][c])
+                    .sum::<f64>()
+        })
+    }
+
+    /// Whether the axes include a reflection ([`Volume::reflects`]).
+    pub fn reflects(&self) -> bool {
+        reflects(&self.axes)
+    }
+}
+
+impl<'a> From<&'a Volume> for VolumeView<'a> {
+    fn from(volume: &'a Volume) -> Self {
+        volume.view()
     }
 }

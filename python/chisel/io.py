@@ -1,0 +1,35 @@
+"""Readers and writers of every format the engine supports; the format
+follows the file's content, then its extension, as on the command line."""
+
+from __future__ import annotations
+
+from typing import Optional, Union
+
+import numpy as np
+
+from . import _chisel
+from .types import Mesh, Volume, as_volume
+
+def read_volume(path, series: Optional[str] = None) -> Volume:
+    """Reads a volume file (NRRD, MetaImage, NIfTI, VTK, VTK XML ``.vti``,
+    raw with a header, DICOM file or directory — ``series`` picks one of
+    several) into a :class:`Volume` in the file's own sample type."""
+    array, (spacing, origin, axes, space), _notes = _chisel.read_volume(str(path), series)
+    return Volume(array, tuple(spacing), tuple(origin), tuple(map(tuple, axes)), space)
+
+
+def write_volume(path, volume: Union[Volume, np.ndarray]) -> None:
+    """Writes a volume atomically; the format follows the extension."""
+    v = as_volume(volume)
+    _chisel.write_volume(str(path), v.array, v._frame())
+
+
+def read_mesh(path) -> Mesh:
+    """Reads a mesh file (PLY, STL, OBJ, BYU, VTK, VTK XML ``.vtp``)."""
+    vertices, triangles, scalars = _chisel.read_mesh(str(path))
+    return Mesh(vertices, triangles, dict(scalars))
+
+
+def write_mesh(path, mesh: Mesh) -> None:
+    """Writes a mesh atomically; the format follows the extension."""
+    _chisel.write_mesh(str(path), np.asarray(mesh.vertices, dtype=np.float32), mesh.triangles)

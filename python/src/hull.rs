@@ -22,6 +22,9 @@ use crate::options::{HullArgs, selection};
 /// A mesh as `(vertices, triangles)` arrays.
 type MeshArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
 
+/// `(figures JSON, hull vertices, faces, mesh)`.
+type HullResult<'py> = (String, Bound<'py, PyAny>, Vec<Vec<u32>>, MeshArrays<'py>);
+
 /// The figures [`hull`] returns.
 #[derive(Debug, Serialize)]
 struct HullFigures {
@@ -74,7 +77,7 @@ pub fn hull<'py>(
     vertices: &str,
     coplanar: &str,
     order: &str,
-) -> PyResult<(String, Bound<'py, PyAny>, Vec<Vec<u32>>, MeshArrays<'py>)> {
+) -> PyResult<HullResult<'py>> {
     let (selection, component) = selection(level, label, component).py_err()?;
     let (kind, options) = HullArgs {
         corners,

@@ -31,10 +31,24 @@ from .errors import (
 )
 from .hulls import hull, polyhedrize, scan, scan_file
 from .io import read_mesh, read_volume, write_mesh, write_volume
+from .shapes import blobby_fit, fuse, implicit, morph, scene_examples, spline
 from .stats import stats
 from .surfaces import marching_cubes
 from .tissue import cut, relax
-from .types import Hull, Mesh, Piece, Polyhedron, Relaxed, Surface, Volume
+from .types import (
+    Animation,
+    BlobbyModel,
+    Fused,
+    Hull,
+    Mesh,
+    Morph,
+    Piece,
+    Polyhedron,
+    Relaxed,
+    Spline,
+    Surface,
+    Volume,
+)
 
 __version__: str = _chisel.__version__
 
@@ -53,6 +67,11 @@ __all__ = [
     "Polyhedron",
     "Piece",
     "Relaxed",
+    "Spline",
+    "Animation",
+    "Fused",
+    "Morph",
+    "BlobbyModel",
     "gpu_info",
     "read_volume",
     "write_volume",
@@ -66,6 +85,12 @@ __all__ = [
     "polyhedrize",
     "cut",
     "relax",
+    "spline",
+    "implicit",
+    "scene_examples",
+    "fuse",
+    "morph",
+    "blobby_fit",
     "batch",
     "ChiselError",
     "IoError",

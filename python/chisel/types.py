@@ -157,3 +157,64 @@ class Relaxed:
     mesh: "Mesh"
     displacement: np.ndarray
     report: dict
+
+
+@dataclass
+class Spline:
+    """A DMS spline surface (seed 000 ch. 2): the evaluated lattice
+    ``mesh`` (scalars ``nx, ny, nz`` unit normals, ``distance`` to the input
+    mesh, ``curvature``), the ``controls`` float64[C, 3] (one per input
+    vertex, then one per edge), the ``control_net`` mesh and the
+    ``report`` (fit: method, rms and max distance, iterations; knot
+    quality; timings)."""
+
+    mesh: "Mesh"
+    controls: np.ndarray
+    control_net: "Mesh"
+    report: dict
+
+
+@dataclass
+class Animation:
+    """Frames of an implicit scene: particles (``Mesh`` without triangles,
+    scalars ``nx, ny, nz, sigma``) or the spring network's closed meshes,
+    and the ``report`` (setup, per-frame figures)."""
+
+    frames: List["Mesh"]
+    report: dict
+
+
+@dataclass
+class Fused:
+    """A fusion (or subtraction): the closed ``mesh`` and the ``report``
+    (centre, method, volumes a, b, result and target, passes)."""
+
+    mesh: "Mesh"
+    report: dict
+
+
+@dataclass
+class Morph:
+    """A morph: ``vertices`` float32[frames, V, 3] over one ``triangles``
+    uint32[T, 3] connectivity, and the ``report`` (per frame t, centre,
+    volumes)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    report: dict
+
+    def frame(self, k: int) -> "Mesh":
+        """Frame ``k`` as a mesh."""
+        return Mesh(self.vertices[k], self.triangles)
+
+
+@dataclass
+class BlobbyModel:
+    """A blobby model fitted to a range scan: ``blobs`` float64[N, 5]
+    (centre x, y, z, decay a, strength b), the ``scene`` TOML text that
+    :func:`chisel.implicit` reads, and the ``report`` (options, stages with
+    their energy terms)."""
+
+    blobs: np.ndarray
+    scene: str
+    report: dict

@@ -286,3 +286,15 @@ pub fn mesh_to<'py>(
     let t = PyArray1::from_vec(py, flat).reshape([m, 3])?;
     Ok((v.into_any(), t.into_any()))
 }
+
+/// Per-vertex scalar fields as a dict of float32 arrays by name.
+pub fn scalars_to<'py>(
+    py: Python<'py>,
+    scalars: Vec<chisel::mesh::ScalarField>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let dict = pyo3::types::PyDict::new(py);
+    for s in scalars {
+        dict.set_item(s.name, PyArray1::from_vec(py, s.values))?;
+    }
+    Ok(dict)
+}

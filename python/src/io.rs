@@ -9,7 +9,7 @@ use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{Frame, mesh_from, mesh_to, volume_from, volume_to};
+use crate::arrays::{Frame, mesh_from, mesh_to, scalars_to, volume_from, volume_to};
 use crate::errors::IntoPy;
 
 /// Reads a volume (a file, or a DICOM directory with `series` choosing
@@ -48,10 +48,7 @@ pub fn read_mesh(
     path: PathBuf,
 ) -> PyResult<(Bound<'_, PyAny>, Bound<'_, PyAny>, Bound<'_, PyDict>)> {
     let mesh = py.detach(|| io::read_mesh(&path)).py_err()?;
-    let scalars = PyDict::new(py);
-    for s in mesh.scalars {
-        scalars.set_item(s.name, numpy::PyArray1::from_vec(py, s.values))?;
-    }
+    let scalars = scalars_to(py, mesh.scalars)?;
     let (v, t) = mesh_to(py, mesh.positions, mesh.triangles)?;
     Ok((v, t, scalars))
 }

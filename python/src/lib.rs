@@ -9,14 +9,19 @@
 //! and the rows of `axes` in the engine's (x, y, z) order.
 
 mod arrays;
+mod blobby;
 mod cut;
+mod dms;
 mod errors;
+mod fusion;
 mod gpu;
 mod hull;
+mod implicit;
 mod io;
 mod json;
 mod mc;
 mod options;
+mod progress;
 mod scan;
 mod stats;
 mod tissue;
@@ -40,5 +45,11 @@ fn _chisel(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hull::polyhedrize, m)?)?;
     m.add_function(wrap_pyfunction!(cut::cut, m)?)?;
     m.add_function(wrap_pyfunction!(tissue::relax, m)?)?;
+    m.add_function(wrap_pyfunction!(dms::spline, m)?)?;
+    m.add_function(wrap_pyfunction!(implicit::implicit, m)?)?;
+    m.add_function(wrap_pyfunction!(implicit::scene_examples, m)?)?;
+    m.add_function(wrap_pyfunction!(fusion::fuse, m)?)?;
+    m.add_function(wrap_pyfunction!(fusion::morph, m)?)?;
+    m.add_function(wrap_pyfunction!(blobby::blobby_fit, m)?)?;
     Ok(())
 }

@@ -14,6 +14,7 @@ use chisel::{Error, Result};
 use pyo3::prelude::*;
 
 use crate::arrays::{Frame, volume_from};
+use crate::progress::Progress;
 use crate::options::HullArgs;
 
 /// The options as the command line names them.
@@ -54,7 +55,7 @@ fn run(
     adapter: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let mut stopped: Option<PyErr> = None;
+    let mut progress = Progress::new(progress, format!("{}: scan", path.display()));
     let result = py.detach(|| -> Result<String> {
         let (volume, read_s) = volume?;
         let options = options?;
@@ -68,26 +69,11 @@ fn run(
             adapter_s,
         };
         let report = chisel::volume_scan::scan(&volume, input, &options, &mut |done, total| {
-            Python::attach(|py| {
-                let outcome = py.check_signals().and_then(|()| match &progress {
-                    Some(f) => f.call1(py, (done, total)).map(|_| ()),
-                    None => Ok(()),
-                });
-                outcome.map_err(|e| {
-                    stopped = Some(e);
-                    Error::Cancelled {
-                        what: format!("{}: scan", path.display()),
-                    }
-                })
-            })
+            progress.tick(done, total)
         })?;
         to_json(&report)
     });
-    match (result, stopped) {
-        (Ok(json), _) => Ok(json),
-        (Err(_), Some(e)) => Err(e),
-        (Err(e), None) => Err(crate::errors::to_py(e)),
-    }
+    progress.finish(result)
 }
 
 /// Scans a numpy volume; `name` stands for its path in the report.

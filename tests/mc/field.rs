@@ -116,3 +116,73 @@ fn field_rows_and_samples_match_layers() {
         "no inside sample: the test proves nothing"
     );
 }
+
+/// A view of borrowed samples (a caller's buffer, read in place) gives the
+/// surface of the owning volume, and is checked as `Volume::new` checks.
+#[test]
+fn a_borrowed_view_gives_the_owned_volumes_surface() {
+    use chisel::Backend;
+    use chisel::mc::McOptions;
+    use chisel::volume::{IDENTITY_AXES, Samples, VolumeView};
+    let n = 16usize;
+    let ball: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y, z) = (i % n, (i / n) % n, i / (n * n));
+            let d2 = [x, y, z]
+                .iter()
+                .map(|&c| (c as f64 - 7.5).powi(2))
+                .sum::<f64>();
+            u8::from(d2 <= 25.0) * 200
+        })
+        .collect();
+    let vol = Volume::new(
+        [n; 3],
+        [0.5, 0.75, 1.0],
+        [1.0, 2.0, 3.0],
+        VolumeData::U8(ball),
+    )
+    .unwrap();
+    let iso = IsoSpec::Level(100.0);
+    let owned = chisel::mc::marching_cubes(&vol, iso, &McOptions::default(), Backend::Cpu).unwrap();
+    let VolumeData::U8(samples) = &vol.data else {
+        unreachable!("made as u8 above");
+    };
+    let view = VolumeView::new(
+        vol.dims,
+        vol.spacing,
+        vol.origin,
+        IDENTITY_AXES,
+        None,
+        Samples::U8(samples),
+    )
+    .unwrap();
+    let borrowed =
+        chisel::mc::marching_cubes(view, iso, &McOptions::default(), Backend::Cpu).unwrap();
+    assert_eq!(borrowed.mesh, owned.mesh);
+    assert!(!owned.mesh.triangles.is_empty());
+    // Negative controls: a sample short, a zero spacing.
+    let short = Samples::U8(&samples[1..]);
+    assert!(
+        VolumeView::new(
+            vol.dims,
+            vol.spacing,
+            vol.origin,
+            IDENTITY_AXES,
+            None,
+            short
+        )
+        .is_err()
+    );
+    let flat = [vol.spacing[0], 0.0, vol.spacing[2]];
+    assert!(
+        VolumeView::new(
+            vol.dims,
+            flat,
+            vol.origin,
+            IDENTITY_AXES,
+            None,
+            Samples::U8(samples)
+        )
+        .is_err()
+    );
+}

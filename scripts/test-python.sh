@@ -14,6 +14,8 @@ fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 MATURIN_PEP517_ARGS="--profile ${CHISEL_PY_PROFILE:-dev}" \
     "$venv/bin/python" -m pip install --quiet "./python[test]"
+# The stubs and annotations agree with the calls the package makes.
+"$venv/bin/python" -m mypy --ignore-missing-imports --no-incremental python/chisel
 # From the repository root, so that `import chisel` finds the installed
 # package and not the source folder python/chisel.
 "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests "$@"

@@ -1,11 +1,13 @@
-"""Hull scans over many volume files, one task per file, on Dask.
+"""Hull scans and polyhedra of many volume files, one task per file, on
+Dask.
 
 ``scan(paths, client=None, **options)`` reads and scans every path (one
 ``dask.distributed`` task each on ``client``; serially in this process when
 ``client`` is None) and returns one report per path, in input order: the
 dict ``chisel scan PATH --json`` prints with those options, or, for a file
 that failed, ``{"volume": path, "error": {"type": ..., "message": ...}}``
-— one failure never stops the batch. ``table(reports)`` flattens them into
+— one failure never stops the batch. ``polyhedrize(paths, ...)`` does
+the same for :func:`chisel.polyhedrize`. ``table(reports)`` flattens scans into
 one row per structure (a pandas DataFrame when pandas is installed).
 
 The same code runs on any Dask cluster; only the client changes::
@@ -23,7 +25,9 @@ from __future__ import annotations
 
 from typing import Iterable, List, Optional
 
+from . import hulls
 from .hulls import scan_file
+from .io import read_volume
 from .errors import ChiselError
 
 GPU_RESOURCE = "GPU"
@@ -33,7 +37,29 @@ def _scan_one(path: str, options: dict) -> dict:
     try:
         return scan_file(path, **options)
     except ChiselError as e:
-        return {"volume": path, "error": {"type": type(e).__name__, "message": str(e)}}
+        return _failed(path, e)
+
+
+def _polyhedrize_one(path: str, options: dict) -> dict:
+    try:
+        volume = read_volume(path, series=options.pop("series", None))
+        p = hulls.polyhedrize(volume, **options)
+    except ChiselError as e:
+        return _failed(path, e)
+    return {
+        "volume": path,
+        "object": p.object,
+        "topology": p.topology,
+        "options": p.options,
+        "polyhedron": p.summary,
+        "zkh": p.zkh,
+        "mesh": p.mesh_kind,
+        "merge_refused": p.merge_refused,
+    }
+
+
+def _failed(path: str, e: ChiselError) -> dict:
+    return {"volume": path, "error": {"type": type(e).__name__, "message": str(e)}}
 
 
 def _gpu_resources(client, options: dict) -> Optional[dict]:
@@ -45,18 +71,33 @@ def _gpu_resources(client, options: dict) -> Optional[dict]:
     return None
 
 
-def scan(paths: Iterable, client=None, **options) -> List[dict]:
-    """One :func:`chisel.scan_file` report per path, in input order (see the
-    module docs); ``options`` as :func:`chisel.scan_file` takes them."""
+def _map(task, name: str, paths: Iterable, client, options: dict) -> List[dict]:
     paths = [str(p) for p in paths]
     if client is None:
-        return [_scan_one(p, options) for p in paths]
+        return [task(p, dict(options)) for p in paths]
     resources = _gpu_resources(client, options)
     futures = [
-        client.submit(_scan_one, p, options, key=f"chisel-scan-{i}-{p}", resources=resources, pure=False)
+        client.submit(
+            task, p, dict(options), key=f"chisel-{name}-{i}-{p}", resources=resources, pure=False
+        )
         for i, p in enumerate(paths)
     ]
     return client.gather(futures)
+
+
+def scan(paths: Iterable, client=None, **options) -> List[dict]:
+    """One :func:`chisel.scan_file` report per path, in input order (see the
+    module docs); ``options`` as :func:`chisel.scan_file` takes them."""
+    return _map(_scan_one, "scan", paths, client, options)
+
+
+def polyhedrize(paths: Iterable, client=None, **options) -> List[dict]:
+    """One polyhedron per path (:func:`chisel.polyhedrize` of the volume
+    read from it, ``series`` choosing a DICOM series), in input order: its
+    ``object``, ``topology``, ``options``, ``polyhedron`` summary,
+    ``zkh`` table, ``mesh`` kind and ``merge_refused`` — the fields of
+    ``chisel polyhedrize --json`` — or the file's error."""
+    return _map(_polyhedrize_one, "polyhedrize", paths, client, options)
 
 
 def table(reports: Iterable[dict]):

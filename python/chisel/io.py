@@ -8,14 +8,15 @@ from typing import Optional, Union
 import numpy as np
 
 from . import _chisel
-from .types import Mesh, Volume, as_volume
+from .types import Mesh, Volume, as_volume, vec3
 
 def read_volume(path, series: Optional[str] = None) -> Volume:
     """Reads a volume file (NRRD, MetaImage, NIfTI, VTK, VTK XML ``.vti``,
     raw with a header, DICOM file or directory — ``series`` picks one of
     several) into a :class:`Volume` in the file's own sample type."""
     array, (spacing, origin, axes, space), _notes = _chisel.read_volume(str(path), series)
-    return Volume(array, tuple(spacing), tuple(origin), tuple(map(tuple, axes)), space)
+    x, y, z = axes
+    return Volume(array, vec3(spacing), vec3(origin), (vec3(x), vec3(y), vec3(z)), space)
 
 
 def write_volume(path, volume: Union[Volume, np.ndarray]) -> None:

@@ -12,11 +12,8 @@ import numpy as np
 
 from . import _chisel
 from .errors import ParameterError
-from .types import Animation, BlobbyModel, Fused, Mesh, Morph, Spline
+from .types import Animation, BlobbyModel, Fused, Mesh, Morph, Spline, f32_mesh, vec3
 
-
-def _f32(mesh: Mesh):
-    return np.asarray(mesh.vertices, dtype=np.float32), mesh.triangles
 
 
 def spline(
@@ -40,7 +37,7 @@ def spline(
     if param == "given" and uv is not None:
         uv = np.asarray(uv, dtype=np.float64)
     (v, t, scalars), controls, (cv, ct), report = _chisel.spline(
-        *_f32(mesh), int(n), param, uv, fit,
+        *f32_mesh(mesh), int(n), param, uv, fit,
         None if data is None else np.asarray(data, dtype=np.float32),
         float(fairing), backend, adapter,
     )
@@ -74,11 +71,11 @@ def implicit(
     if (scene is None) == (scene_toml is None):
         raise ParameterError("give a scene file or scene_toml, one of them")
     if scene is not None:
-        origin = os.fspath(scene)
+        origin = str(os.fspath(scene))
         with open(origin, encoding="utf-8") as f:
             text = f.read()
     else:
-        origin, text = "<scene_toml>", scene_toml
+        origin, text = "<scene_toml>", str(scene_toml)
     meshes, report = _chisel.implicit(
         text, origin, method, int(frames), edge_length, reports, backend, adapter, progress
     )
@@ -103,8 +100,8 @@ def fuse(
     difference with ``subtract=True``), by rays from a common centre
     (searched when ``center`` is None)."""
     (v, t), report = _chisel.fuse(
-        (*_f32(a), *_f32(b)), subtract,
-        None if center is None else tuple(map(float, center)),
+        (*f32_mesh(a), *f32_mesh(b)), subtract,
+        None if center is None else vec3(center),
         tolerance, start_level, max_triangles, cells, backend, adapter,
     )
     return Fused(Mesh(v, t), json.loads(report))
@@ -126,9 +123,9 @@ def morph(
     """``a`` morphed into ``b`` (``chisel morph``, seed 001 eq. 8) over
     ``frames`` frames sharing one connectivity."""
     v, t, report = _chisel.morph(
-        (*_f32(a), *_f32(b)), int(frames),
-        None if center is None else tuple(map(float, center)),
-        None if center_end is None else tuple(map(float, center_end)),
+        (*f32_mesh(a), *f32_mesh(b)), int(frames),
+        None if center is None else vec3(center),
+        None if center_end is None else vec3(center_end),
         tolerance, start_level, max_triangles, backend, adapter,
     )
     return Morph(v, t, json.loads(report))
@@ -151,7 +148,7 @@ def blobby_fit(
     (``chisel blobby fit``, seed 001 §3): its vertices and area-weighted
     normals (turned outward), primitives split and fitted by L-BFGS."""
     blobs, scene, report = _chisel.blobby_fit(
-        *_f32(scan), int(primitives), float(alpha), float(beta), float(iso),
+        *f32_mesh(scan), int(primitives), float(alpha), float(beta), float(iso),
         int(pair_iterations), int(global_iterations), energy_target, backend, adapter,
     )
     return BlobbyModel(blobs, scene, json.loads(report))

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _chisel
 from .errors import ParameterError
-from .types import Mesh, Piece, Relaxed
+from .types import Mesh, Piece, Relaxed, f32_mesh, vec3
 
 
 def _is_point(x) -> bool:
@@ -27,9 +27,6 @@ def _many(knife) -> list:
         return []
     return [knife] if _is_point(knife[0]) else list(knife)
 
-
-def _f32(mesh: Mesh):
-    return np.asarray(mesh.vertices, dtype=np.float32), mesh.triangles
 
 
 def cut(
@@ -48,15 +45,15 @@ def cut(
     one knife or a list. ``cap=True`` closes every piece with the knife's
     surface. Returns ``(pieces, stats)``: a list of :class:`Piece` and the
     cut's statistics."""
-    planes = [(tuple(map(float, p)), tuple(map(float, n))) for p, n in _many(plane)]
+    planes = [(vec3(p), vec3(n)) for p, n in _many(plane)]
     rects = [
-        (tuple(map(float, c)), tuple(map(float, n)), tuple(map(float, u)), tuple(map(float, h)))
+        (vec3(c), vec3(n), vec3(u), (float(h[0]), float(h[1])))
         for c, n, u, h in _many(rect)
     ]
-    spheres = [(tuple(map(float, c)), float(r)) for c, r in _many(sphere)]
+    spheres = [(vec3(c), float(r)) for c, r in _many(sphere)]
     knives = [] if knife is None else [knife] if isinstance(knife, Mesh) else list(knife)
     pieces, stats = _chisel.cut(
-        *_f32(mesh), planes, rects, spheres, [_f32(k) for k in knives], cap
+        *f32_mesh(mesh), planes, rects, spheres, [f32_mesh(k) for k in knives], cap
     )
     return [Piece(Mesh(v, t), side) for v, t, side in pieces], json.loads(stats)
 
@@ -86,14 +83,14 @@ def relax(
     else:
         raise ParameterError(f"plan = {type(plan).__name__}: a dict or a path")
     (v, t), displacement, report = _chisel.relax(
-        *_f32(skin),
-        None if bone is None else _f32(bone),
+        *f32_mesh(skin),
+        None if bone is None else f32_mesh(bone),
         path,
         text,
         solver,
         bending,
         subcutis_depth,
-        None if origin is None else tuple(map(float, origin)),
+        None if origin is None else vec3(origin),
         backend,
         adapter,
     )

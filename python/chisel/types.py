@@ -35,12 +35,8 @@ class Volume:
         return (nx, ny, nz)
 
     def _frame(self):
-        return (
-            tuple(float(s) for s in self.spacing),
-            tuple(float(o) for o in self.origin),
-            tuple(tuple(float(c) for c in row) for row in self.axes),
-            self.space,
-        )
+        x, y, z = self.axes
+        return (vec3(self.spacing), vec3(self.origin), (vec3(x), vec3(y), vec3(z)), self.space)
 
 
 @dataclass
@@ -218,3 +214,14 @@ class BlobbyModel:
     blobs: np.ndarray
     scene: str
     report: dict
+
+
+def vec3(x) -> Vec3:
+    """Three floats (a point, a direction, a spacing)."""
+    a, b, c = (float(v) for v in x)
+    return (a, b, c)
+
+
+def f32_mesh(mesh: "Mesh") -> Tuple[np.ndarray, np.ndarray]:
+    """A mesh's arrays as the engine takes them (float32 vertices)."""
+    return np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.triangles)

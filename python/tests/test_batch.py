@@ -1,5 +1,5 @@
 """chisel.batch: one Dask task per volume on a LocalCluster of 2 worker
-processes over 9 volumes (the shared CT, MR, label and 2-D images plus
+processes over 9 volumes (scans; polyhedra of the generated ones) (the shared CT, MR, label and 2-D images plus
 four generated phantoms in four formats) and one broken file: results
 equal the serial loop's and the command line's, in input order."""
 
@@ -52,13 +52,31 @@ def test_serial_batch_reports_every_file_in_order(paths, cli):
     assert len(rows) == 1 + sum(len(r["rows"]) for r in reports if "rows" in r)
 
 
-def test_local_cluster_equals_the_serial_loop(paths):
+@pytest.fixture(scope="module")
+def client():
     distributed = pytest.importorskip("distributed")
-    serial = chisel.batch.scan(paths, **OPTIONS)
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as client:
         assert len(client.scheduler_info()["workers"]) == 2
-        parallel = chisel.batch.scan(paths, client=client, **OPTIONS)
+        yield client
+
+
+def test_local_cluster_equals_the_serial_loop(paths, client):
+    serial = chisel.batch.scan(paths, **OPTIONS)
+    parallel = chisel.batch.scan(paths, client=client, **OPTIONS)
     assert [without_timings(r) for r in parallel] == [without_timings(r) for r in serial]
     assert sum("rows" in r for r in parallel) == len(paths) - 1
+
+
+def test_polyhedra_on_the_cluster_equal_the_serial_loop_and_the_cli(paths, client, cli):
+    generated = [p for p in paths if "phantoms" in str(p)]  # four phantoms and the broken file
+    serial = chisel.batch.polyhedrize(generated, level=5)
+    parallel = chisel.batch.polyhedrize(generated, client=client, level=5)
+    assert parallel == serial
+    assert [("error" in r) for r in serial] == [p.name == "broken.mha" for p in generated]
+    good = next(p for p, r in zip(generated, serial) if "error" not in r)
+    theirs = cli("polyhedrize", good, "--level", "5", "--backend", "cpu")
+    mine = next(r for p, r in zip(generated, serial) if p == good)
+    for key in ("object", "topology", "options", "polyhedron", "zkh", "mesh"):
+        assert mine[key] == theirs[key], key

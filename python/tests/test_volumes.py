@@ -66,17 +66,17 @@ def test_arrays_and_frames_equal_simpleitk(data, name):
         expected = expected[np.newaxis]
     assert v.array.shape == expected.shape
     assert v.array.dtype == expected.dtype
-    differ = v.array != expected
     if name.startswith("froggy"):
         # ITK, like VTK, stops inflating at the header's wrong
-        # CompressedDataSize (data README §4): zeros from slice 131, row 356
-        # on, where chisel reads the whole zlib stream — 2,670 voxels of
-        # label 13.
-        assert differ.sum() == 2670
-        assert set(np.unique(v.array[differ])) == {13} and not expected[differ].any()
-        assert np.argwhere(differ)[0].tolist()[:2] == [131, 356]
+        # CompressedDataSize (data README §4): 30,963,285 voxels, then
+        # whatever its buffer held. chisel reads the whole zlib stream:
+        # equal up to there, and the README's label counts in full.
+        decoded = 30_963_285
+        np.testing.assert_array_equal(v.array.ravel()[:decoded], expected.ravel()[:decoded])
+        assert (v.array == 13).sum() == 440_722
+        assert (v.array != 0).sum() == 1_156_957
     else:
-        assert not differ.any()
+        np.testing.assert_array_equal(v.array, expected)
     np.testing.assert_allclose(v.spacing[: image.GetDimension()], image.GetSpacing())
     np.testing.assert_allclose(v.origin[: image.GetDimension()], image.GetOrigin())
 

@@ -77,7 +77,7 @@ def batch(rounds):
         serial = chisel.batch.scan(paths, **options)
         serial_s = time.perf_counter() - t
         with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                      dashboard_address=None) as cluster, \
+                                      dashboard_address=":0") as cluster, \
                 distributed.Client(cluster) as client:
             chisel.batch.scan(paths[:2], client=client, **options)  # workers warm
             t = time.perf_counter()

@@ -2,11 +2,11 @@
 //! §3): primitives split and fitted by L-BFGS until there are enough; the
 //! model as blobs and as a scene file the implicit room reads.
 
-use chisel::blobby::RangePoints;
-use chisel::blobby::fit::{FitOptions, FitStage, fit};
-use chisel::blobby::Weights;
-use chisel::gpu::Backend;
 use chisel::Result;
+use chisel::blobby::RangePoints;
+use chisel::blobby::Weights;
+use chisel::blobby::fit::{FitOptions, FitStage, fit};
+use chisel::gpu::Backend;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use serde::Serialize;

@@ -2,9 +2,9 @@
 //! parametrisation, knot clouds, the quadratic basis and a fit, evaluated
 //! on a lattice.
 
+use chisel::dms::fit::FitReport;
 use chisel::dms::param::Projection;
 use chisel::dms::spline::{Fit, SplineOptions, SplineTimings, spline as run_spline};
-use chisel::dms::fit::FitReport;
 use chisel::gpu::Backend;
 use chisel::{Error, Result};
 use glam::{DVec2, Vec3};
@@ -111,7 +111,9 @@ pub fn spline<'py>(
         .py_err()?;
     let n_controls = surface.controls.len();
     let flat: Vec<f64> = surface.controls.iter().flat_map(|c| c.to_array()).collect();
-    let controls = PyArray1::from_vec(py, flat).reshape([n_controls, 3])?.into_any();
+    let controls = PyArray1::from_vec(py, flat)
+        .reshape([n_controls, 3])?
+        .into_any();
     let scalars = scalars_to(py, surface.mesh.scalars)?.into_any();
     let (v, t) = mesh_to(py, surface.mesh.positions, surface.mesh.triangles)?;
     Ok((

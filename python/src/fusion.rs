@@ -25,7 +25,11 @@ type Pair<'py> = (
     Bound<'py, PyAny>,
 );
 
-fn refine(tolerance: Option<f64>, start_level: Option<u32>, max_triangles: Option<usize>) -> RefineOptions {
+fn refine(
+    tolerance: Option<f64>,
+    start_level: Option<u32>,
+    max_triangles: Option<usize>,
+) -> RefineOptions {
     let d = RefineOptions::default();
     RefineOptions {
         tolerance,
@@ -108,9 +112,9 @@ pub fn morph<'py>(
         .py_err()?;
     let report: MorphReport = morph.report;
     let mut frames_out = morph.frames.into_iter();
-    let first = frames_out.next().ok_or_else(|| {
-        crate::errors::to_py(Error::Internal("a morph without frames".into()))
-    })?;
+    let first = frames_out
+        .next()
+        .ok_or_else(|| crate::errors::to_py(Error::Internal("a morph without frames".into())))?;
     let n_vertices = first.positions.len();
     let mut flat: Vec<f32> = first.positions.iter().flat_map(|p| p.to_array()).collect();
     let mut n_frames = 1;

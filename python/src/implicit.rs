@@ -74,11 +74,12 @@ pub fn implicit<'py>(
                 let opts = WhOptions::from_scene(&scene, &origin)?;
                 let r = animate::edge_length(&parsed, opts.edge_length, edge_length)?;
                 let mut reports_out = Vec::new();
-                let setup = animate::sample(&parsed, &times, r, opts, backend, |p, field, report| {
-                    meshes.push(animate::point_set(p, field));
-                    reports_out.push(report.clone());
-                    progress.tick(meshes.len(), total)
-                })?;
+                let setup =
+                    animate::sample(&parsed, &times, r, opts, backend, |p, field, report| {
+                        meshes.push(animate::point_set(p, field));
+                        reports_out.push(report.clone());
+                        progress.tick(meshes.len(), total)
+                    })?;
                 Ok((
                     meshes,
                     Animation {
@@ -101,9 +102,8 @@ pub fn implicit<'py>(
                     let k = meshes.len() as u32;
                     meshes.push(net.mesh());
                     if reports {
-                        frame_reports.push(animate::network_report(
-                            net, &parsed, k, t, steps, backend,
-                        )?);
+                        frame_reports
+                            .push(animate::network_report(net, &parsed, k, t, steps, backend)?);
                     }
                     steps_out.push(steps.clone());
                     progress.tick(meshes.len(), total)

@@ -14,8 +14,8 @@ use chisel::{Error, Result};
 use pyo3::prelude::*;
 
 use crate::arrays::{Frame, volume_from};
-use crate::progress::Progress;
 use crate::options::HullArgs;
+use crate::progress::Progress;
 
 /// The options as the command line names them.
 fn options(

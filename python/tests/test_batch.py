@@ -56,7 +56,7 @@ def test_serial_batch_reports_every_file_in_order(paths, cli):
 def client():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     ) as cluster, distributed.Client(cluster) as client:
         assert len(client.scheduler_info()["workers"]) == 2
         yield client
@@ -80,3 +80,20 @@ def test_polyhedra_on_the_cluster_equal_the_serial_loop_and_the_cli(paths, clien
     mine = next(r for p, r in zip(generated, serial) if p == good)
     for key in ("object", "topology", "options", "polyhedron", "zkh", "mesh"):
         assert mine[key] == theirs[key], key
+
+
+def test_gpu_tasks_ask_for_the_gpu_resource(paths, client):
+    distributed = pytest.importorskip("distributed")
+    small = [p for p in paths if "phantoms" in str(p) and p.name != "broken.mha"]
+    # Workers without a GPU resource: GPU tasks ask for none and run anywhere.
+    assert chisel.batch._gpu_resources(client, {"backend": "gpu"}) is None
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+        resources={"GPU": 1},
+    ) as cluster, distributed.Client(cluster) as gpu_client:
+        assert chisel.batch._gpu_resources(gpu_client, {"backend": "gpu"}) == {"GPU": 1}
+        assert chisel.batch._gpu_resources(gpu_client, {"backend": "cpu"}) is None
+        on_gpu = chisel.batch.scan(small, client=gpu_client, backend="gpu", **OPTIONS)
+    on_cpu = chisel.batch.scan(small, **OPTIONS)
+    assert [r["backend"] for r in on_gpu] == ["gpu"] * len(small)
+    assert [r["rows"] for r in on_gpu] == [r["rows"] for r in on_cpu]

@@ -29,7 +29,7 @@ from .errors import (
     ParameterError,
     RefusedError,
 )
-from .hulls import hull, polyhedrize, scan, scan_file
+from .hulls import hull, hull_scan, polyhedrize, scan, scan_file
 from .io import read_mesh, read_volume, write_mesh, write_volume
 from .shapes import blobby_fit, fuse, implicit, morph, scene_examples, spline
 from .stats import stats
@@ -40,6 +40,7 @@ from .types import (
     BlobbyModel,
     Fused,
     Hull,
+    HullScan,
     Mesh,
     Morph,
     Piece,
@@ -64,6 +65,7 @@ __all__ = [
     "Mesh",
     "Surface",
     "Hull",
+    "HullScan",
     "Polyhedron",
     "Piece",
     "Relaxed",
@@ -80,6 +82,7 @@ __all__ = [
     "stats",
     "marching_cubes",
     "hull",
+    "hull_scan",
     "scan",
     "scan_file",
     "polyhedrize",

@@ -78,6 +78,19 @@ def hull(
     coplanar: str = "merge",
     order: str = "furthest",
 ) -> Tuple[str, npt.NDArray[np.int64], List[List[int]], MeshArrays]: ...
+def hull_scan(
+    array: np.ndarray,
+    frame: Frame,
+    level: Optional[float] = None,
+    label: Optional[float] = None,
+    component: str = "largest",
+    corners: str = "local26",
+    vertices: str = "voxels",
+    coplanar: str = "merge",
+    order: str = "furthest",
+    backend: str = "cpu",
+    adapter: Optional[str] = None,
+) -> Tuple[npt.NDArray[np.uint8], Tuple[int, int, int]]: ...
 def polyhedrize(
     array: np.ndarray,
     frame: Frame,

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _chisel
 from .errors import ParameterError
-from .types import Hull, Mesh, Polyhedron, Volume, as_volume
+from .types import Hull, HullScan, Mesh, Polyhedron, Volume, as_volume
 
 _SCAN_DEFAULTS = dict(
     min_voxels=1,
@@ -144,3 +144,27 @@ def polyhedrize(
         Mesh(mv, mt), kind, f["cells"], f["polyhedron"], f["zkh"], f["topology"],
         f["object"], f["options"], f["merge_refused"],
     )
+
+
+def hull_scan(
+    volume: Union[Volume, np.ndarray],
+    level: Optional[float] = None,
+    label: Optional[float] = None,
+    *,
+    component: Union[str, int] = "largest",
+    backend: str = "cpu",
+    adapter: Optional[str] = None,
+    **options,
+) -> HullScan:
+    """Every voxel of the object's hull box classified against the object's
+    exact convex hull (the ``hull_rows`` kernel on the GPU, its CPU mirror
+    otherwise; exact either way): ``sides`` uint8 (0 outside, 1 on, 2
+    inside) in the volume's (z, y, x) order, starting at voxel
+    ``origin`` (x, y, z). Options as :func:`hull`."""
+    v = as_volume(volume)
+    kw = _hull_options(options, _HULL_DEFAULTS)
+    sides, origin = _chisel.hull_scan(
+        v.array, v._frame(), level, label, str(component), backend=backend, adapter=adapter, **kw
+    )
+    x, y, z = origin
+    return HullScan(sides, (int(x), int(y), int(z)))

@@ -114,6 +114,21 @@ class Hull:
 
 
 @dataclass
+class HullScan:
+    """Voxels against a hull: ``sides`` uint8[nz, ny, nx] (0 outside, 1 on,
+    2 inside) over the hull's voxel box, whose first voxel is ``origin``
+    (x, y, z voxel indices of the volume)."""
+
+    sides: np.ndarray
+    origin: Tuple[int, int, int]
+
+    def counts(self) -> Dict[str, int]:
+        """Voxels outside, on and inside."""
+        c = np.bincount(self.sides.ravel(), minlength=3)
+        return {"outside": int(c[0]), "on": int(c[1]), "inside": int(c[2])}
+
+
+@dataclass
 class Polyhedron:
     """A lossless polyhedron of a digital object (seed 003 §4.5): ``mesh``
     (the merged surface, or the shells where they cannot be merged:

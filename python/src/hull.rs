@@ -4,6 +4,7 @@
 
 use chisel::gpu::Backend;
 use chisel::hull::{CellList, ConvexHull, HalfSpace, HullSummary};
+use chisel::hull_scan::VoxelBox;
 use chisel::polyhedron::{
     PolyhedrizeOptions, PolyhedronSummary, Zkh, ZkhReport, background_components,
     polyhedrize as run_polyhedrize,
@@ -206,4 +207,56 @@ pub fn polyhedrize<'py>(
         mesh_to(py, mesh.positions, mesh.triangles)?,
         kind,
     ))
+}
+
+/// Every voxel of the object's hull box classified against its hull (the
+/// `hull_rows` kernel on the GPU, its CPU mirror otherwise, exact either
+/// way): `(sides uint8[nz, ny, nx]: 0 outside, 1 on, 2 inside; the voxel
+/// index (x, y, z) of sides[0, 0, 0])`.
+#[pyfunction]
+#[pyo3(signature = (array, frame, level = None, label = None, component = "largest", corners = "local26", vertices = "voxels", coplanar = "merge", order = "furthest", backend = "cpu", adapter = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn hull_scan<'py>(
+    py: Python<'py>,
+    array: &Bound<'py, PyAny>,
+    frame: Frame,
+    level: Option<f64>,
+    label: Option<f64>,
+    component: &str,
+    corners: &str,
+    vertices: &str,
+    coplanar: &str,
+    order: &str,
+    backend: &str,
+    adapter: Option<String>,
+) -> PyResult<(Bound<'py, PyAny>, [i64; 3])> {
+    let (selection, component) = selection(level, label, component).py_err()?;
+    let (kind, options) = HullArgs {
+        corners,
+        vertices,
+        coplanar,
+        order,
+    }
+    .parse()
+    .py_err()?;
+    let volume = volume_from(array, frame)?;
+    let classification = py
+        .detach(|| -> Result<_> {
+            let object = DigitalObject::from_volume(&volume, selection, component)?;
+            let hull = ConvexHull::of_object(&object, kind, options)?;
+            let (lo, hi) = hull.voxel_bbox();
+            let bbox = VoxelBox {
+                origin: lo,
+                dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize),
+            };
+            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
+            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
+            hull.row_spans(&bbox, backend)?.to_classification()
+        })
+        .py_err()?;
+    let [nx, ny, nz] = classification.bbox.dims;
+    let sides = PyArray1::from_vec(py, classification.sides)
+        .reshape([nz, ny, nx])?
+        .into_any();
+    Ok((sides, classification.bbox.origin))
 }

@@ -42,6 +42,7 @@ fn _chisel(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stats::volume_stats, m)?)?;
     m.add_function(wrap_pyfunction!(stats::mesh_stats, m)?)?;
     m.add_function(wrap_pyfunction!(hull::hull, m)?)?;
+    m.add_function(wrap_pyfunction!(hull::hull_scan, m)?)?;
     m.add_function(wrap_pyfunction!(hull::polyhedrize, m)?)?;
     m.add_function(wrap_pyfunction!(cut::cut, m)?)?;
     m.add_function(wrap_pyfunction!(tissue::relax, m)?)?;

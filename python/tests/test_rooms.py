@@ -94,3 +94,21 @@ def test_relax_takes_a_plan_dict():
     assert r.report["relax"]["iterations"] > 0 and r.displacement.max() > 0
     with pytest.raises(chisel.FormatError, match="unknown variant `cube`"):
         chisel.relax(sphere, plan={"step": [{"select": {"cube": 1}}]})
+
+
+def test_hull_scan_counts_equal_the_scan_and_the_gpu(data):
+    frog = chisel.read_volume(data("froggy/frogtissue.mhd"))
+    hs = chisel.hull_scan(frog, label=4, component="all")
+    report = chisel.scan(frog, labels=True, min_voxels=1000)
+    row = next(r for r in report["rows"] if r["label"] == 4.0)
+    counts = hs.counts()
+    assert {k: row["scan"][k] for k in counts} == counts
+    assert list(hs.origin) == row["scan"]["box"]["origin"]
+    assert hs.sides.shape == tuple(reversed(row["scan"]["box"]["dims"]))
+    # Every voxel of the label lies inside or on its hull.
+    x, y, z = hs.origin
+    nz, ny, nx = hs.sides.shape
+    window = frog.array[z : z + nz, y : y + ny, x : x + nx] == 4
+    assert (hs.sides[window] > 0).all()
+    gpu = chisel.hull_scan(frog, label=4, component="all", backend="gpu")
+    np.testing.assert_array_equal(gpu.sides, hs.sides)

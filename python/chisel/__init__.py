@@ -30,7 +30,7 @@ from .errors import (
     RefusedError,
 )
 from .hulls import hull, hull_scan, polyhedrize, scan, scan_file
-from .io import read_mesh, read_volume, write_mesh, write_volume
+from .io import dicom_series, read_mesh, read_volume, write_mesh, write_volume
 from .shapes import blobby_fit, fuse, implicit, morph, scene_examples, spline
 from .stats import stats
 from .surfaces import marching_cubes
@@ -79,6 +79,7 @@ __all__ = [
     "write_volume",
     "read_mesh",
     "write_mesh",
+    "dicom_series",
     "stats",
     "marching_cubes",
     "hull",

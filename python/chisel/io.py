@@ -3,7 +3,8 @@ follows the file's content, then its extension, as on the command line."""
 
 from __future__ import annotations
 
-from typing import Optional, Union
+import json
+from typing import List, Optional, Union
 
 import numpy as np
 
@@ -34,3 +35,10 @@ def read_mesh(path) -> Mesh:
 def write_mesh(path, mesh: Mesh) -> None:
     """Writes a mesh atomically; the format follows the extension."""
     _chisel.write_mesh(str(path), np.asarray(mesh.vertices, dtype=np.float32), mesh.triangles)
+
+
+def dicom_series(directory) -> List[dict]:
+    """The DICOM series under ``directory`` (up to four levels down): UID,
+    description, modality, files, frames, rows, columns, transfer syntax —
+    pass a ``uid`` to :func:`read_volume` as ``series``."""
+    return json.loads(_chisel.dicom_series(str(directory)))

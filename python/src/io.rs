@@ -64,3 +64,11 @@ pub fn write_mesh(
     let mesh = mesh_from(vertices, triangles)?;
     py.detach(|| io::write_mesh(&path, &mesh)).py_err()
 }
+
+/// The series of the DICOM image files under `dir` (up to four levels
+/// down), as `chisel stats DIR` lists them: JSON.
+#[pyfunction]
+pub fn dicom_series(py: Python<'_>, dir: PathBuf) -> PyResult<String> {
+    let series = py.detach(|| io::dicom_series(&dir)).py_err()?;
+    crate::json::to_json("DICOM series", &series)
+}

@@ -36,6 +36,7 @@ fn _chisel(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(io::write_volume, m)?)?;
     m.add_function(wrap_pyfunction!(io::read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(io::write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(io::dicom_series, m)?)?;
     m.add_function(wrap_pyfunction!(mc::marching_cubes, m)?)?;
     m.add_function(wrap_pyfunction!(scan::scan, m)?)?;
     m.add_function(wrap_pyfunction!(scan::scan_file, m)?)?;

@@ -123,3 +123,16 @@ def test_results_pickle():
     back = pickle.loads(pickle.dumps(s))
     np.testing.assert_array_equal(back.mesh.triangles, s.mesh.triangles)
     assert back.groups == s.groups
+
+
+def test_dicom_directories_list_their_series_and_read_one():
+    from conftest import REPO
+
+    folder = REPO / "tests" / "data" / "dicom" / "two_series"
+    series = chisel.dicom_series(folder)
+    assert len(series) == 2
+    assert all(s["files"] == 2 and s["rows"] == 5 and s["columns"] == 6 for s in series)
+    with pytest.raises(chisel.ChiselError, match=series[1]["uid"]):
+        chisel.read_volume(folder)
+    v = chisel.read_volume(folder, series=series[1]["uid"])
+    assert v.array.shape == (2, 5, 6) and v.space == "LPS"

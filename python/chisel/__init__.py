@@ -8,8 +8,10 @@ slices; nibabel's ``get_fdata()`` is ``(nx, ny, nz)``, its transpose.
 in world units (mm), as SimpleITK's ``GetSpacing()`` / ``GetOrigin()``.
 Vertices are world (x, y, z) positions.
 
-Every call releases the GIL while the engine works; errors are
-:class:`chisel.errors.ChiselError` subclasses with the engine's message.
+Every call releases the GIL while the engine works; the engine's errors
+are :class:`chisel.errors.ChiselError` subclasses with its message (file,
+position, what was expected). Arguments of the wrong Python type raise
+``TypeError`` before the engine runs.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from . import _chisel
 from .errors import (
     CancelledError,
     ChiselError,
+    DivergedError,
     FormatError,
     GpuError,
     InternalError,
@@ -104,6 +107,7 @@ __all__ = [
     "RefusedError",
     "GpuError",
     "CancelledError",
+    "DivergedError",
     "InternalError",
 ]
 

@@ -1,6 +1,6 @@
 # Type stubs of the native module chisel._chisel (python/src/). Users call
 # the package `chisel`, whose wrappers are typed in __init__.py.
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -8,17 +8,24 @@ import numpy.typing as npt
 __version__: str
 
 Vec3 = Tuple[float, float, float]
-# (spacing, origin, axes, space), each in the engine's (x, y, z) order.
+# (spacing, origin, axes, space), each in the engine's (x, y, z) order;
+# taken as tuples, returned as lists.
 Frame = Tuple[Vec3, Vec3, Tuple[Vec3, Vec3, Vec3], Optional[str]]
+FrameOut = Tuple[List[float], List[float], List[List[float]], Optional[str]]
 Progress = Callable[[int, int], object]
 
 def gpu_info(adapter: Optional[str] = None) -> str: ...
-def read_volume(path: str, series: Optional[str] = None) -> Tuple[np.ndarray, Frame, List[str]]: ...
+def read_volume(path: str, series: Optional[str] = None) -> Tuple[np.ndarray, FrameOut, List[str]]: ...
 def write_volume(path: str, array: np.ndarray, frame: Frame) -> None: ...
 def read_mesh(
     path: str,
 ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32], Dict[str, npt.NDArray[np.float32]]]: ...
-def write_mesh(path: str, vertices: npt.NDArray[np.float32], triangles: np.ndarray) -> None: ...
+def write_mesh(
+    path: str,
+    vertices: npt.NDArray[np.float32],
+    triangles: np.ndarray,
+    scalars: Optional[Dict[str, npt.NDArray[np.float32]]] = None,
+) -> None: ...
 def dicom_series(dir: str) -> str: ...
 def marching_cubes(
     array: np.ndarray,
@@ -91,7 +98,7 @@ def hull_scan(
     order: str = "furthest",
     backend: str = "cpu",
     adapter: Optional[str] = None,
-) -> Tuple[npt.NDArray[np.uint8], Tuple[int, int, int]]: ...
+) -> Tuple[npt.NDArray[np.uint8], List[int]]: ...
 def polyhedrize(
     array: np.ndarray,
     frame: Frame,
@@ -103,6 +110,7 @@ def polyhedrize(
     balls: bool = False,
     press_in: bool = False,
     corners: str = "local26",
+    vertices: str = "voxels",
     coplanar: str = "merge",
     order: str = "furthest",
     backend: str = "cpu",
@@ -124,6 +132,7 @@ def relax(
     plan_path: Optional[str] = None,
     plan_json: Optional[str] = None,
     solver: str = "explicit",
+    force_dt: bool = False,
     bending: Optional[float] = None,
     subcutis_depth: Optional[float] = None,
     origin: Optional[Vec3] = None,
@@ -149,8 +158,8 @@ def spline(
 ]: ...
 def scene_examples() -> List[Tuple[str, str]]: ...
 def implicit(
-    scene: str,
-    origin: str,
+    scene_path: Optional[str],
+    scene_text: Optional[str],
     method: str = "particles",
     frames: int = 8,
     edge_length: Optional[float] = None,

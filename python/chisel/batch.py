@@ -6,7 +6,8 @@ Dask.
 ``client`` is None) and returns one report per path, in input order: the
 dict ``chisel scan PATH --json`` prints with those options, or, for a file
 that failed, ``{"volume": path, "error": {"type": ..., "message": ...}}``
-— one failure never stops the batch. ``polyhedrize(paths, ...)`` does
+— one failure never stops the batch (an unknown option name is raised at
+once, before any task). ``polyhedrize(paths, ...)`` does
 the same for :func:`chisel.polyhedrize`. ``table(reports)`` flattens scans into
 one row per structure (a pandas DataFrame when pandas is installed).
 
@@ -23,10 +24,11 @@ they run only where a GPU is.
 
 from __future__ import annotations
 
+import uuid
 from typing import Iterable, List, Optional
 
 from . import hulls
-from .hulls import scan_file
+from .hulls import POLYHEDRIZE_OPTIONS, SCAN_OPTIONS, check_options, scan_file
 from .io import read_volume
 from .errors import ChiselError
 
@@ -65,7 +67,11 @@ def _failed(path: str, e: ChiselError) -> dict:
 def _gpu_resources(client, options: dict) -> Optional[dict]:
     if options.get("backend") != "gpu":
         return None
-    workers = client.scheduler_info().get("workers", {}).values()
+    try:  # every worker (newer distributed lists only the first few by default)
+        info = client.scheduler_info(n_workers=-1)
+    except TypeError:
+        info = client.scheduler_info()
+    workers = info.get("workers", {}).values()
     if any(GPU_RESOURCE in w.get("resources", {}) for w in workers):
         return {GPU_RESOURCE: 1}
     return None
@@ -76,9 +82,10 @@ def _map(task, name: str, paths: Iterable, client, options: dict) -> List[dict]:
     if client is None:
         return [task(p, dict(options)) for p in paths]
     resources = _gpu_resources(client, options)
+    batch = uuid.uuid4().hex[:12]  # keys of concurrent batches never meet
     futures = [
         client.submit(
-            task, p, dict(options), key=f"chisel-{name}-{i}-{p}", resources=resources, pure=False
+            task, p, dict(options), key=f"chisel-{name}-{batch}-{i}", resources=resources, pure=False
         )
         for i, p in enumerate(paths)
     ]
@@ -88,6 +95,7 @@ def _map(task, name: str, paths: Iterable, client, options: dict) -> List[dict]:
 def scan(paths: Iterable, client=None, **options) -> List[dict]:
     """One :func:`chisel.scan_file` report per path, in input order (see the
     module docs); ``options`` as :func:`chisel.scan_file` takes them."""
+    check_options(options, SCAN_OPTIONS + ("level", "labels", "series"), "scan")
     return _map(_scan_one, "scan", paths, client, options)
 
 
@@ -97,6 +105,10 @@ def polyhedrize(paths: Iterable, client=None, **options) -> List[dict]:
     ``object``, ``topology``, ``options``, ``polyhedron`` summary,
     ``zkh`` table, ``mesh`` kind and ``merge_refused`` — the fields of
     ``chisel polyhedrize --json`` — or the file's error."""
+    known = POLYHEDRIZE_OPTIONS + (
+        "level", "label", "component", "slice", "overlapping_siblings", "balls", "press_in", "series",
+    )
+    check_options(options, known, "polyhedrize")
     return _map(_polyhedrize_one, "polyhedrize", paths, client, options)
 
 

@@ -31,6 +31,15 @@ class GpuError(ChiselError):
     """No adapter, a lost device, GPU memory exhausted, a kernel failure."""
 
 
+class DivergedError(ChiselError):
+    """A relaxation diverged; ``report`` holds the engine's report (steps,
+    increments, where it diverged)."""
+
+    def __init__(self, message: str, report: dict):
+        super().__init__(message)
+        self.report = report
+
+
 class CancelledError(ChiselError):
     """The operation was stopped by its caller."""
 
@@ -48,5 +57,6 @@ __all__ = [
     "RefusedError",
     "GpuError",
     "CancelledError",
+    "DivergedError",
     "InternalError",
 ]

@@ -12,15 +12,19 @@ from . import _chisel
 from .errors import ParameterError
 from .types import Hull, HullScan, Mesh, Polyhedron, Volume, as_volume
 
-_SCAN_DEFAULTS = dict(
-    min_voxels=1,
-    corners="local26",
-    vertices="voxels",
-    coplanar="merge",
-    order="furthest",
-    backend="cpu",
-    adapter=None,
-)
+# The option names each function takes; their defaults are the engine's
+# (the command line's), applied in the native module.
+SCAN_OPTIONS = ("min_voxels", "corners", "vertices", "coplanar", "order", "backend", "adapter")
+HULL_OPTIONS = ("corners", "vertices", "coplanar", "order")
+POLYHEDRIZE_OPTIONS = ("corners", "vertices", "coplanar", "order", "backend", "adapter")
+
+
+def check_options(options: dict, known: tuple, what: str) -> dict:
+    """``options`` when every name is one of ``known``."""
+    unknown = set(options) - set(known)
+    if unknown:
+        raise ParameterError(f"unknown {what} option(s) {sorted(unknown)}; known: {sorted(known)}")
+    return options
 
 
 def scan(
@@ -43,7 +47,7 @@ def scan(
     ``progress(done, total)`` runs after each structure; an exception it
     raises (or Ctrl-C) stops the scan."""
     v = as_volume(volume)
-    kw = _scan_options(options)
+    kw = check_options(options, SCAN_OPTIONS, "scan")
     return json.loads(
         _chisel.scan(v.array, v._frame(), name, level, labels, progress=progress, **kw)
     )
@@ -60,29 +64,10 @@ def scan_file(
 ) -> dict:
     """Reads and scans a volume file: the report of ``chisel scan PATH
     --json`` with these options (see :func:`scan`)."""
-    kw = _scan_options(options)
+    kw = check_options(options, SCAN_OPTIONS, "scan")
     return json.loads(
         _chisel.scan_file(str(path), level, labels, series=series, progress=progress, **kw)
     )
-
-
-def _scan_options(options: dict) -> dict:
-    unknown = set(options) - set(_SCAN_DEFAULTS)
-    if unknown:
-        raise ParameterError(
-            f"unknown scan option(s) {sorted(unknown)}; known: {sorted(_SCAN_DEFAULTS)}"
-        )
-    return {**_SCAN_DEFAULTS, **options}
-
-
-_HULL_DEFAULTS = dict(corners="local26", vertices="voxels", coplanar="merge", order="furthest")
-
-
-def _hull_options(options: dict, allowed: dict) -> dict:
-    unknown = set(options) - set(allowed)
-    if unknown:
-        raise ParameterError(f"unknown option(s) {sorted(unknown)}; known: {sorted(allowed)}")
-    return {**allowed, **options}
 
 
 def hull(
@@ -99,7 +84,7 @@ def hull(
     or a 1-based number in file order), with its ZKHs. Options as
     :func:`scan`: ``corners``, ``vertices``, ``coplanar``, ``order``."""
     v = as_volume(volume)
-    kw = _hull_options(options, _HULL_DEFAULTS)
+    kw = check_options(options, HULL_OPTIONS, "hull")
     figures, vertices, faces, (mv, mt) = _chisel.hull(
         v.array, v._frame(), level, label, str(component), zkh, **kw
     )
@@ -111,9 +96,6 @@ def hull(
         vertices, faces, planes, Mesh(mv, mt), f["cells"], f["hull"], f["object"],
         f["candidates"], f["zkh"], f["zkh_skipped"],
     )
-
-
-_POLY_DEFAULTS = dict(corners="local26", coplanar="merge", order="furthest", backend="cpu", adapter=None)
 
 
 def polyhedrize(
@@ -134,7 +116,7 @@ def polyhedrize(
     ``slice=z`` polyhedrizes one z slice (2-D). Options: ``corners``,
     ``coplanar``, ``order``, ``backend``, ``adapter``."""
     v = as_volume(volume)
-    kw = _hull_options(options, _POLY_DEFAULTS)
+    kw = check_options(options, POLYHEDRIZE_OPTIONS, "polyhedrize")
     figures, (mv, mt), kind = _chisel.polyhedrize(
         v.array, v._frame(), level, label, str(component), slice, overlapping_siblings,
         balls, press_in, **kw
@@ -162,7 +144,7 @@ def hull_scan(
     inside) in the volume's (z, y, x) order, starting at voxel
     ``origin`` (x, y, z). Options as :func:`hull`."""
     v = as_volume(volume)
-    kw = _hull_options(options, _HULL_DEFAULTS)
+    kw = check_options(options, HULL_OPTIONS, "hull")
     sides, origin = _chisel.hull_scan(
         v.array, v._frame(), level, label, str(component), backend=backend, adapter=adapter, **kw
     )

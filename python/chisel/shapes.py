@@ -67,17 +67,13 @@ def implicit(
     ``frames`` times by Witkin–Heckbert particles (``method="particles"``)
     or followed by the particle spring network (``"network"``).
     ``progress(done, total)`` runs after each frame; an exception it
-    raises (or Ctrl-C) stops the animation."""
+    raises (or Ctrl-C) stops the animation. ``reports=False`` skips the
+    network's per-frame quality figures (particles report at no cost)."""
     if (scene is None) == (scene_toml is None):
         raise ParameterError("give a scene file or scene_toml, one of them")
-    if scene is not None:
-        origin = str(os.fspath(scene))
-        with open(origin, encoding="utf-8") as f:
-            text = f.read()
-    else:
-        origin, text = "<scene_toml>", str(scene_toml)
+    path = None if scene is None else str(os.fspath(scene))
     meshes, report = _chisel.implicit(
-        text, origin, method, int(frames), edge_length, reports, backend, adapter, progress
+        path, scene_toml, method, int(frames), edge_length, reports, backend, adapter, progress
     )
     return Animation([Mesh(v, t, dict(s)) for v, t, s in meshes], json.loads(report))
 

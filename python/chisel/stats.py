@@ -8,7 +8,8 @@ from typing import Optional, Union
 import numpy as np
 
 from . import _chisel
-from .types import Mesh, Volume, as_volume
+from .errors import ParameterError
+from .types import Mesh, Volume, as_volume, f32_mesh
 
 
 def stats(
@@ -23,8 +24,8 @@ def stats(
     characteristic, orientation, area, signed volume) and its
     self-intersecting triangle pairs."""
     if isinstance(obj, Mesh):
-        return json.loads(
-            _chisel.mesh_stats(np.asarray(obj.vertices, dtype=np.float32), obj.triangles)
-        )
+        if level is not None or label is not None:
+            raise ParameterError("level and label select voxels: a mesh has none")
+        return json.loads(_chisel.mesh_stats(*f32_mesh(obj)))
     v = as_volume(obj)
     return json.loads(_chisel.volume_stats(v.array, v._frame(), level, label))

@@ -10,7 +10,7 @@ from typing import Optional, Sequence, Union
 import numpy as np
 
 from . import _chisel
-from .errors import ParameterError
+from .errors import DivergedError, ParameterError
 from .types import Mesh, Piece, Relaxed, f32_mesh, vec3
 
 
@@ -64,6 +64,7 @@ def relax(
     *,
     plan: Union[dict, str, os.PathLike],
     solver: str = "explicit",
+    force_dt: bool = False,
     bending: Optional[float] = None,
     subcutis_depth: Optional[float] = None,
     origin: Optional[Sequence[float]] = None,
@@ -75,7 +76,9 @@ def relax(
     ``plan`` cuts and moves the bone: a plan file (TOML or JSON) or a dict
     of the same fields (``step``: ``select``, ``translate``, ``rotate``,
     ``increments``, ``iterations``; ``cut``; ``dynamics``). ``solver`` is
-    ``"explicit"`` or ``"chebyshev"``."""
+    ``"explicit"`` or ``"chebyshev"``; ``force_dt`` keeps a ``dt`` above the
+    stability limit. A relaxation that diverges raises
+    :class:`DivergedError`, whose ``report`` says where."""
     if isinstance(plan, dict):
         path, text = None, json.dumps(plan)
     elif isinstance(plan, (str, os.PathLike)):
@@ -88,10 +91,18 @@ def relax(
         path,
         text,
         solver,
+        force_dt,
         bending,
         subcutis_depth,
         None if origin is None else vec3(origin),
         backend,
         adapter,
     )
-    return Relaxed(Mesh(v, t, {"displacement": displacement}), displacement, json.loads(report))
+    report = json.loads(report)
+    if report["relax"]["status"] == "diverged" or not np.isfinite(v).all():
+        raise DivergedError(
+            f"the relaxation diverged after {report['relax']['iterations']} iterations "
+            "(use more increments, or a smaller dt)",
+            report,
+        )
+    return Relaxed(Mesh(v, t, {"displacement": displacement}), displacement, report)

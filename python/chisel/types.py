@@ -238,5 +238,17 @@ def vec3(x) -> Vec3:
 
 
 def f32_mesh(mesh: "Mesh") -> Tuple[np.ndarray, np.ndarray]:
-    """A mesh's arrays as the engine takes them (float32 vertices)."""
-    return np.asarray(mesh.vertices, dtype=np.float32), np.asarray(mesh.triangles)
+    """A mesh's arrays as the engine takes them: float32[N, 3] vertices,
+    integer[M, 3] triangles (any integer dtype; floats are refused, not
+    truncated)."""
+    v = np.asarray(mesh.vertices, dtype=np.float32)
+    t = np.asarray(mesh.triangles)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ParameterError(f"vertices = shape {v.shape}: vertices are float32[N, 3]")
+    if t.size == 0:
+        t = t.reshape(0, 3).astype(np.uint32)
+    if t.dtype.kind not in "iu" or t.ndim != 2 or t.shape[1] != 3:
+        raise ParameterError(
+            f"triangles = {t.dtype}, shape {t.shape}: triangles are integer[M, 3] vertex indices"
+        )
+    return v, t

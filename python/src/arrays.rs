@@ -2,6 +2,7 @@
 //! sample type the engine reads, meshes as `float32[N, 3]` vertices and
 //! `uint32[M, 3]` triangles. Outputs hand their buffers to numpy (no copy).
 
+use chisel::mesh::ScalarField;
 use chisel::volume::{Samples, Space, Volume, VolumeData, VolumeView};
 use chisel::{Error, TriMesh};
 use numpy::ndarray::Array3;
@@ -28,15 +29,21 @@ enum Buf<'py, T: Element> {
 }
 
 impl<'py, T: Element + Copy> Buf<'py, T> {
-    fn of(array: &Bound<'py, PyArray3<T>>) -> Self {
-        let ro = array.readonly();
+    fn of(array: &Bound<'py, PyArray3<T>>) -> PyResult<Self> {
+        let ro = array.try_readonly().map_err(|e| {
+            crate::errors::to_py(Error::param(
+                "array",
+                "borrowed for writing",
+                format!("the array must be readable: {e}"),
+            ))
+        })?;
         // `as_slice` also takes an F-ordered buffer (memory order, z
         // fastest): only a C-ordered one is the engine's order.
-        if ro.is_c_contiguous() && ro.as_slice().is_ok() {
+        Ok(if ro.is_c_contiguous() && ro.as_slice().is_ok() {
             Buf::InPlace(ro)
         } else {
             Buf::Copied(ro.as_array().iter().copied().collect())
-        }
+        })
     }
 
     /// The samples; empty only if the array changed layout since (then
@@ -87,7 +94,7 @@ impl<'py> HeldVolume<'py> {
                     return Ok(HeldVolume {
                         dims: [shape[2], shape[1], shape[0]],
                         frame,
-                        data: Held::$variant(Buf::of(a)),
+                        data: Held::$variant(Buf::of(a)?),
                     });
                 }
             };
@@ -102,12 +109,7 @@ impl<'py> HeldVolume<'py> {
         try_type!(f64, F64);
         if let Ok(a) = array.cast::<PyArray3<bool>>() {
             let shape = a.shape();
-            let data = a
-                .readonly()
-                .as_array()
-                .iter()
-                .map(|&b| u8::from(b))
-                .collect();
+            let data = Buf::of(a)?.slice().iter().map(|&b| u8::from(b)).collect();
             return Ok(HeldVolume {
                 dims: [shape[2], shape[1], shape[0]],
                 frame,
@@ -273,12 +275,34 @@ pub fn mesh_from(
     TriMesh::new(positions, tris).py_err()
 }
 
+/// Per-vertex scalar fields from a dict of 1-D float32 arrays by name.
+pub fn scalars_from(scalars: &Bound<'_, pyo3::types::PyDict>) -> PyResult<Vec<ScalarField>> {
+    let mut out = Vec::with_capacity(scalars.len());
+    for (name, values) in scalars.iter() {
+        let values = values.cast::<PyArray1<f32>>().map_err(|_| {
+            crate::errors::to_py(Error::param(
+                "scalars",
+                name.to_string(),
+                "a scalar field is a float32[N] array",
+            ))
+        })?;
+        out.push(ScalarField {
+            name: name.extract()?,
+            values: values.readonly().as_array().to_vec(),
+        });
+    }
+    Ok(out)
+}
+
+/// A mesh as `(vertices, triangles)` arrays.
+pub type MeshArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
+
 /// `(vertices float32[N, 3], triangles uint32[M, 3])` owning the mesh's buffers.
 pub fn mesh_to<'py>(
     py: Python<'py>,
     positions: Vec<glam::Vec3>,
     triangles: Vec<[u32; 3]>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+) -> PyResult<MeshArrays<'py>> {
     let (n, m) = (positions.len(), triangles.len());
     let flat: Vec<f32> = bytemuck::allocation::cast_vec(positions);
     let v = PyArray1::from_vec(py, flat).reshape([n, 3])?;
@@ -290,7 +314,7 @@ pub fn mesh_to<'py>(
 /// Per-vertex scalar fields as a dict of float32 arrays by name.
 pub fn scalars_to<'py>(
     py: Python<'py>,
-    scalars: Vec<chisel::mesh::ScalarField>,
+    scalars: Vec<ScalarField>,
 ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
     let dict = pyo3::types::PyDict::new(py);
     for s in scalars {

@@ -6,7 +6,6 @@ use chisel::Result;
 use chisel::blobby::RangePoints;
 use chisel::blobby::Weights;
 use chisel::blobby::fit::{FitOptions, FitStage, fit};
-use chisel::gpu::Backend;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 use serde::Serialize;
@@ -57,9 +56,9 @@ pub fn blobby_fit<'py>(
         .detach(|| -> Result<_> {
             let mut points = RangePoints::from_mesh(&scan)?;
             let normals_turned = points.orient_outward();
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            let result = fit(&points, &options, backend, |_| {})?;
+            let result = crate::gpu::with_backend(backend, adapter.as_deref(), |b| {
+                fit(&points, &options, b, |_| {})
+            })?;
             let figures = BlobbyFigures {
                 options,
                 normals_turned,

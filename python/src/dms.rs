@@ -5,10 +5,9 @@
 use chisel::dms::fit::FitReport;
 use chisel::dms::param::Projection;
 use chisel::dms::spline::{Fit, SplineOptions, SplineTimings, spline as run_spline};
-use chisel::gpu::Backend;
 use chisel::{Error, Result};
 use glam::{DVec2, Vec3};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use serde::Serialize;
 
@@ -52,6 +51,23 @@ pub fn spline<'py>(
     adapter: Option<String>,
 ) -> PyResult<SplineResult<'py>> {
     let mesh = mesh_from(vertices, triangles)?;
+    let columns = |name: &str, shape: &[usize], n: usize| {
+        if shape[1] == n {
+            Ok(())
+        } else {
+            Err(crate::errors::to_py(Error::param(
+                name,
+                format!("shape {shape:?}"),
+                format!("{n} columns"),
+            )))
+        }
+    };
+    if let Some(uv) = &uv {
+        columns("uv", uv.shape(), 2)?;
+    }
+    if let Some(d) = &data {
+        columns("data", d.shape(), 3)?;
+    }
     let projection = match (param, uv) {
         ("given", Some(uv)) => Projection::Given(
             uv.as_array()
@@ -97,9 +113,9 @@ pub fn spline<'py>(
     };
     let (figures, surface, net) = py
         .detach(|| -> Result<_> {
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            let (domain, surface) = run_spline(&mesh, &options, backend)?;
+            let (domain, surface) = crate::gpu::with_backend(backend, adapter.as_deref(), |b| {
+                run_spline(&mesh, &options, b)
+            })?;
             let net = domain.control_mesh(&surface.controls);
             let figures = SplineFigures {
                 fit: surface.fit.clone(),

@@ -12,7 +12,15 @@ fn class_name(e: &Error) -> &'static str {
     match e.root() {
         Error::Io { .. } => "IoError",
         Error::Format { .. } | Error::Unsupported { .. } => "FormatError",
-        Error::Size { .. } | Error::Limit { .. } | Error::HostMemory { .. } => "LimitError",
+        // A size past a budget or the address space is a limit; past the
+        // data a file holds, a truncated file.
+        Error::Size { limit_kind, .. }
+            if limit_kind.contains("budget") || limit_kind.contains("address space") =>
+        {
+            "LimitError"
+        }
+        Error::Size { .. } => "FormatError",
+        Error::Limit { .. } | Error::HostMemory { .. } => "LimitError",
         Error::InvalidParameter { .. }
         | Error::Mismatch { .. }
         | Error::Empty { .. }
@@ -32,16 +40,23 @@ fn class_name(e: &Error) -> &'static str {
     }
 }
 
-/// `e` as the `chisel.errors` exception of its kind.
+/// `e` as the `chisel.errors` exception of its kind, its message the
+/// engine's. An `IoError` (an `OSError`) also carries the errno. Should the
+/// classes not import, a `RuntimeError` with the message.
 pub fn to_py(e: Error) -> PyErr {
+    let message = e.to_string();
     Python::attach(|py| {
         let class = py
             .import("chisel.errors")
             .and_then(|m| m.getattr(class_name(&e)))
             .and_then(|c| Ok(c.cast_into::<PyType>()?));
-        match class {
-            Ok(class) => PyErr::from_type(class, e.to_string()),
-            Err(import_error) => import_error,
+        match (class, e.root()) {
+            (Ok(class), Error::Io { error, .. }) => match error.raw_os_error() {
+                Some(errno) => PyErr::from_type(class, (errno, message)),
+                None => PyErr::from_type(class, message),
+            },
+            (Ok(class), _) => PyErr::from_type(class, message),
+            (Err(_), _) => pyo3::exceptions::PyRuntimeError::new_err(message),
         }
     })
 }

@@ -5,18 +5,15 @@ use chisel::fusion::{
     FuseOptions, FusionReport, MorphOptions, MorphReport, RefineOptions, fuse as run_fuse,
     morph as run_morph,
 };
-use chisel::gpu::Backend;
 use chisel::{Error, Result};
 use glam::Vec3;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
 
-use crate::arrays::{mesh_from, mesh_to};
+use crate::arrays::{MeshArrays, mesh_from, mesh_to};
 use crate::errors::IntoPy;
 use crate::json::to_json;
 
-/// A mesh as `(vertices, triangles)` arrays.
-type MeshArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
 /// Two input meshes.
 type Pair<'py> = (
     PyReadonlyArray2<'py, f32>,
@@ -66,9 +63,9 @@ pub fn fuse<'py>(
     };
     let fused = py
         .detach(|| -> Result<_> {
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            run_fuse(&a, &b, &options, backend, |_| {})
+            crate::gpu::with_backend(backend, adapter.as_deref(), |on| {
+                run_fuse(&a, &b, &options, on, |_| {})
+            })
         })
         .py_err()?;
     let report: FusionReport = fused.report;
@@ -105,9 +102,9 @@ pub fn morph<'py>(
     };
     let morph = py
         .detach(|| -> Result<_> {
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            run_morph(&a, &b, &options, backend, |_| {})
+            crate::gpu::with_backend(backend, adapter.as_deref(), |on| {
+                run_morph(&a, &b, &options, on, |_| {})
+            })
         })
         .py_err()?;
     let report: MorphReport = morph.report;

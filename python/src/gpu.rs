@@ -5,7 +5,7 @@
 use std::str::FromStr;
 use std::sync::{Arc, Mutex};
 
-use chisel::gpu::{AdapterChoice, Gpu, GpuOptions};
+use chisel::gpu::{AdapterChoice, Backend, Gpu, GpuOptions};
 use chisel::{Error, Result};
 use pyo3::prelude::*;
 
@@ -40,19 +40,45 @@ pub fn device(adapter: Option<&str>) -> Result<Arc<Gpu>> {
     Ok(gpu)
 }
 
+/// Software adapters found by `auto`, by adapter choice: probed once.
+static PROBED: Mutex<Vec<(String, bool)>> = Mutex::new(Vec::new());
+
+/// Whether `adapter` names a software adapter (or none opens: `auto`
+/// then runs on the CPU, as the command line's `--backend auto`).
+fn software(adapter: Option<&str>) -> Result<bool> {
+    let choice = choice(adapter)?;
+    let key = choice.to_string();
+    let mut probed = PROBED
+        .lock()
+        .map_err(|_| Error::Internal("the adapter probe lock is poisoned".into()))?;
+    if let Some((_, s)) = probed.iter().find(|(k, _)| *k == key) {
+        return Ok(*s);
+    }
+    let s = chisel::gpu::probe_adapter(&choice).map_or(true, |(_, software)| software);
+    probed.push((key, s));
+    Ok(s)
+}
+
 /// The device `backend` asks for: `"cpu"` none, `"gpu"` the adapter's,
-/// `"auto"` the adapter's unless it is a software one (as the command
-/// line's `--backend auto`).
-pub fn backend(backend: &str, adapter: Option<&str>) -> Result<Option<Arc<Gpu>>> {
+/// `"auto"` the adapter's unless it is a software one.
+pub fn device_for(backend: &str, adapter: Option<&str>) -> Result<Option<Arc<Gpu>>> {
     match backend {
         "cpu" => Ok(None),
         "gpu" => device(adapter).map(Some),
-        "auto" => match chisel::gpu::probe_adapter(&choice(adapter)?) {
-            Ok((_, false)) => device(adapter).map(Some),
-            Ok((_, true)) | Err(_) => Ok(None),
-        },
+        "auto" if software(adapter)? => Ok(None),
+        "auto" => device(adapter).map(Some),
         other => Err(Error::unknown("backend", other, ["cpu", "gpu", "auto"])),
     }
+}
+
+/// Runs `f` on the backend `backend` and `adapter` ask for.
+pub fn with_backend<T>(
+    backend: &str,
+    adapter: Option<&str>,
+    f: impl FnOnce(Backend<'_>) -> Result<T>,
+) -> Result<T> {
+    let gpu = device_for(backend, adapter)?;
+    f(gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu))
 }
 
 /// The adapters and the one `adapter` opens, as `chisel info --json`.

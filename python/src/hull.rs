@@ -2,7 +2,6 @@
 //! lossless polyhedrization (`chisel polyhedrize`): faces, cells and the
 //! ZKH tables as JSON, surfaces as meshes.
 
-use chisel::gpu::Backend;
 use chisel::hull::{CellList, ConvexHull, HalfSpace, HullSummary};
 use chisel::hull_scan::VoxelBox;
 use chisel::polyhedron::{
@@ -15,13 +14,10 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use serde::Serialize;
 
-use crate::arrays::{Frame, mesh_to, volume_from};
+use crate::arrays::{Frame, MeshArrays, mesh_to, volume_from};
 use crate::errors::IntoPy;
 use crate::json::to_json;
 use crate::options::{HullArgs, selection};
-
-/// A mesh as `(vertices, triangles)` arrays.
-type MeshArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
 
 /// `(figures JSON, hull vertices, faces, mesh)`.
 type HullResult<'py> = (String, Bound<'py, PyAny>, Vec<Vec<u32>>, MeshArrays<'py>);
@@ -137,7 +133,7 @@ pub fn hull<'py>(
 /// `merge_refused`; the mesh is the merged surface (kind `"merged"`) or,
 /// where it cannot be merged, the shells (`"shells"`).
 #[pyfunction]
-#[pyo3(signature = (array, frame, level = None, label = None, component = "largest", slice = None, overlapping_siblings = false, balls = false, press_in = false, corners = "local26", coplanar = "merge", order = "furthest", backend = "cpu", adapter = None))]
+#[pyo3(signature = (array, frame, level = None, label = None, component = "largest", slice = None, overlapping_siblings = false, balls = false, press_in = false, corners = "local26", vertices = "voxels", coplanar = "merge", order = "furthest", backend = "cpu", adapter = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn polyhedrize<'py>(
     py: Python<'py>,
@@ -151,6 +147,7 @@ pub fn polyhedrize<'py>(
     balls: bool,
     press_in: bool,
     corners: &str,
+    vertices: &str,
     coplanar: &str,
     order: &str,
     backend: &str,
@@ -159,7 +156,7 @@ pub fn polyhedrize<'py>(
     let (selection, component) = selection(level, label, component).py_err()?;
     let (candidates, hull) = HullArgs {
         corners,
-        vertices: "voxels",
+        vertices,
         coplanar,
         order,
     }
@@ -181,9 +178,9 @@ pub fn polyhedrize<'py>(
             };
             let object = DigitalObject::from_volume(&volume, selection, component)?;
             let topology = object.topology()?;
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            let (poly, zkh) = run_polyhedrize(&object, options, backend, &|_| {})?;
+            let (poly, zkh) = crate::gpu::with_backend(backend, adapter.as_deref(), |b| {
+                run_polyhedrize(&object, options, b, &|_| {})
+            })?;
             let (mesh, kind, refused) = match poly.merged_surface() {
                 Ok(m) if !m.triangles.is_empty() => (m.to_mesh(&poly.frame)?, "merged", None),
                 Ok(_) => (poly.to_mesh()?, "shells", Some("no 3-D shell".to_string())),
@@ -249,9 +246,9 @@ pub fn hull_scan<'py>(
                 origin: lo,
                 dims: std::array::from_fn(|a| (hi[a] - lo[a] + 1).max(0) as usize),
             };
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            hull.row_spans(&bbox, backend)?.to_classification()
+            crate::gpu::with_backend(backend, adapter.as_deref(), |b| {
+                hull.row_spans(&bbox, b)?.to_classification()
+            })
         })
         .py_err()?;
     let [nx, ny, nz] = classification.bbox.dims;

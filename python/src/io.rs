@@ -9,7 +9,7 @@ use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{Frame, mesh_from, mesh_to, scalars_to, volume_from, volume_to};
+use crate::arrays::{Frame, mesh_from, mesh_to, scalars_from, scalars_to, volume_from, volume_to};
 use crate::errors::IntoPy;
 
 /// Reads a volume (a file, or a DICOM directory with `series` choosing
@@ -53,16 +53,23 @@ pub fn read_mesh(
     Ok((v, t, scalars))
 }
 
-/// Writes a mesh, atomically; the format follows the extension.
+/// Writes a mesh with its per-vertex scalars (where the format carries
+/// them: PLY, VTK, VTP), atomically; the format follows the extension.
 #[pyfunction]
+#[pyo3(signature = (path, vertices, triangles, scalars = None))]
 pub fn write_mesh(
     py: Python<'_>,
     path: PathBuf,
     vertices: PyReadonlyArray2<'_, f32>,
     triangles: &Bound<'_, PyAny>,
+    scalars: Option<Bound<'_, PyDict>>,
 ) -> PyResult<()> {
-    let mesh = mesh_from(vertices, triangles)?;
-    py.detach(|| io::write_mesh(&path, &mesh)).py_err()
+    let mut mesh = mesh_from(vertices, triangles)?;
+    if let Some(s) = scalars {
+        mesh.scalars = scalars_from(&s)?;
+    }
+    py.detach(|| mesh.validate().and_then(|()| io::write_mesh(&path, &mesh)))
+        .py_err()
 }
 
 /// The series of the DICOM image files under `dir` (up to four levels

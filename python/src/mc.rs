@@ -1,14 +1,15 @@
 //! Marching cubes of a numpy volume (`chisel mc`), with the seed's
 //! grouping: the mesh, each triangle's group and the groups' figures.
 
-use chisel::gpu::Backend;
+use chisel::Result;
 use chisel::mc::{IsoSpec, McOptions};
-use chisel::{Error, Result};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
 use crate::arrays::{Frame, HeldVolume, mesh_to};
 use crate::errors::IntoPy;
+use crate::json::to_json;
+use crate::options::Iso;
 
 /// `(vertices, triangles, triangle_groups or None, groups as JSON)`.
 type McResult<'py> = (
@@ -35,32 +36,25 @@ pub fn marching_cubes<'py>(
     backend: &str,
     adapter: Option<String>,
 ) -> PyResult<McResult<'py>> {
-    let iso = match (level, label) {
-        (Some(l), None) => Ok(IsoSpec::Level(l as f32)),
-        (None, Some(l)) => Ok(IsoSpec::Label(l)),
-        _ => Err(Error::param(
-            "level, label",
-            format!("{level:?}, {label:?}"),
-            "give exactly one of them",
-        )),
-    }
-    .py_err()?;
+    let iso = match Iso::of(level, label).py_err()? {
+        Iso::Level(l) => IsoSpec::Level(l as f32),
+        Iso::Label(l) => IsoSpec::Label(l),
+    };
     // A C-ordered array is read in place, not copied.
     let held = HeldVolume::of(array, frame)?;
     let volume = held.view()?;
     let surface = py
         .detach(|| -> Result<_> {
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
             let options = McOptions {
                 close_border,
                 mesh_only: !groups,
             };
-            chisel::mc::marching_cubes(volume, iso, &options, backend)
+            crate::gpu::with_backend(backend, adapter.as_deref(), |b| {
+                chisel::mc::marching_cubes(volume, iso, &options, b)
+            })
         })
         .py_err()?;
-    let figures = serde_json::to_string(&surface.groups)
-        .map_err(|e| crate::errors::to_py(Error::Internal(format!("groups to JSON: {e}"))))?;
+    let figures = to_json("groups", &surface.groups)?;
     let triangle_groups =
         groups.then(|| PyArray1::from_vec(py, surface.triangle_groups).into_any());
     let (v, t) = mesh_to(py, surface.mesh.positions, surface.mesh.triangles)?;

@@ -61,6 +61,44 @@ impl HullArgs<'_> {
     }
 }
 
+/// `level` (samples ≥ T) or `label` (samples == L): exactly one of them,
+/// not NaN (as the command line's `--level` / `--label`).
+#[derive(Debug, Clone, Copy)]
+pub enum Iso {
+    Level(f64),
+    Label(f64),
+}
+
+impl Iso {
+    pub fn of(level: Option<f64>, label: Option<f64>) -> Result<Iso> {
+        let iso = match (level, label) {
+            (Some(t), None) => Iso::Level(t),
+            (None, Some(l)) => Iso::Label(l),
+            _ => {
+                return Err(Error::param(
+                    "level, label",
+                    format!("{level:?}, {label:?}"),
+                    "give exactly one of them",
+                ));
+            }
+        };
+        match iso {
+            Iso::Level(v) | Iso::Label(v) if v.is_nan() => {
+                Err(Error::param("level, label", "NaN", "must be a number"))
+            }
+            _ => Ok(iso),
+        }
+    }
+}
+
+/// A scan's `level` (`None`: labels); not NaN.
+pub fn level(level: Option<f64>) -> Result<Option<f64>> {
+    match level {
+        Some(t) if t.is_nan() => Err(Error::param("level", "NaN", "must be a number")),
+        other => Ok(other),
+    }
+}
+
 /// The object of `chisel hull` / `polyhedrize`: `level` (samples ≥ T) or
 /// `label` (samples == L), and `component` (`"largest"`, `"all"` or a
 /// 1-based number as a string).
@@ -69,16 +107,9 @@ pub fn selection(
     label: Option<f64>,
     component: &str,
 ) -> Result<(Selection, Component)> {
-    let selection = match (level, label) {
-        (Some(t), None) => Selection::Threshold(t),
-        (None, Some(l)) => Selection::Label(l),
-        _ => {
-            return Err(Error::param(
-                "level, label",
-                format!("{level:?}, {label:?}"),
-                "give exactly one of them",
-            ));
-        }
+    let selection = match Iso::of(level, label)? {
+        Iso::Level(t) => Selection::Threshold(t),
+        Iso::Label(l) => Selection::Label(l),
     };
     let component = match component {
         "largest" => Component::Largest,

@@ -14,6 +14,7 @@ use chisel::{Error, Result};
 use pyo3::prelude::*;
 
 use crate::arrays::{Frame, volume_from};
+use crate::errors::IntoPy;
 use crate::options::HullArgs;
 use crate::progress::Progress;
 
@@ -24,14 +25,14 @@ fn options(
     min_voxels: u64,
     hull: HullArgs<'_>,
 ) -> Result<ScanOptions> {
-    let level = match (level, labels) {
+    let level = match (crate::options::level(level)?, labels) {
         (Some(t), false) => Some(t),
         (None, true) => None,
         _ => {
             return Err(Error::param(
                 "level, labels",
                 format!("{level:?}, {labels}"),
-                "give a level or labels=True, not both",
+                "give a level or labels=True: one of them",
             ));
         }
     };
@@ -50,7 +51,7 @@ fn run(
     py: Python<'_>,
     path: &Path,
     volume: Result<(Volume, f64)>,
-    options: Result<ScanOptions>,
+    options: ScanOptions,
     backend: &str,
     adapter: Option<&str>,
     progress: Option<Py<PyAny>>,
@@ -58,9 +59,8 @@ fn run(
     let mut progress = Progress::new(progress, format!("{}: scan", path.display()));
     let result = py.detach(|| -> Result<String> {
         let (volume, read_s) = volume?;
-        let options = options?;
         let t = Instant::now();
-        let gpu = crate::gpu::backend(backend, adapter)?;
+        let gpu = crate::gpu::device_for(backend, adapter)?;
         let adapter_s = gpu.as_ref().map(|_| t.elapsed().as_secs_f64());
         let input = ScanInput {
             path,
@@ -96,14 +96,14 @@ pub fn scan(
     adapter: Option<String>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let volume = volume_from(array, frame)?;
     let hull = HullArgs {
         corners,
         vertices,
         coplanar,
         order,
     };
-    let options = options(level, labels, min_voxels, hull);
+    let options = options(level, labels, min_voxels, hull).py_err()?;
+    let volume = volume_from(array, frame)?;
     run(
         py,
         &name,
@@ -141,7 +141,7 @@ pub fn scan_file(
         coplanar,
         order,
     };
-    let options = options(level, labels, min_voxels, hull);
+    let options = options(level, labels, min_voxels, hull).py_err()?;
     let volume = py.detach(|| {
         let t = Instant::now();
         chisel::io::read_volume_with(&path, &ReadOptions { series })

@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use serde::Serialize;
 
 use crate::arrays::{Frame, mesh_from, volume_from};
+use crate::errors::IntoPy;
 use crate::json::to_json;
 
 /// What [`volume_stats`] returns (typed, so that f32 figures print as
@@ -39,6 +40,8 @@ pub fn volume_stats(
     level: Option<f64>,
     label: Option<f64>,
 ) -> PyResult<String> {
+    let level = crate::options::level(level).py_err()?;
+    let label = crate::options::level(label).py_err()?;
     let volume = volume_from(array, frame)?;
     let value = py.detach(|| VolumeFigures {
         stats: VolumeStats::of(&volume),

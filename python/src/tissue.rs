@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 
-use chisel::gpu::Backend;
 use chisel::tissue::network::{Material, Stiffness};
 use chisel::tissue::{
     BoneCutFigures, Fragments, Job, NetworkParams, Plan, RelaxOptions, RelaxReport, Solver,
@@ -13,12 +12,9 @@ use numpy::{PyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use serde::Serialize;
 
-use crate::arrays::{mesh_from, mesh_to};
+use crate::arrays::{MeshArrays, mesh_from, mesh_to};
 use crate::errors::IntoPy;
 use crate::json::to_json;
-
-/// A mesh as `(vertices, triangles)` arrays.
-type MeshArrays<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>);
 
 /// The report [`relax`] returns.
 #[derive(Debug, Serialize)]
@@ -32,7 +28,7 @@ struct Relaxation {
 /// text) moves the bone: `(relaxed skin, displacement float32[N], report
 /// JSON)`. The report is the engine's relaxation report plus `bone_cut`.
 #[pyfunction]
-#[pyo3(signature = (skin_vertices, skin_triangles, bone = None, plan_path = None, plan_json = None, solver = "explicit", bending = None, subcutis_depth = None, origin = None, backend = "cpu", adapter = None))]
+#[pyo3(signature = (skin_vertices, skin_triangles, bone = None, plan_path = None, plan_json = None, solver = "explicit", force_dt = false, bending = None, subcutis_depth = None, origin = None, backend = "cpu", adapter = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn relax<'py>(
     py: Python<'py>,
@@ -42,6 +38,7 @@ pub fn relax<'py>(
     plan_path: Option<PathBuf>,
     plan_json: Option<String>,
     solver: &str,
+    force_dt: bool,
     bending: Option<f32>,
     subcutis_depth: Option<f32>,
     origin: Option<[f32; 3]>,
@@ -82,12 +79,12 @@ pub fn relax<'py>(
             let job = Job::build(skin, bone, plan, Fragments::new(), &params)?;
             let mut opts = RelaxOptions {
                 solver,
+                force_dt,
                 ..Default::default()
             };
             dynamics.apply_to_options(&mut opts);
-            let gpu = crate::gpu::backend(backend, adapter.as_deref())?;
-            let backend = gpu.as_deref().map_or(Backend::Cpu, Backend::Gpu);
-            let report = job.run(&opts, backend)?;
+            let report =
+                crate::gpu::with_backend(backend, adapter.as_deref(), |b| job.run(&opts, b))?;
             let relaxed = report.skin_mesh(&job.network);
             let displacement = report.displacement.clone();
             let value = Relaxation {

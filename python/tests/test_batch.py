@@ -1,18 +1,15 @@
 """chisel.batch: one Dask task per volume on a LocalCluster of 2 worker
-processes over 9 volumes (scans; polyhedra of the generated ones) (the shared CT, MR, label and 2-D images plus
-four generated phantoms in four formats) and one broken file: results
-equal the serial loop's and the command line's, in input order."""
+processes over 8 volumes (the shared CT, MR, label and 2-D images plus
+four generated phantoms in four formats) and one broken file — scans of
+all, polyhedra of the generated ones: results equal the serial loop's and
+the command line's, in input order; GPU tasks go where the GPU is."""
 
 import pytest
 
 import chisel
-from conftest import phantoms
+from conftest import phantoms, without_timings
 
 OPTIONS = dict(level=5, min_voxels=20)
-
-
-def without_timings(report):
-    return {k: v for k, v in report.items() if k != "timings_s"}
 
 
 @pytest.fixture(scope="module")
@@ -82,18 +79,35 @@ def test_polyhedra_on_the_cluster_equal_the_serial_loop_and_the_cli(paths, clien
         assert mine[key] == theirs[key], key
 
 
-def test_gpu_tasks_ask_for_the_gpu_resource(paths, client):
+def test_gpu_tasks_run_only_where_the_gpu_resource_is(paths, client):
     distributed = pytest.importorskip("distributed")
     small = [p for p in paths if "phantoms" in str(p) and p.name != "broken.mha"]
     # Workers without a GPU resource: GPU tasks ask for none and run anywhere.
     assert chisel.batch._gpu_resources(client, {"backend": "gpu"}) is None
-    with distributed.LocalCluster(
-        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
-        resources={"GPU": 1},
-    ) as cluster, distributed.Client(cluster) as gpu_client:
+    # Two workers, one with the resource `GPU`: GPU tasks go there only.
+    spec = {
+        "plain": {"cls": distributed.Nanny, "options": {"nthreads": 1}},
+        "gpu": {"cls": distributed.Nanny, "options": {"nthreads": 1, "resources": {"GPU": 1}}},
+    }
+    scheduler = {"cls": distributed.Scheduler, "options": {"dashboard_address": ":0"}}
+    with distributed.SpecCluster(workers=spec, scheduler=scheduler) as cluster, distributed.Client(
+        cluster
+    ) as gpu_client:
+        gpu_client.wait_for_workers(2)
         assert chisel.batch._gpu_resources(gpu_client, {"backend": "gpu"}) == {"GPU": 1}
         assert chisel.batch._gpu_resources(gpu_client, {"backend": "cpu"}) is None
-        on_gpu = chisel.batch.scan(small, client=gpu_client, backend="gpu", **OPTIONS)
-    on_cpu = chisel.batch.scan(small, **OPTIONS)
-    assert [r["backend"] for r in on_gpu] == ["gpu"] * len(small)
+        on_gpu = chisel.batch.scan(small * 2, client=gpu_client, backend="gpu", **OPTIONS)
+        ran = gpu_client.run(
+            lambda dask_worker: sum(
+                1 for entry in dask_worker.state.log if str(entry[0]).startswith("chisel-scan")
+            )
+        )
+        resources = {
+            addr: w["resources"]
+            for addr, w in gpu_client.scheduler_info()["workers"].items()
+        }
+    by_resource = {("GPU" in resources[addr]): n for addr, n in ran.items()}
+    assert by_resource[False] == 0 and by_resource[True] > 0, (ran, resources)
+    on_cpu = chisel.batch.scan(small * 2, **OPTIONS)
+    assert [r["backend"] for r in on_gpu] == ["gpu"] * len(on_gpu)
     assert [r["rows"] for r in on_gpu] == [r["rows"] for r in on_cpu]

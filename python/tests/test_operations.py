@@ -1,6 +1,7 @@
 """The engine's operations from Python equal the command line's on the
 real data; GPU results match the CPU's; errors are typed exceptions."""
 
+import errno
 import json
 import threading
 
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 import chisel
-from conftest import ball
+from conftest import ball, without_timings
 
 
 def test_gpu_info_reports_the_adapter():
@@ -52,10 +53,6 @@ def test_label_surface(data):
     assert len(s.mesh.triangles) > 0
     with pytest.raises(chisel.ParameterError, match="exactly one"):
         chisel.marching_cubes(frog, level=1, label=4)
-
-
-def without_timings(report):
-    return {k: v for k, v in report.items() if k != "timings_s"}
 
 
 def test_scan_equals_the_command_line(data, cli):
@@ -109,27 +106,34 @@ def test_errors_are_typed_with_the_engine_message(tmp_path, data):
 
 
 def test_the_gil_is_released_while_the_engine_works(data):
+    import sys
+    import time
+
     v = chisel.read_volume(data("froggy/frogtissue.mhd"))
-    count = 0
+    stamps = []
     stop = threading.Event()
 
     def spin():
-        nonlocal count
         while not stop.is_set():
-            count += 1
+            stamps.append(time.perf_counter())
 
     thread = threading.Thread(target=spin)
     thread.start()
     try:
-        before = count
-        chisel.marching_cubes(v, level=1)  # ~0.1 s of engine work
-        during = count - before
+        time.sleep(0.05)  # the spinner is running
+        t0 = time.perf_counter()
+        chisel.marching_cubes(v, level=1)  # ~0.2 s of engine work
+        t1 = time.perf_counter()
     finally:
         stop.set()
         thread.join()
-    # With the GIL held the spinning thread could not count while the
-    # engine ran; released, it counts many times.
-    assert during > 1000, during
+    # Held, the GIL would let the spinner run at most one switch interval
+    # after the call began and after it ended; stamps well inside the call
+    # prove the engine ran without it.
+    margin = 2 * sys.getswitchinterval()
+    assert t1 - t0 > 4 * margin, "the call is too short to tell"
+    inside = [t for t in stamps if t0 + margin < t < t1 - margin]
+    assert len(inside) > 1000, (len(inside), t1 - t0)
 
 
 def test_ctrl_c_stops_a_scan_between_structures(data):
@@ -170,3 +174,34 @@ def test_the_readme_example_runs_as_written(tmp_path, data):
     assert out.returncode == 0, out.stderr
     assert (cwd / "bone.ply").exists()
     assert "(39420, 3) 76" in out.stdout
+
+
+def test_inputs_the_command_line_refuses_are_refused(tmp_path):
+    sphere = chisel.marching_cubes(ball(12, (6, 6, 6), 4), level=0.5).mesh
+    with pytest.raises(chisel.ParameterError, match="NaN"):
+        chisel.hull(ball(8, (4, 4, 4), 2), level=float("nan"))
+    with pytest.raises(chisel.ParameterError, match="NaN"):
+        chisel.scan(ball(8, (4, 4, 4), 2), level=float("nan"))
+    with pytest.raises(chisel.ParameterError, match="integer"):
+        chisel.stats(chisel.Mesh(sphere.vertices, sphere.triangles.astype(np.float64)))
+    with pytest.raises(chisel.ParameterError, match="a mesh has none"):
+        chisel.stats(sphere, level=1)
+    with pytest.raises(chisel.ParameterError, match="uv"):
+        chisel.spline(sphere, 3, param="given", uv=np.zeros((len(sphere.vertices), 1)))
+    with pytest.raises(chisel.IoError, match="missing.toml") as e:  # an OSError with its errno
+        chisel.implicit(tmp_path / "missing.toml")
+    assert e.value.errno == errno.ENOENT
+    with pytest.raises(chisel.ParameterError, match="unknown scan option"):
+        chisel.batch.scan([tmp_path / "a.nrrd", tmp_path / "b.nrrd"], level=1, corner="local6")
+
+
+def test_scalars_are_written_with_the_mesh(tmp_path):
+    s = chisel.marching_cubes(ball(12, (6, 6, 6), 4), level=0.5).mesh
+    s.scalars["height"] = s.vertices[:, 2].copy()
+    for ext in ("ply", "vtk", "vtp"):
+        chisel.write_mesh(tmp_path / f"h.{ext}", s)
+        back = chisel.read_mesh(tmp_path / f"h.{ext}")
+        np.testing.assert_array_equal(back.scalars["height"], s.scalars["height"])
+    s.scalars["short"] = np.zeros(3, np.float32)
+    with pytest.raises(chisel.ChiselError, match="short"):
+        chisel.write_mesh(tmp_path / "bad.ply", s)

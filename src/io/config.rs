@@ -35,7 +35,7 @@ pub(crate) fn toml_message(text: &str, e: &toml::de::Error) -> String {
 
 /// A configuration file as text, read within the input budget; invalid
 /// UTF-8 is an error at its byte offset.
-pub(crate) fn read_text(path: &std::path::Path) -> crate::Result<String> {
+pub fn read_text(path: &std::path::Path) -> crate::Result<String> {
     let bytes =
         super::read_whole_with(path, |head| super::sniff_text(path, head, "configuration"))?;
     String::from_utf8(bytes).map_err(|e| {

@@ -60,6 +60,8 @@ mod text;
 mod vtk;
 mod vtk_xml;
 
+/// A configuration file (plan, scene) as text, within the input budget.
+pub use config::read_text;
 pub use dicom::SeriesInfo;
 pub use raw::{RawSpec, read_raw_volume};
 

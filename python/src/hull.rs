@@ -17,7 +17,7 @@ use serde::Serialize;
 use crate::arrays::{Frame, MeshArrays, mesh_to, volume_from};
 use crate::errors::IntoPy;
 use crate::json::to_json;
-use crate::options::{HullArgs, selection};
+use crate::options::{HullArgs, ObjectArgs};
 
 /// `(figures JSON, hull vertices, faces, mesh)`.
 type HullResult<'py> = (String, Bound<'py, PyAny>, Vec<Vec<u32>>, MeshArrays<'py>);
@@ -75,21 +75,20 @@ pub fn hull<'py>(
     coplanar: &str,
     order: &str,
 ) -> PyResult<HullResult<'py>> {
-    let (selection, component) = selection(level, label, component).py_err()?;
-    let (kind, options) = HullArgs {
+    let hull_args = HullArgs {
         corners,
         vertices,
         coplanar,
         order,
-    }
-    .parse()
-    .py_err()?;
+    };
+    let args = ObjectArgs::parse(level, label, component, hull_args).py_err()?;
+    let kind = args.candidates;
     let volume = volume_from(array, frame)?;
     let (figures, hull, mesh) = py
         .detach(|| -> Result<_> {
-            let object = DigitalObject::from_volume(&volume, selection, component)?;
+            let object = DigitalObject::from_volume(&volume, args.selection, args.component)?;
             let candidates = object.candidates(kind);
-            let hull = ConvexHull::build(&candidates, options)?;
+            let hull = ConvexHull::build(&candidates, args.hull)?;
             let frame = object.frame();
             let (zkhs, skipped) = if !zkh {
                 (None, Some("zkh=False"))
@@ -153,18 +152,17 @@ pub fn polyhedrize<'py>(
     backend: &str,
     adapter: Option<String>,
 ) -> PyResult<(String, MeshArrays<'py>, &'static str)> {
-    let (selection, component) = selection(level, label, component).py_err()?;
-    let (candidates, hull) = HullArgs {
+    let hull_args = HullArgs {
         corners,
         vertices,
         coplanar,
         order,
-    }
-    .parse()
-    .py_err()?;
+    };
+    let args = ObjectArgs::parse(level, label, component, hull_args).py_err()?;
+    let (selection, component) = (args.selection, args.component);
     let options = PolyhedrizeOptions {
-        candidates,
-        hull,
+        candidates: args.candidates,
+        hull: args.hull,
         disjoint_siblings: !overlapping_siblings,
         balls,
         press_in,
@@ -227,20 +225,18 @@ pub fn hull_scan<'py>(
     backend: &str,
     adapter: Option<String>,
 ) -> PyResult<(Bound<'py, PyAny>, [i64; 3])> {
-    let (selection, component) = selection(level, label, component).py_err()?;
-    let (kind, options) = HullArgs {
+    let hull_args = HullArgs {
         corners,
         vertices,
         coplanar,
         order,
-    }
-    .parse()
-    .py_err()?;
+    };
+    let args = ObjectArgs::parse(level, label, component, hull_args).py_err()?;
     let volume = volume_from(array, frame)?;
     let classification = py
         .detach(|| -> Result<_> {
-            let object = DigitalObject::from_volume(&volume, selection, component)?;
-            let hull = ConvexHull::of_object(&object, kind, options)?;
+            let object = DigitalObject::from_volume(&volume, args.selection, args.component)?;
+            let hull = ConvexHull::of_object(&object, args.candidates, args.hull)?;
             let (lo, hi) = hull.voxel_bbox();
             let bbox = VoxelBox {
                 origin: lo,

@@ -102,7 +102,7 @@ pub fn level(level: Option<f64>) -> Result<Option<f64>> {
 /// The object of `chisel hull` / `polyhedrize`: `level` (samples ≥ T) or
 /// `label` (samples == L), and `component` (`"largest"`, `"all"` or a
 /// 1-based number as a string).
-pub fn selection(
+fn selection(
     level: Option<f64>,
     label: Option<f64>,
     component: &str,
@@ -126,4 +126,31 @@ pub fn selection(
         },
     };
     Ok((selection, component))
+}
+
+/// The object and hull options of `hull`, `hull_scan`, `polyhedrize`.
+#[derive(Debug, Clone, Copy)]
+pub struct ObjectArgs {
+    pub selection: Selection,
+    pub component: Component,
+    pub candidates: CandidateKind,
+    pub hull: HullOptions,
+}
+
+impl ObjectArgs {
+    pub fn parse(
+        level: Option<f64>,
+        label: Option<f64>,
+        component: &str,
+        hull: HullArgs<'_>,
+    ) -> Result<ObjectArgs> {
+        let (selection, component) = selection(level, label, component)?;
+        let (candidates, hull) = hull.parse()?;
+        Ok(ObjectArgs {
+            selection,
+            component,
+            candidates,
+            hull,
+        })
+    }
 }

@@ -138,14 +138,24 @@ def test_the_gil_is_released_while_the_engine_works(data):
 
 def test_ctrl_c_stops_a_scan_between_structures(data):
     import _thread
+    import signal
 
-    path = data("froggy/frogtissue.mhd")
+    # Python installs this handler at start-up unless SIGINT was ignored
+    # (as in a shell's background job): install it for the test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        ctrl_c_stops_a_scan(data("froggy/frogtissue.mhd"), _thread.interrupt_main)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def ctrl_c_stops_a_scan(path, interrupt_main):
     seen = []
 
     def progress(done, total):
         seen.append(done)
         if done == 1:
-            _thread.interrupt_main()  # what Ctrl-C does: SIGINT pending in the main thread
+            interrupt_main()  # what Ctrl-C does: SIGINT pending in the main thread
 
     with pytest.raises(KeyboardInterrupt):
         chisel.scan_file(path, labels=True, min_voxels=500, progress=progress)

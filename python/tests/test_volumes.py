@@ -136,3 +136,13 @@ def test_dicom_directories_list_their_series_and_read_one():
         chisel.read_volume(folder)
     v = chisel.read_volume(folder, series=series[1]["uid"])
     assert v.array.shape == (2, 5, 6) and v.space == "LPS"
+
+
+def test_meshes_convert_to_pyvista(data):
+    pyvista = pytest.importorskip("pyvista")
+    bunny = chisel.read_mesh(data("bunny.ply"))
+    p = bunny.to_pyvista()
+    assert isinstance(p, pyvista.PolyData)
+    np.testing.assert_array_equal(np.asarray(p.points), bunny.vertices)
+    np.testing.assert_array_equal(p.faces.reshape(-1, 4)[:, 1:], bunny.triangles)
+    np.testing.assert_array_equal(p.point_data["intensity"], bunny.scalars["intensity"])

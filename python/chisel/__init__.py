@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 from typing import Optional
 
-from . import _chisel
+from . import _chisel, errors
 from .errors import (
     CancelledError,
     ChiselError,
@@ -99,16 +99,7 @@ __all__ = [
     "morph",
     "blobby_fit",
     "batch",
-    "ChiselError",
-    "IoError",
-    "FormatError",
-    "LimitError",
-    "ParameterError",
-    "RefusedError",
-    "GpuError",
-    "CancelledError",
-    "DivergedError",
-    "InternalError",
+    *errors.__all__,
 ]
 
 # `chisel.batch`: scans over many files (Dask).

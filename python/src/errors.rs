@@ -12,13 +12,8 @@ fn class_name(e: &Error) -> &'static str {
     match e.root() {
         Error::Io { .. } => "IoError",
         Error::Format { .. } | Error::Unsupported { .. } => "FormatError",
-        // A size past a budget or the address space is a limit; past the
-        // data a file holds, a truncated file.
-        Error::Size { limit_kind, .. }
-            if limit_kind.contains("budget") || limit_kind.contains("address space") =>
-        {
-            "LimitError"
-        }
+        _ if chisel::io::exceeds_a_limit(e) => "LimitError",
+        // Past the data a file holds: a truncated file.
         Error::Size { .. } => "FormatError",
         Error::Limit { .. } | Error::HostMemory { .. } => "LimitError",
         Error::InvalidParameter { .. }

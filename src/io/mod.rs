@@ -76,6 +76,19 @@ use crate::foundation::alloc::memory_budget;
 
 /// Limit kind used in [`Error::Size`] for the memory budget.
 pub(crate) const BUDGET_KIND: &str = "the memory budget (CHISEL_MAX_INPUT_BYTES)";
+/// [`Error::Size`]'s `limit_kind` when a size does not fit the address space.
+pub(crate) const ADDRESS_SPACE_KIND: &str = "the address space";
+
+/// Whether `error` is an input past a resource limit (the memory budget,
+/// the address space) rather than a file whose data ends short of what its
+/// header promises (every other [`Error::Size`]).
+pub fn exceeds_a_limit(error: &Error) -> bool {
+    match error.root() {
+        Error::Size { limit_kind, .. } => [BUDGET_KIND, ADDRESS_SPACE_KIND].contains(limit_kind),
+        Error::Limit { .. } | Error::HostMemory { .. } => true,
+        _ => false,
+    }
+}
 
 /// Checks `needed` bytes for `what` against the budget before allocating.
 pub(crate) fn check_budget(path: &Path, at: Position, what: &str, needed: u64) -> Result<()> {

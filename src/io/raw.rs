@@ -282,7 +282,7 @@ pub(crate) fn sample_count(
         at: at.clone(),
         what: format!("{dims:?} samples"),
         needed: bytes,
-        limit_kind: "the address space",
+        limit_kind: super::ADDRESS_SPACE_KIND,
         limit: usize::MAX as u64,
     })
 }

@@ -77,16 +77,7 @@ impl ScalarType {
 impl VolumeData {
     /// Number of samples.
     pub fn len(&self) -> usize {
-        match self {
-            VolumeData::U8(v) => v.len(),
-            VolumeData::I8(v) => v.len(),
-            VolumeData::U16(v) => v.len(),
-            VolumeData::I16(v) => v.len(),
-            VolumeData::U32(v) => v.len(),
-            VolumeData::I32(v) => v.len(),
-            VolumeData::F32(v) => v.len(),
-            VolumeData::F64(v) => v.len(),
-        }
+        self.samples().len()
     }
 
     /// Whether there are no samples.

@@ -9,9 +9,10 @@
 // of WG_SIZE points (a block never spans two layers), one workgroup per
 // block, 2-D grid past the per-dimension limit (shared/dispatch.wgsl).
 // Buffers:
-//   params:        grid dims, slab position, level (see Params)
-//   samples:       f32 samples of global layers z_first.., nx·ny per layer
-//                  (x fastest); must hold the layers z_begin ..= z_begin + n_layers
+//   params:        grid (dims, sample words, level), slab position (see Params)
+//   samples:       the volume's samples in their own type, packed in u32
+//                  words (shared/mc_grid.wgsl, params.grid); must hold the
+//                  inner layers of layers z_begin ..= z_begin + n_layers
 //                  (the last one clipped at nz − 1)
 //   table:         257 case offsets, then 3 local edges per triangle
 //                  (mc::tables::CaseTable::flat)
@@ -20,22 +21,19 @@
 // scans block_counts (exclusive) for mc_vertices/mc_triangles.
 
 #import dispatch
+#import mc_grid
 
 struct Params {
-    nx: u32,
-    ny: u32,
-    nz: u32,
-    z_first: u32,
+    grid: SampleGrid,
     z_begin: u32,
     n_layers: u32,
     blocks_per_layer: u32,
-    level: f32,
 }
 
 const WG_SIZE: u32 = 256u;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> samples: array<f32>;
+// binding 1: samples (shared/mc_grid.wgsl)
 @group(0) @binding(2) var<storage, read> table: array<u32>;
 @group(0) @binding(3) var<storage, read_write> block_counts: array<vec2<u32>>;
 
@@ -43,8 +41,8 @@ const WG_SIZE: u32 = 256u;
 var<workgroup> sh_sum: array<atomic<u32>, 2>;
 
 fn inside(x: u32, y: u32, z: u32) -> u32 {
-    let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
-    return select(0u, 1u, v >= params.level);
+    let v = grid_sample(params.grid, x, y, z);
+    return select(0u, 1u, v >= params.grid.level);
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -54,18 +52,18 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let w = workgroup_index(wid, n_groups);
     let layer = w / params.blocks_per_layer;
     let q = (w % params.blocks_per_layer) * WG_SIZE + lid.x;
-    let n_layer = params.nx * params.ny;
+    let n_layer = params.grid.nx * params.grid.ny;
     var nv = 0u;
     var nt = 0u;
     if layer < params.n_layers && q < n_layer {
-        let x = q % params.nx;
-        let y = q / params.nx;
+        let x = q % params.grid.nx;
+        let y = q / params.grid.nx;
         let z = params.z_begin + layer;
         let m = inside(x, y, z);
-        if x + 1u < params.nx && inside(x + 1u, y, z) != m { nv += 1u; }
-        if y + 1u < params.ny && inside(x, y + 1u, z) != m { nv += 1u; }
-        if z + 1u < params.nz && inside(x, y, z + 1u) != m { nv += 1u; }
-        if x + 1u < params.nx && y + 1u < params.ny && z + 1u < params.nz {
+        if x + 1u < params.grid.nx && inside(x + 1u, y, z) != m { nv += 1u; }
+        if y + 1u < params.grid.ny && inside(x, y + 1u, z) != m { nv += 1u; }
+        if z + 1u < params.grid.nz && inside(x, y, z + 1u) != m { nv += 1u; }
+        if x + 1u < params.grid.nx && y + 1u < params.grid.ny && z + 1u < params.grid.nz {
             // Corner c = dx + 2·dy + 4·dz is bit c of the case index.
             var case_ix = 0u;
             for (var c = 0u; c < 8u; c++) {

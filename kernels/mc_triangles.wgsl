@@ -7,8 +7,9 @@
 // corner it is (none when x = nx − 1 or y = ny − 1). Blocks of WG_SIZE
 // points per layer, numbered as in mc_classify.
 // Buffers:
-//   params:        grid dims, slab position, level, t_start (see Params)
-//   samples:       f32 samples of global layers z_first..
+//   params:        grid (dims, sample words, level), slab position, t_start (see Params)
+//   samples:       the volume's samples in their own type, packed in u32
+//                  words (shared/mc_grid.wgsl, params.grid)
 //   table:         257 case offsets, then 3 local edges per triangle
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  triangle counts (block w holds the difference of
@@ -23,24 +24,21 @@
 
 #import block_scan
 #import dispatch
+#import mc_grid
 
 struct Params {
-    nx: u32,
-    ny: u32,
-    nz: u32,
-    z_first: u32,
+    grid: SampleGrid,
     z_begin: u32,
     n_layers: u32,
     blocks_per_layer: u32,
     vb_first: u32,
     t_start: u32,
-    level: f32,
 }
 
 const WG_SIZE: u32 = SCAN_WG;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> samples: array<f32>;
+// binding 1: samples (shared/mc_grid.wgsl)
 @group(0) @binding(2) var<storage, read> table: array<u32>;
 @group(0) @binding(3) var<storage, read> block_offsets: array<u32>;
 @group(0) @binding(4) var<storage, read> vert_base: array<u32>;
@@ -50,22 +48,22 @@ const WG_SIZE: u32 = SCAN_WG;
 var<workgroup> sh_count: u32;
 
 fn inside(x: u32, y: u32, z: u32) -> u32 {
-    let v = samples[x + params.nx * (y + params.ny * (z - params.z_first))];
-    return select(0u, 1u, v >= params.level);
+    let v = grid_sample(params.grid, x, y, z);
+    return select(0u, 1u, v >= params.grid.level);
 }
 
 // Vertex id of the edge (point o, axis).
 fn vertex(o: vec3<u32>, axis: u32) -> u32 {
     let m = inside(o.x, o.y, o.z);
     var rank = 0u;
-    if axis > 0u && o.x + 1u < params.nx && inside(o.x + 1u, o.y, o.z) != m {
+    if axis > 0u && o.x + 1u < params.grid.nx && inside(o.x + 1u, o.y, o.z) != m {
         rank += 1u;
     }
-    if axis > 1u && o.y + 1u < params.ny && inside(o.x, o.y + 1u, o.z) != m {
+    if axis > 1u && o.y + 1u < params.grid.ny && inside(o.x, o.y + 1u, o.z) != m {
         rank += 1u;
     }
-    let n_layer = params.nx * params.ny;
-    return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.nx + o.x] + rank;
+    let n_layer = params.grid.nx * params.grid.ny;
+    return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.grid.nx + o.x] + rank;
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -83,12 +81,12 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     if workgroupUniformLoad(&sh_count) == 0u {
         return;
     }
-    let n_layer = params.nx * params.ny;
-    let x = q % params.nx;
-    let y = q / params.nx;
+    let n_layer = params.grid.nx * params.grid.ny;
+    let x = q % params.grid.nx;
+    let y = q / params.grid.nx;
     let z = params.z_begin + layer;
     let in_range = layer < params.n_layers && q < n_layer
-        && x + 1u < params.nx && y + 1u < params.ny;
+        && x + 1u < params.grid.nx && y + 1u < params.grid.ny;
     var case_ix = 0u;
     var nt = 0u;
     if in_range {
@@ -102,7 +100,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         return;
     }
     let out0 = block_offsets[w] + inclusive - nt - params.t_start;
-    let cell = x + (params.nx - 1u) * (y + (params.ny - 1u) * z);
+    let cell = x + (params.grid.nx - 1u) * (y + (params.grid.ny - 1u) * z);
     let first = table[case_ix];
     for (var k = 0u; k < nt; k++) {
         var v = vec3<u32>(0u);

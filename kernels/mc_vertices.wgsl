@@ -7,8 +7,9 @@
 // layer `z_begin`, blocks of WG_SIZE points per layer as in mc_classify
 // (same block numbering, so block_offsets lines up with its counts).
 // Buffers:
-//   params:        grid dims, slab position, level, v_start (see Params)
-//   samples:       f32 samples of global layers z_first.. (nx·ny per layer)
+//   params:        grid (dims, sample words, level), slab position, v_start (see Params)
+//   samples:       the volume's samples in their own type, packed in u32
+//                  words (shared/mc_grid.wgsl, params.grid)
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  vertex counts over the whole grid (host scan), so block
 //                  w holds block_offsets[w + 1] − block_offsets[w] vertices
@@ -24,25 +25,22 @@
 
 #import block_scan
 #import dispatch
+#import mc_grid
 
 struct Params {
-    nx: u32,
-    ny: u32,
-    nz: u32,
-    z_first: u32,
+    grid: SampleGrid,
     z_begin: u32,
     n_layers: u32,
     n_owned: u32,
     blocks_per_layer: u32,
     v_start: u32,
-    level: f32,
 }
 
 const WG_SIZE: u32 = SCAN_WG;
 const T_MIN: f32 = 0.0009765625;
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> samples: array<f32>;
+// binding 1: samples (shared/mc_grid.wgsl)
 @group(0) @binding(2) var<storage, read> block_offsets: array<u32>;
 @group(0) @binding(3) var<storage, read_write> vert_base: array<u32>;
 @group(0) @binding(4) var<storage, read_write> positions: array<vec4<f32>>;
@@ -51,7 +49,7 @@ const T_MIN: f32 = 0.0009765625;
 var<workgroup> sh_count: u32;
 
 fn sample(x: u32, y: u32, z: u32) -> f32 {
-    return samples[x + params.nx * (y + params.ny * (z - params.z_first))];
+    return grid_sample(params.grid, x, y, z);
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -69,10 +67,10 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     if workgroupUniformLoad(&sh_count) == 0u {
         return;
     }
-    let n_layer = params.nx * params.ny;
+    let n_layer = params.grid.nx * params.grid.ny;
     let in_range = layer < params.n_layers && q < n_layer;
-    let x = q % params.nx;
-    let y = q / params.nx;
+    let x = q % params.grid.nx;
+    let y = q / params.grid.nx;
     let z = params.z_begin + layer;
     // Far-end sample of each crossing edge; `crossing` bit a set for axis a.
     var crossing = 0u;
@@ -80,18 +78,18 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     var far = vec3<f32>(0.0);
     if in_range {
         a = sample(x, y, z);
-        let m = a >= params.level;
-        if x + 1u < params.nx {
+        let m = a >= params.grid.level;
+        if x + 1u < params.grid.nx {
             far.x = sample(x + 1u, y, z);
-            if (far.x >= params.level) != m { crossing |= 1u; }
+            if (far.x >= params.grid.level) != m { crossing |= 1u; }
         }
-        if y + 1u < params.ny {
+        if y + 1u < params.grid.ny {
             far.y = sample(x, y + 1u, z);
-            if (far.y >= params.level) != m { crossing |= 2u; }
+            if (far.y >= params.grid.level) != m { crossing |= 2u; }
         }
-        if z + 1u < params.nz {
+        if z + 1u < params.grid.nz {
             far.z = sample(x, y, z + 1u);
-            if (far.z >= params.level) != m { crossing |= 4u; }
+            if (far.z >= params.grid.level) != m { crossing |= 4u; }
         }
     }
     let nv = countOneBits(crossing);
@@ -108,7 +106,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     var k = base - params.v_start;
     for (var axis = 0u; axis < 3u; axis++) {
         if (crossing & (1u << axis)) != 0u {
-            let t = clamp((params.level - a) / (far[axis] - a), T_MIN, 1.0 - T_MIN);
+            let t = clamp((params.grid.level - a) / (far[axis] - a), T_MIN, 1.0 - T_MIN);
             var u = vec3<f32>(f32(x), f32(y), f32(z));
             u[axis] += t;
             positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));

@@ -152,80 +152,59 @@ fn params_sample(kernel: Kernel) -> Sample {
             encase_bytes(&exclusive_scan::gpu::Params { n: 0xC1 }),
             vec![("n", 0xC1)],
         ),
-        Kernel::McClassify => (
-            encase_bytes(&mc::gpu::ClassifyParams {
-                nx: 0xD1,
-                ny: 0xD2,
-                nz: 0xD3,
-                z_first: 0xD4,
+        Kernel::McClassify => {
+            let (grid, mut fields) = sample_grid_sample(0xD0);
+            let p = mc::gpu::ClassifyParams {
+                grid,
                 z_begin: 0xD5,
                 n_layers: 0xD6,
                 blocks_per_layer: 0xD7,
-                level: f32::from_bits(0xD8),
-            }),
-            vec![
-                ("nx", 0xD1),
-                ("ny", 0xD2),
-                ("nz", 0xD3),
-                ("z_first", 0xD4),
+            };
+            fields.extend([
                 ("z_begin", 0xD5),
                 ("n_layers", 0xD6),
                 ("blocks_per_layer", 0xD7),
-                ("level", 0xD8),
-            ],
-        ),
-        Kernel::McVertices => (
-            encase_bytes(&mc::gpu::VerticesParams {
-                nx: 0xE1,
-                ny: 0xE2,
-                nz: 0xE3,
-                z_first: 0xE4,
+            ]);
+            (encase_bytes(&p), fields)
+        }
+        Kernel::McVertices => {
+            let (grid, mut fields) = sample_grid_sample(0xE0);
+            let p = mc::gpu::VerticesParams {
+                grid,
                 z_begin: 0xE5,
                 n_layers: 0xE6,
                 n_owned: 0xE7,
                 blocks_per_layer: 0xE8,
                 v_start: 0xE9,
-                level: f32::from_bits(0xEA),
-            }),
-            vec![
-                ("nx", 0xE1),
-                ("ny", 0xE2),
-                ("nz", 0xE3),
-                ("z_first", 0xE4),
+            };
+            fields.extend([
                 ("z_begin", 0xE5),
                 ("n_layers", 0xE6),
                 ("n_owned", 0xE7),
                 ("blocks_per_layer", 0xE8),
                 ("v_start", 0xE9),
-                ("level", 0xEA),
-            ],
-        ),
-        Kernel::McTriangles => (
-            encase_bytes(&mc::gpu::TrianglesParams {
-                nx: 0xF1,
-                ny: 0xF2,
-                nz: 0xF3,
-                z_first: 0xF4,
+            ]);
+            (encase_bytes(&p), fields)
+        }
+        Kernel::McTriangles => {
+            let (grid, mut fields) = sample_grid_sample(0xF0);
+            let p = mc::gpu::TrianglesParams {
+                grid,
                 z_begin: 0xF5,
                 n_layers: 0xF6,
                 blocks_per_layer: 0xF7,
                 vb_first: 0xF8,
                 t_start: 0xF9,
-                level: f32::from_bits(0xFA),
-            }),
-            vec![
-                ("nx", 0xF1),
-                ("ny", 0xF2),
-                ("nz", 0xF3),
-                ("z_first", 0xF4),
+            };
+            fields.extend([
                 ("z_begin", 0xF5),
                 ("n_layers", 0xF6),
                 ("blocks_per_layer", 0xF7),
                 ("vb_first", 0xF8),
                 ("t_start", 0xF9),
-                ("level", 0xFA),
-            ],
-        ),
+            ]);
+            (encase_bytes(&p), fields)
+        }
         Kernel::HullScan | Kernel::HullScanI32x2 | Kernel::HullRows | Kernel::HullRowsI32x2 => (
             encase_bytes(&hull_scan::gpu::Params {
                 n_faces: 0xD1,
@@ -333,6 +312,45 @@ fn params_sample(kernel: Kernel) -> Sample {
 }
 
 /// `particle_update`'s `Params` with distinct values (floats by their bits).
+/// The marching-cubes kernels' `grid` member with distinct values from
+/// `base << 8`, and its flattened fields (`grid.<name>`).
+fn sample_grid_sample(base: u32) -> (mc::grid::SampleGrid, Vec<(&'static str, u32)>) {
+    let v = |k: u32| (base << 8) + k;
+    let f = |k: u32| f32::from_bits(v(k));
+    let grid = mc::grid::SampleGrid {
+        nx: v(1),
+        ny: v(2),
+        nz: v(3),
+        z_first: v(4),
+        pad: v(5),
+        kind: v(6),
+        labels: v(7),
+        label: f(8),
+        outside: f(9),
+        level: f(10),
+        unused0: v(11),
+        unused1: v(12),
+    };
+    let names = [
+        "grid.nx",
+        "grid.ny",
+        "grid.nz",
+        "grid.z_first",
+        "grid.pad",
+        "grid.kind",
+        "grid.labels",
+        "grid.label",
+        "grid.outside",
+        "grid.level",
+        "grid.unused0",
+        "grid.unused1",
+    ];
+    (
+        grid,
+        names.into_iter().zip(1..).map(|(n, k)| (n, v(k))).collect(),
+    )
+}
+
 fn particle_params_sample() -> Sample {
     use chisel::particles::wh::UpdateParams;
     let f = |v: u32| f32::from_bits(v);
@@ -451,7 +469,7 @@ fn params_match_the_wgsl_layout() {
             .iter()
             .find(|(_, t)| t.name.as_deref() == Some("Params"))
             .unwrap_or_else(|| panic!("{path}: no `Params` struct"));
-        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        let naga::TypeInner::Struct { span, .. } = &ty.inner else {
             panic!("{path}: `Params` is not a struct");
         };
         assert_eq!(layouter[handle].size, *span);
@@ -460,16 +478,45 @@ fn params_match_the_wgsl_layout() {
             *span,
             "{path}: encase size vs naga span"
         );
-        let names: Vec<&str> = members.iter().filter_map(|m| m.name.as_deref()).collect();
+        let members = flat_members(&module, handle, "", 0);
+        let names: Vec<&str> = members.iter().map(|m| m.0.as_str()).collect();
         let host_names: Vec<&str> = fields.iter().map(|f| f.0).collect();
         assert_eq!(names, host_names, "{path}: Params members");
-        for (m, (name, value)) in members.iter().zip(&fields) {
-            let at = m.offset as usize;
+        for ((_, offset, ty), (name, value)) in members.iter().zip(&fields) {
+            let at = *offset as usize;
             let word = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
             assert_eq!(word, *value, "{path}: Params.{name} at offset {at}");
-            assert_eq!(layouter[m.ty].size, 4, "{path}: Params.{name} is 4 bytes");
+            assert_eq!(layouter[*ty].size, 4, "{path}: Params.{name} is 4 bytes");
         }
     }
+}
+
+/// The members of struct `handle` with their offsets from `base`, members
+/// of nested structs flattened as `outer.inner`.
+fn flat_members(
+    module: &naga::Module,
+    handle: naga::Handle<naga::Type>,
+    prefix: &str,
+    base: u32,
+) -> Vec<(String, u32, naga::Handle<naga::Type>)> {
+    let naga::TypeInner::Struct { members, .. } = &module.types[handle].inner else {
+        unreachable!("only structs are flattened")
+    };
+    let mut out = Vec::new();
+    for m in members {
+        let name = format!("{prefix}{}", m.name.as_deref().unwrap_or("?"));
+        if matches!(module.types[m.ty].inner, naga::TypeInner::Struct { .. }) {
+            out.extend(flat_members(
+                module,
+                m.ty,
+                &format!("{name}."),
+                base + m.offset,
+            ));
+        } else {
+            out.push((name, base + m.offset, m.ty));
+        }
+    }
+    out
 }
 
 /// The host's `FieldParams` (the second uniform of every kernel that

@@ -143,6 +143,7 @@ const SHARED: &[(&str, &str)] = &[
         include_str!("../../kernels/shared/block_scan.wgsl"),
     ),
     ("bvh_ray", include_str!("../../kernels/shared/bvh_ray.wgsl")),
+    ("mc_grid", include_str!("../../kernels/shared/mc_grid.wgsl")),
 ];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`

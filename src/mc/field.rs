@@ -1,12 +1,15 @@
 //! The sample grid marching cubes walks: the volume's samples as `f32`
 //! (labels as 0/1), optionally padded by one outside sample per side.
 //!
-//! The GPU uploads [`Field::layer`]; the CPU reads the inside flags a row
-//! at a time as bits straight from the volume's native type
-//! ([`Field::inside_row`]) and converts a sample to `f32` only where an edge
-//! crosses ([`Field::sample`]). Both give exactly `layer(z)[x + nx·y]` and
-//! `layer(z)[x + nx·y] >= level` (tested in `tests/mc.rs`), so the CPU
-//! mirror and the GPU kernels see bit-identical inputs.
+//! [`Field::layer`] defines that grid in `f32`; nothing converts whole
+//! layers in production. The CPU reads the inside flags a row at a time as
+//! bits straight from the volume's native type ([`Field::inside_row`]) and
+//! converts a sample to `f32` only where an edge crosses
+//! ([`Field::sample`]); the GPU uploads the samples in their own type and
+//! decodes and pads them in the kernels ([`super::grid`]). All give exactly
+//! `layer(z)[x + nx·y]` and `layer(z)[x + nx·y] >= level` (tested in
+//! `tests/mc.rs`), so the CPU mirror and the GPU kernels see bit-identical
+//! inputs.
 
 use super::IsoSpec;
 use crate::volume::{Samples, VolumeView};
@@ -125,6 +128,11 @@ impl<'a> Field<'a> {
         }
     }
 
+    /// The surface asked for (a level or a label).
+    pub fn iso(&self) -> IsoSpec {
+        self.iso
+    }
+
     /// Number of sample points of the (padded) grid.
     pub fn n_points(&self) -> usize {
         self.dims.iter().product()
@@ -199,7 +207,7 @@ impl<'a> Field<'a> {
 
     /// A value below the level: `level − 1`, or the next float down where
     /// the level is too large for `− 1` to change it (|level| ≥ 2²⁴).
-    fn outside(&self) -> f32 {
+    pub(crate) fn outside(&self) -> f32 {
         (self.level - 1.0).min(self.level.next_down())
     }
 

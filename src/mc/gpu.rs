@@ -6,23 +6,25 @@
 //! points, a 2 MiB readback for a 512³ volume) — no dependency on the
 //! engine's generic scan kernels.
 //!
-//! Samples: when the whole (padded) grid fits one storage binding
-//! ([`Gpu::max_binding_bytes`]; 2 GiB on an H200: about 810³ f32 samples) it is
-//! converted and uploaded once and stays resident for both passes;
+//! Samples travel in the volume's own type ([`super::grid`]: 2 bytes a
+//! sample for an `i16` CT, decoded, padded and compared with a label in the
+//! kernels). When the whole volume fits one storage binding
+//! ([`Gpu::max_binding_bytes`]; 2 GiB on an H200: about 1020³ `i16` or 810³
+//! `f32` samples) it is uploaded once and stays resident for both passes;
 //! otherwise each slab uploads its own layers. Pass 1 classifies slabs whose
 //! samples fit one binding; pass 2 re-slabs knowing the exact per-layer
 //! vertex and triangle counts, so that samples, `vert_base`, positions and
 //! triangles of a slab each fit one binding. `vert_base` is cleared on the
-//! device (the vertex pass writes all of it); positions and triangles start
-//! as sentinels. Output is read back per slab; vertices and triangles come
+//! device (the vertex pass writes all of it); positions and triangles are
+//! cleared on the device too, and start as sentinels only on a device
+//! opened with sentinels (tests). Output is read back per slab; vertices and triangles come
 //! out in the CPU mirror's order (point order, cell order), so the grouping
 //! finishes on the host with the same union-find numbering. With timestamp
 //! queries the kernels' GPU time is measured too ([`GpuRaw::kernel_seconds`]).
 
-use rayon::prelude::*;
-
 use super::cpu::RawSurface;
 use super::field::Field;
+use super::grid::{SampleGrid, inner_layers, sample_bytes, sample_grid, sample_words};
 use super::{exclusive_offsets, tables};
 use crate::foundation::vertex_components;
 use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, UniformBuffer};
@@ -32,44 +34,35 @@ use crate::{Error, Result};
 /// Uniform parameters of `mc_classify`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct ClassifyParams {
-    pub nx: u32,
-    pub ny: u32,
-    pub nz: u32,
-    pub z_first: u32,
+    /// The padded grid and its sample words.
+    pub grid: SampleGrid,
     pub z_begin: u32,
     pub n_layers: u32,
     pub blocks_per_layer: u32,
-    pub level: f32,
 }
 
 /// Uniform parameters of `mc_vertices`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct VerticesParams {
-    pub nx: u32,
-    pub ny: u32,
-    pub nz: u32,
-    pub z_first: u32,
+    /// The padded grid and its sample words.
+    pub grid: SampleGrid,
     pub z_begin: u32,
     pub n_layers: u32,
     pub n_owned: u32,
     pub blocks_per_layer: u32,
     pub v_start: u32,
-    pub level: f32,
 }
 
 /// Uniform parameters of `mc_triangles`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct TrianglesParams {
-    pub nx: u32,
-    pub ny: u32,
-    pub nz: u32,
-    pub z_first: u32,
+    /// The padded grid and its sample words.
+    pub grid: SampleGrid,
     pub z_begin: u32,
     pub n_layers: u32,
     pub blocks_per_layer: u32,
     pub vb_first: u32,
     pub t_start: u32,
-    pub level: f32,
 }
 
 /// Output of the GPU passes before host grouping, as read back.
@@ -142,19 +135,23 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     let bpl = layer.div_ceil(Kernel::McClassify.spec()?.wg_size as usize);
     let max = gpu.max_binding_bytes();
     let layer_bytes = (layer * 4) as u64;
+    // Bytes of the sample words of `n` padded layers (a bound: the words
+    // hold inner layers, which are no larger).
+    let sample_layer_bytes = (layer * sample_bytes(field)) as u64;
+    let samples_bytes = |n: usize| (n as u64 * sample_layer_bytes).next_multiple_of(4);
     // A classify slab holds its layers plus one above.
-    let classify_layers = (max / layer_bytes).saturating_sub(1) as usize;
+    let classify_layers = (max / sample_layer_bytes).saturating_sub(1) as usize;
     if classify_layers == 0 {
         return Err(Error::limit(
             "marching cubes: bytes of two sample layers (one storage binding)",
-            2 * layer_bytes,
+            samples_bytes(2),
             max,
         ));
     }
     let table = GpuArray::from_slice(gpu, "mc.table", &tables::table().flat())?;
     let dims = [nx as u32, ny as u32, nz as u32];
-    let resident = if nz as u64 * layer_bytes <= max {
-        Some(upload_layers(gpu, field, 0, nz)?)
+    let resident = if samples_bytes(nz) <= max {
+        Some(upload_layers(gpu, field, 0, field.volume().dims[2])?)
     } else {
         None
     };
@@ -175,7 +172,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let b = (a + classify_layers).min(nz);
         let mut slot = None;
         let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 1).min(nz))?;
-        let (c, t) = classify(gpu, &table, samples, dims, a, b - a, bpl, field.level)?;
+        let (c, t) = classify(gpu, &table, samples, a, b - a, bpl)?;
         counts.extend(c);
         add_time(0, t);
         a = b;
@@ -200,7 +197,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         kernel_seconds: None,
     };
     let fits = |a: usize, b: usize| -> bool {
-        let samples = ((b + 2).min(nz) - a) as u64 * layer_bytes;
+        let samples = samples_bytes((b + 2).min(nz) - a);
         let vert_base = ((b + 1).min(nz) - a) as u64 * layer_bytes;
         let verts: u64 = layer_v[a..b].iter().sum::<u64>() * 16;
         let tris: u64 = layer_t[a..b.min(nz - 1)].iter().sum::<u64>() * 16;
@@ -247,18 +244,19 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     Ok(out)
 }
 
-/// A samples buffer holding global layers `z_first..`.
+/// A buffer of sample words ([`super::grid`]) and the grid that reads it.
 #[derive(Clone, Copy)]
 struct Samples<'a> {
-    buffer: &'a GpuArray<f32>,
-    z_first: usize,
+    buffer: &'a GpuArray<u32>,
+    grid: SampleGrid,
 }
 
 impl<'a> Samples<'a> {
-    /// The resident grid, or else layers `z0..z1` uploaded into `slot`.
+    /// The resident grid, or else the inner layers of padded layers
+    /// `z0..z1` uploaded into `slot`.
     fn get(
-        resident: Option<&'a GpuArray<f32>>,
-        slot: &'a mut Option<GpuArray<f32>>,
+        resident: Option<&'a GpuArray<u32>>,
+        slot: &'a mut Option<GpuArray<u32>>,
         gpu: &Gpu,
         field: &Field<'_>,
         z0: usize,
@@ -267,12 +265,15 @@ impl<'a> Samples<'a> {
         Ok(match resident {
             Some(all) => Samples {
                 buffer: all,
-                z_first: 0,
+                grid: sample_grid(field, 0),
             },
-            None => Samples {
-                buffer: slot.insert(upload_layers(gpu, field, z0, z1)?),
-                z_first: z0,
-            },
+            None => {
+                let (k0, k1) = inner_layers(field, z0, z1);
+                Samples {
+                    buffer: slot.insert(upload_layers(gpu, field, k0, k1)?),
+                    grid: sample_grid(field, k0),
+                }
+            }
         })
     }
 }
@@ -287,29 +288,18 @@ struct Slab {
     n_t: usize,
 }
 
-/// Samples of layers `z0..z1` as one storage buffer (converted in parallel).
-fn upload_layers(gpu: &Gpu, field: &Field<'_>, z0: usize, z1: usize) -> Result<GpuArray<f32>> {
-    let layer = field.dims[0] * field.dims[1];
-    let mut data = vec![0.0f32; (z1 - z0) * layer];
-    data.par_chunks_mut(layer)
-        .enumerate()
-        .for_each(|(k, out)| field.layer(z0 + k, out));
-    GpuArray::from_slice(gpu, "mc.samples", &data)
+/// Inner layers `k0..k1` as one storage buffer of sample words.
+fn upload_layers(gpu: &Gpu, field: &Field<'_>, k0: usize, k1: usize) -> Result<GpuArray<u32>> {
+    GpuArray::from_slice(gpu, "mc.samples", &sample_words(field, k0, k1)?)
 }
 
-#[expect(
-    clippy::too_many_arguments,
-    reason = "one pass, its buffers and slab position"
-)]
 fn classify(
     gpu: &Gpu,
     table: &GpuArray<u32>,
     samples: Samples<'_>,
-    dims: [u32; 3],
     z_begin: usize,
     n_layers: usize,
     bpl: usize,
-    level: f32,
 ) -> Result<(Vec<[u32; 2]>, PassSeconds)> {
     let kernel = Kernel::McClassify;
     let n_blocks = n_layers * bpl;
@@ -317,14 +307,10 @@ fn classify(
         gpu,
         "mc_classify.params",
         &ClassifyParams {
-            nx: dims[0],
-            ny: dims[1],
-            nz: dims[2],
-            z_first: samples.z_first as u32,
+            grid: samples.grid,
             z_begin: z_begin as u32,
             n_layers: n_layers as u32,
             blocks_per_layer: bpl as u32,
-            level,
         },
     )?;
     let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks, [u32::MAX; 2])?;
@@ -370,7 +356,7 @@ type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, PassSeconds);
 fn emit(
     gpu: &Gpu,
     field: &Field<'_>,
-    resident: Option<&GpuArray<f32>>,
+    resident: Option<&GpuArray<u32>>,
     table: &GpuArray<u32>,
     dims: [u32; 3],
     bpl: usize,
@@ -404,32 +390,24 @@ fn emit(
         gpu,
         "mc_vertices.params",
         &VerticesParams {
-            nx: dims[0],
-            ny: dims[1],
-            nz: dims[2],
-            z_first: samples.z_first as u32,
+            grid: samples.grid,
             z_begin: a as u32,
             n_layers: vb_layers as u32,
             n_owned: (b - a) as u32,
             blocks_per_layer: bpl as u32,
             v_start: slab.v_start,
-            level: field.level,
         },
     )?;
     let tparams = UniformBuffer::new(
         gpu,
         "mc_triangles.params",
         &TrianglesParams {
-            nx: dims[0],
-            ny: dims[1],
-            nz: dims[2],
-            z_first: samples.z_first as u32,
+            grid: samples.grid,
             z_begin: a as u32,
             n_layers: cell_layers as u32,
             blocks_per_layer: bpl as u32,
             vb_first: a as u32,
             t_start: slab.t_start,
-            level: field.level,
         },
     )?;
     let vk = Kernel::McVertices;
@@ -478,7 +456,7 @@ fn emit(
 fn bind_classify(
     gpu: &Gpu,
     params: &UniformBuffer<ClassifyParams>,
-    samples: &GpuArray<f32>,
+    samples: &GpuArray<u32>,
     table: &GpuArray<u32>,
     block_counts: &GpuArray<[u32; 2]>,
 ) -> Result<BoundKernel> {
@@ -493,7 +471,7 @@ fn bind_classify(
 fn bind_vertices(
     gpu: &Gpu,
     params: &UniformBuffer<VerticesParams>,
-    samples: &GpuArray<f32>,
+    samples: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
     positions: &GpuArray<[f32; 4]>,
@@ -510,7 +488,7 @@ fn bind_vertices(
 fn bind_triangles(
     gpu: &Gpu,
     params: &UniformBuffer<TrianglesParams>,
-    samples: &GpuArray<f32>,
+    samples: &GpuArray<u32>,
     table: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
@@ -545,7 +523,7 @@ fn run_blocks<T: bytemuck::Pod>(
 pub fn mc_classify(
     gpu: &Gpu,
     params: &ClassifyParams,
-    samples: &[f32],
+    samples: &[u32],
     table: &[u32],
 ) -> Result<Vec<[u32; 2]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
@@ -569,12 +547,12 @@ pub fn mc_classify(
 pub fn mc_vertices(
     gpu: &Gpu,
     params: &VerticesParams,
-    samples: &[f32],
+    samples: &[u32],
     block_offsets: &[u32],
     n_vertices: usize,
 ) -> Result<(Vec<u32>, Vec<[f32; 4]>)> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
-    let layer = (params.nx * params.ny) as usize;
+    let layer = (params.grid.nx * params.grid.ny) as usize;
     let uniform = UniformBuffer::new(gpu, "mc_vertices.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_vertices.samples", samples)?;
     let offsets = GpuArray::from_slice(gpu, "mc_vertices.block_offsets", block_offsets)?;
@@ -594,7 +572,7 @@ pub fn mc_vertices(
 pub fn mc_triangles(
     gpu: &Gpu,
     params: &TrianglesParams,
-    samples: &[f32],
+    samples: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],

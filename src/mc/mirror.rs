@@ -17,6 +17,7 @@ use super::cpu::T_MIN;
 use super::exclusive_offsets;
 use super::field::Field;
 use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams};
+use super::grid::{grid_sample, sample_grid, sample_words};
 use super::tables;
 use crate::Result;
 
@@ -33,24 +34,19 @@ pub const TOL_POSITION_ULPS: u32 = 3;
 /// `edge_owner` of `mc_triangles.wgsl`: the corner owning each local edge.
 const EDGE_OWNER: [u32; 12] = [0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3];
 
-/// The `samples` layout of all three kernels: global layers from `z_first`.
-fn sample(samples: &[f32], nx: u32, ny: u32, z_first: u32, x: u32, y: u32, z: u32) -> f32 {
-    samples[(x + nx * (y + ny * (z - z_first))) as usize]
-}
-
 /// `mc_classify`: per block of `WG_SIZE` points, (vertices, triangles).
 /// `block_counts` holds `n_layers · blocks_per_layer` entries.
 pub fn mc_classify(
     params: &ClassifyParams,
-    samples: &[f32],
+    samples: &[u32],
     table: &[u32],
     block_counts: &mut [[u32; 2]],
 ) {
     let p = params;
     let inside = |x: u32, y: u32, z: u32| -> u32 {
-        u32::from(sample(samples, p.nx, p.ny, p.z_first, x, y, z) >= p.level)
+        u32::from(grid_sample(&p.grid, samples, x, y, z) >= p.grid.level)
     };
-    let n_layer = p.nx * p.ny;
+    let n_layer = p.grid.nx * p.grid.ny;
     for w in 0..block_counts.len() as u32 {
         let layer = w / p.blocks_per_layer;
         let mut sh_sum = [0u32; 2];
@@ -59,20 +55,20 @@ pub fn mc_classify(
             let mut nv = 0;
             let mut nt = 0;
             if layer < p.n_layers && q < n_layer {
-                let x = q % p.nx;
-                let y = q / p.nx;
+                let x = q % p.grid.nx;
+                let y = q / p.grid.nx;
                 let z = p.z_begin + layer;
                 let m = inside(x, y, z);
-                if x + 1 < p.nx && inside(x + 1, y, z) != m {
+                if x + 1 < p.grid.nx && inside(x + 1, y, z) != m {
                     nv += 1;
                 }
-                if y + 1 < p.ny && inside(x, y + 1, z) != m {
+                if y + 1 < p.grid.ny && inside(x, y + 1, z) != m {
                     nv += 1;
                 }
-                if z + 1 < p.nz && inside(x, y, z + 1) != m {
+                if z + 1 < p.grid.nz && inside(x, y, z + 1) != m {
                     nv += 1;
                 }
-                if x + 1 < p.nx && y + 1 < p.ny && z + 1 < p.nz {
+                if x + 1 < p.grid.nx && y + 1 < p.grid.ny && z + 1 < p.grid.nz {
                     let mut case_ix = 0u32;
                     for c in 0..8u32 {
                         case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
@@ -96,14 +92,14 @@ pub fn mc_classify(
 /// counts with the total appended. Blocks without a vertex write nothing.
 pub fn mc_vertices(
     params: &VerticesParams,
-    samples: &[f32],
+    samples: &[u32],
     block_offsets: &[u32],
     vert_base: &mut [u32],
     positions: &mut [[f32; 4]],
 ) {
     let p = params;
-    let sample = |x: u32, y: u32, z: u32| sample(samples, p.nx, p.ny, p.z_first, x, y, z);
-    let n_layer = p.nx * p.ny;
+    let sample = |x: u32, y: u32, z: u32| grid_sample(&p.grid, samples, x, y, z);
+    let n_layer = p.grid.nx * p.grid.ny;
     let n_blocks = p.n_layers * p.blocks_per_layer;
     for w in 0..n_blocks {
         let layer = w / p.blocks_per_layer;
@@ -115,30 +111,30 @@ pub fn mc_vertices(
         for lid in 0..WG_SIZE {
             let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
             let in_range = layer < p.n_layers && q < n_layer;
-            let x = q % p.nx;
-            let y = q / p.nx;
+            let x = q % p.grid.nx;
+            let y = q / p.grid.nx;
             let z = p.z_begin + layer;
             let mut crossing = 0u32;
             let mut a = 0.0f32;
             let mut far = [0.0f32; 3];
             if in_range {
                 a = sample(x, y, z);
-                let m = a >= p.level;
-                if x + 1 < p.nx {
+                let m = a >= p.grid.level;
+                if x + 1 < p.grid.nx {
                     far[0] = sample(x + 1, y, z);
-                    if (far[0] >= p.level) != m {
+                    if (far[0] >= p.grid.level) != m {
                         crossing |= 1;
                     }
                 }
-                if y + 1 < p.ny {
+                if y + 1 < p.grid.ny {
                     far[1] = sample(x, y + 1, z);
-                    if (far[1] >= p.level) != m {
+                    if (far[1] >= p.grid.level) != m {
                         crossing |= 2;
                     }
                 }
-                if z + 1 < p.nz {
+                if z + 1 < p.grid.nz {
                     far[2] = sample(x, y, z + 1);
-                    if (far[2] >= p.level) != m {
+                    if (far[2] >= p.grid.level) != m {
                         crossing |= 4;
                     }
                 }
@@ -157,7 +153,8 @@ pub fn mc_vertices(
             let mut k = base - p.v_start;
             for axis in 0..3u32 {
                 if crossing & (1 << axis) != 0 {
-                    let t = ((p.level - a) / (far[axis as usize] - a)).clamp(T_MIN, 1.0 - T_MIN);
+                    let t =
+                        ((p.grid.level - a) / (far[axis as usize] - a)).clamp(T_MIN, 1.0 - T_MIN);
                     let mut u = [x as f32, y as f32, z as f32];
                     u[axis as usize] += t;
                     positions[k as usize] = [u[0], u[1], u[2], f32::from_bits(3 * point + axis)];
@@ -175,7 +172,7 @@ pub fn mc_vertices(
 /// nothing.
 pub fn mc_triangles(
     params: &TrianglesParams,
-    samples: &[f32],
+    samples: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],
@@ -183,20 +180,20 @@ pub fn mc_triangles(
 ) {
     let p = params;
     let inside = |x: u32, y: u32, z: u32| -> u32 {
-        u32::from(sample(samples, p.nx, p.ny, p.z_first, x, y, z) >= p.level)
+        u32::from(grid_sample(&p.grid, samples, x, y, z) >= p.grid.level)
     };
-    let n_layer = p.nx * p.ny;
+    let n_layer = p.grid.nx * p.grid.ny;
     // Vertex id of the edge (point o, axis).
     let vertex = |o: [u32; 3], axis: u32| -> u32 {
         let m = inside(o[0], o[1], o[2]);
         let mut rank = 0;
-        if axis > 0 && o[0] + 1 < p.nx && inside(o[0] + 1, o[1], o[2]) != m {
+        if axis > 0 && o[0] + 1 < p.grid.nx && inside(o[0] + 1, o[1], o[2]) != m {
             rank += 1;
         }
-        if axis > 1 && o[1] + 1 < p.ny && inside(o[0], o[1] + 1, o[2]) != m {
+        if axis > 1 && o[1] + 1 < p.grid.ny && inside(o[0], o[1] + 1, o[2]) != m {
             rank += 1;
         }
-        vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.nx + o[0]) as usize] + rank
+        vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.grid.nx + o[0]) as usize] + rank
     };
     let n_blocks = p.n_layers * p.blocks_per_layer;
     for w in 0..n_blocks {
@@ -208,10 +205,11 @@ pub fn mc_triangles(
         let mut inclusive = 0u32;
         for lid in 0..WG_SIZE {
             let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
-            let x = q % p.nx;
-            let y = q / p.nx;
+            let x = q % p.grid.nx;
+            let y = q / p.grid.nx;
             let z = p.z_begin + layer;
-            let in_range = layer < p.n_layers && q < n_layer && x + 1 < p.nx && y + 1 < p.ny;
+            let in_range =
+                layer < p.n_layers && q < n_layer && x + 1 < p.grid.nx && y + 1 < p.grid.ny;
             let mut case_ix = 0u32;
             let mut nt = 0u32;
             if in_range {
@@ -225,7 +223,7 @@ pub fn mc_triangles(
                 continue;
             }
             let out0 = block_offsets[w as usize] + inclusive - nt - p.t_start;
-            let cell = x + (p.nx - 1) * (y + (p.ny - 1) * z);
+            let cell = x + (p.grid.nx - 1) * (y + (p.grid.ny - 1) * z);
             let first = table[case_ix as usize];
             for k in 0..nt {
                 let mut v = [0u32; 3];
@@ -250,23 +248,17 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
         return Ok(GpuRaw::default());
     }
     let layer = nx * ny;
-    let mut samples = vec![0.0f32; layer * nz];
-    for (z, out) in samples.chunks_mut(layer).enumerate() {
-        field.layer(z, out);
-    }
+    let samples = sample_words(field, 0, field.volume().dims[2])?;
+    let grid = sample_grid(field, 0);
     let table = tables::table().flat();
     let bpl = layer.div_ceil(WG_SIZE as usize);
-    let dims = [nx as u32, ny as u32, nz as u32];
+    let nz32 = nz as u32;
     let mut counts = vec![[0u32; 2]; nz * bpl];
     let classify = ClassifyParams {
-        nx: dims[0],
-        ny: dims[1],
-        nz: dims[2],
-        z_first: 0,
+        grid,
         z_begin: 0,
-        n_layers: dims[2],
+        n_layers: nz32,
         blocks_per_layer: bpl as u32,
-        level: field.level,
     };
     mc_classify(&classify, &samples, &table, &mut counts);
     let off_v = exclusive_offsets(counts.iter().map(|c| c[0].into()), "vertices")?;
@@ -274,30 +266,22 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
     let mut vert_base = vec![0u32; nz * layer];
     let mut positions = vec![[0.0f32; 4]; off_v[nz * bpl] as usize];
     let vertices = VerticesParams {
-        nx: dims[0],
-        ny: dims[1],
-        nz: dims[2],
-        z_first: 0,
+        grid,
         z_begin: 0,
-        n_layers: dims[2],
-        n_owned: dims[2],
+        n_layers: nz32,
+        n_owned: nz32,
         blocks_per_layer: bpl as u32,
         v_start: 0,
-        level: field.level,
     };
     mc_vertices(&vertices, &samples, &off_v, &mut vert_base, &mut positions);
     let mut triangles = vec![[0u32; 4]; off_t[nz * bpl] as usize];
     let cells = TrianglesParams {
-        nx: dims[0],
-        ny: dims[1],
-        nz: dims[2],
-        z_first: 0,
+        grid,
         z_begin: 0,
-        n_layers: dims[2] - 1,
+        n_layers: nz32 - 1,
         blocks_per_layer: bpl as u32,
         vb_first: 0,
         t_start: 0,
-        level: field.level,
     };
     mc_triangles(&cells, &samples, &table, &off_t, &vert_base, &mut triangles);
     Ok(GpuRaw {

@@ -32,6 +32,7 @@
 pub mod cpu;
 pub mod field;
 pub mod gpu;
+pub mod grid;
 pub mod mirror;
 pub mod tables;
 

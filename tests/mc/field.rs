@@ -1,8 +1,10 @@
-//! The CPU's sample access (bit rows, native samples) against the `f32`
-//! layers the GPU uploads.
+//! The CPU's sample access (bit rows, native samples) and the GPU's
+//! (sample words decoded as `kernels/shared/mc_grid.wgsl` does) against
+//! the `f32` layers of `Field::layer`.
 
 use chisel::mc::IsoSpec;
 use chisel::mc::field::{NativeSamples, SampleVisitor, Scalar};
+use chisel::mc::grid::{SampleKind, grid_sample, inner_layers, sample_grid, sample_words};
 use chisel::volume::{Volume, VolumeData};
 
 use crate::common;
@@ -30,9 +32,13 @@ impl SampleVisitor for AllSamples {
 
 /// The CPU reads inside flags as bit rows in the native type and samples
 /// only at crossings (`Field::sample`, and `NativeSamples` with the type
-/// known at compile time); all must equal the `f32` layers the GPU uploads
-/// (`Field::layer`), for every sample type, with and without padding, at
-/// levels between, on and beyond the integer values, and for labels.
+/// known at compile time); the GPU reads the samples' words of the layers
+/// it needs (`grid_sample`, the mirror of the kernels' decoding, on the
+/// words of one layer's window as a slab upload makes them); all must equal
+/// the `f32` layers (`Field::layer`), for every sample type, with and
+/// without padding, at levels between, on and beyond the integer values,
+/// and for labels. 8- and 16-bit and `f32` samples travel in their own
+/// type (2 bytes a sample for `i16`).
 #[test]
 fn field_rows_and_samples_match_layers() {
     let dims = [70, 5, 4];
@@ -80,6 +86,9 @@ fn field_rows_and_samples_match_layers() {
                 let mut row = vec![0u64; field.row_words()];
                 for z in 0..nz {
                     field.layer(z, &mut layer);
+                    let (k0, k1) = inner_layers(&field, z, z + 1);
+                    let words = sample_words(&field, k0, k1).unwrap();
+                    let grid = sample_grid(&field, k0);
                     for y in 0..ny {
                         field.inside_row(y, z, &mut row);
                         for x in 0..field.row_words() * 64 {
@@ -96,7 +105,10 @@ fn field_rows_and_samples_match_layers() {
                                 let want = layer[x + nx * y].to_bits();
                                 let s = field.sample(x, y, z);
                                 let n = native[x + nx * (y + ny * z)];
-                                for (got, what) in [(s, "sample"), (n, "native sample")] {
+                                let g = grid_sample(&grid, &words, x as u32, y as u32, z as u32);
+                                for (got, what) in
+                                    [(s, "sample"), (n, "native sample"), (g, "GPU word sample")]
+                                {
                                     assert_eq!(
                                         got.to_bits(),
                                         want,
@@ -115,6 +127,74 @@ fn field_rows_and_samples_match_layers() {
         checked_inside > 0,
         "no inside sample: the test proves nothing"
     );
+}
+
+/// The words' sizes: 16-bit samples two a word, 8-bit four, 32-bit
+/// integers and f64 converted to one f32 a word; a word decoded as the
+/// wrong kind gives other samples (the comparison above can fail).
+#[test]
+fn sample_words_keep_the_native_width() {
+    let dims = [7, 3, 2];
+    let n: u32 = 42;
+    let cases = [
+        (
+            VolumeData::I16((0..n).map(|i| i as i16 * -700).collect()),
+            SampleKind::I16,
+            21,
+        ),
+        (
+            VolumeData::U16((0..n).map(|i| i as u16 * 900).collect()),
+            SampleKind::U16,
+            21,
+        ),
+        (
+            VolumeData::I8((0..n).map(|i| i as i8 - 20).collect()),
+            SampleKind::I8,
+            11,
+        ),
+        (
+            VolumeData::U8((0..n).map(|i| i as u8 * 5).collect()),
+            SampleKind::U8,
+            11,
+        ),
+        (
+            VolumeData::F32((0..n).map(|i| i as f32 * 0.25).collect()),
+            SampleKind::F32,
+            42,
+        ),
+        (
+            VolumeData::I32((0..n).map(|i| i as i32 * 3).collect()),
+            SampleKind::F32,
+            42,
+        ),
+        (
+            VolumeData::F64((0..n).map(|i| i as f64 * 0.5).collect()),
+            SampleKind::F32,
+            42,
+        ),
+    ];
+    for (data, kind, n_words) in cases {
+        let what = data.scalar_type();
+        let vol = Volume::new(dims, [1.0; 3], [0.0; 3], data).unwrap();
+        let field = chisel::mc::Field::new(&vol, IsoSpec::Level(10.0), false).unwrap();
+        let words = sample_words(&field, 0, 2).unwrap();
+        let grid = sample_grid(&field, 0);
+        assert_eq!((grid.kind, words.len()), (kind as u32, n_words), "{what:?}");
+        let wrong = chisel::mc::grid::SampleGrid {
+            // Narrower or same-width kinds, so no index leaves the words.
+            kind: match kind {
+                SampleKind::F32 => SampleKind::I16,
+                SampleKind::I16 | SampleKind::U16 | SampleKind::U8 => SampleKind::I8,
+                SampleKind::I8 => SampleKind::U8,
+            } as u32,
+            ..grid
+        };
+        let differs = (0..n).any(|i| {
+            let (x, y, z) = (i % 7, (i / 7) % 3, i / 21);
+            grid_sample(&grid, &words, x, y, z) != grid_sample(&wrong, &words, x, y, z)
+        });
+        assert!(differs, "{what:?}: a wrong kind must change the samples");
+    }
 }
 
 /// A view of borrowed samples (a caller's buffer, read in place) gives the

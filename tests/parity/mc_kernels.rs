@@ -7,6 +7,7 @@
 //! gives it (`mc::gpu`).
 
 use chisel::mc::gpu::{ClassifyParams, TrianglesParams, VerticesParams};
+use chisel::mc::grid::{inner_layers, sample_grid, sample_words};
 use chisel::mc::mirror::{self, WG_SIZE};
 use chisel::mc::{Field, IsoSpec, tables};
 use chisel::parity::Mismatch;
@@ -19,10 +20,10 @@ pub struct Stages {
     pub what: String,
     pub table: Vec<u32>,
     pub classify: ClassifyParams,
-    pub classify_samples: Vec<f32>,
+    pub classify_samples: Vec<u32>,
     pub block_counts: Vec<[u32; 2]>,
     pub vertices: VerticesParams,
-    pub emit_samples: Vec<f32>,
+    pub emit_samples: Vec<u32>,
     pub vertex_offsets: Vec<u32>,
     pub vert_base: Vec<u32>,
     pub positions: Vec<[f32; 4]>,
@@ -44,28 +45,30 @@ fn scan(values: impl Iterator<Item = u32>) -> Vec<u32> {
     out
 }
 
-/// The stages of `vol` at `iso` for point layers `[a, b)` of the emission
-/// (`None`: the whole grid); classification always covers the whole grid.
-pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize)>) -> Stages {
-    let field = Field::new(vol, iso, true).unwrap();
+/// The stages of `vol` at `iso` (border closed or open) for point layers
+/// `[a, b)` of the emission (`None`: the whole grid); classification always
+/// covers the whole grid. Samples are the words the production path
+/// uploads (`mc::grid`): the whole volume, and the slab's window of inner
+/// layers.
+pub fn stages(
+    what: &str,
+    vol: &Volume,
+    iso: IsoSpec,
+    close: bool,
+    slab: Option<(usize, usize)>,
+) -> Stages {
+    let field = Field::new(vol, iso, close).unwrap();
     let [nx, ny, nz] = field.dims;
     let layer = nx * ny;
-    let mut samples = vec![0.0f32; layer * nz];
-    for (z, out) in samples.chunks_mut(layer).enumerate() {
-        field.layer(z, out);
-    }
+    let samples = sample_words(&field, 0, vol.dims[2]).unwrap();
     let table = tables::table().flat();
     let bpl = layer.div_ceil(WG_SIZE as usize);
-    let [nx32, ny32, nz32] = [nx as u32, ny as u32, nz as u32];
+    let nz32 = nz as u32;
     let classify = ClassifyParams {
-        nx: nx32,
-        ny: ny32,
-        nz: nz32,
-        z_first: 0,
+        grid: sample_grid(&field, 0),
         z_begin: 0,
         n_layers: nz32,
         blocks_per_layer: bpl as u32,
-        level: field.level,
     };
     let mut block_counts = vec![[0u32; 2]; nz * bpl];
     mirror::mc_classify(&classify, &samples, &table, &mut block_counts);
@@ -74,18 +77,16 @@ pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize
     let (a, b) = slab.unwrap_or((0, nz));
     let vb_layers = (b + 1).min(nz) - a;
     let cell_layers = b.min(nz - 1).saturating_sub(a);
-    let emit_samples = samples[a * layer..(b + 2).min(nz) * layer].to_vec();
+    let (k0, k1) = inner_layers(&field, a, (b + 2).min(nz));
+    let emit_samples = sample_words(&field, k0, k1).unwrap();
+    let grid = sample_grid(&field, k0);
     let vertices = VerticesParams {
-        nx: nx32,
-        ny: ny32,
-        nz: nz32,
-        z_first: a as u32,
+        grid,
         z_begin: a as u32,
         n_layers: vb_layers as u32,
         n_owned: (b - a) as u32,
         blocks_per_layer: bpl as u32,
         v_start: off_v[a * bpl],
-        level: field.level,
     };
     let vertex_offsets = off_v[a * bpl..=(a + vb_layers) * bpl].to_vec();
     let mut vert_base = vec![0u32; vb_layers * layer];
@@ -98,16 +99,12 @@ pub fn stages(what: &str, vol: &Volume, iso: IsoSpec, slab: Option<(usize, usize
         &mut positions,
     );
     let triangles_params = TrianglesParams {
-        nx: nx32,
-        ny: ny32,
-        nz: nz32,
-        z_first: a as u32,
+        grid,
         z_begin: a as u32,
         n_layers: cell_layers as u32,
         blocks_per_layer: bpl as u32,
         vb_first: a as u32,
         t_start: off_t[a * bpl],
-        level: field.level,
     };
     let triangle_offsets = off_t[a * bpl..=(a + cell_layers.max(1)) * bpl].to_vec();
     let n_t = off_t[(a + cell_layers) * bpl] - off_t[a * bpl];
@@ -156,35 +153,84 @@ pub fn random_volume(seed: u64, dims: [usize; 3]) -> Volume {
     .unwrap()
 }
 
+/// `vol`'s samples as another type (`f`: the i16 value to the new one).
+fn retyped(vol: &Volume, f: impl Fn(&[i16]) -> VolumeData) -> Volume {
+    let VolumeData::I16(v) = &vol.data else {
+        unreachable!("random volumes are i16")
+    };
+    Volume::new(vol.dims, vol.spacing, vol.origin, f(v)).unwrap()
+}
+
 /// The fixtures every kernel module runs: random volumes (levels between
-/// and on the samples), a label volume, an emission slab in the middle of
-/// the grid, and the real CT (headsq at the skin and bone levels).
+/// and on the samples) in i16, and as u16, i8, f32 (each uploaded in its
+/// own type) and f64 (converted to f32 on the host), with the border
+/// closed and open; label volumes (u8 in its own type, i32 converted); an
+/// emission slab in the middle of the grid (closed and open); and the real
+/// CT (headsq at the skin and bone levels).
 pub fn fixtures() -> Vec<Stages> {
     let mut out = Vec::new();
     for seed in 1..=3u64 {
         let vol = random_volume(seed, [23, 17, 11]);
         for level in [1000.5, 1000.0] {
             let what = format!("random {seed} level {level}");
-            out.push(stages(&what, &vol, IsoSpec::Level(level), None));
+            out.push(stages(&what, &vol, IsoSpec::Level(level), true, None));
+        }
+    }
+    let vol = random_volume(4, [23, 17, 11]);
+    let as_u16 = retyped(&vol, |v| {
+        VolumeData::U16(v.iter().map(|&x| x as u16).collect())
+    });
+    let as_i8 = retyped(&vol, |v| {
+        VolumeData::I8(v.iter().map(|&x| (x % 256 - 128) as i8).collect())
+    });
+    let as_f32 = retyped(&vol, |v| {
+        VolumeData::F32(v.iter().map(|&x| f32::from(x) * 0.5).collect())
+    });
+    let as_f64 = retyped(&vol, |v| {
+        VolumeData::F64(v.iter().map(|&x| f64::from(x) / 3.0).collect())
+    });
+    for close in [true, false] {
+        let kinds = [
+            ("u16", &as_u16, 1000.5),
+            ("i8", &as_i8, 0.5),
+            ("f32", &as_f32, 500.0),
+            ("f64", &as_f64, 333.3),
+        ];
+        for (name, vol, level) in kinds {
+            let what = format!("random {name} level {level} closed {close}");
+            out.push(stages(&what, vol, IsoSpec::Level(level), close, None));
         }
     }
     let mut next = common::xorshift(9);
     let data: Vec<u8> = (0..30 * 20 * 10).map(|_| (next() % 4) as u8).collect();
+    let wide = VolumeData::I32(data.iter().map(|&x| i32::from(x) - 1).collect());
     let labels = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], VolumeData::U8(data)).unwrap();
-    out.push(stages("labels", &labels, IsoSpec::Label(2.0), None));
-    let vol = random_volume(5, [40, 30, 24]);
+    out.push(stages("labels", &labels, IsoSpec::Label(2.0), true, None));
+    let labels = Volume::new([30, 20, 10], [1.0; 3], [0.0; 3], wide).unwrap();
     out.push(stages(
-        "slab 7..15",
-        &vol,
-        IsoSpec::Level(1000.5),
-        Some((7, 15)),
+        "labels i32",
+        &labels,
+        IsoSpec::Label(1.0),
+        false,
+        None,
     ));
+    let vol = random_volume(5, [40, 30, 24]);
+    for close in [true, false] {
+        out.push(stages(
+            &format!("slab 7..15 closed {close}"),
+            &vol,
+            IsoSpec::Level(1000.5),
+            close,
+            Some((7, 15)),
+        ));
+    }
     if let Some(vol) = common::real_volume("headsq/quarter.nhdr") {
         for level in [500.0, 1150.0] {
             out.push(stages(
                 &format!("headsq {level}"),
                 &vol,
                 IsoSpec::Level(level),
+                true,
                 None,
             ));
         }

@@ -62,31 +62,30 @@ fn tree_locate_equals_the_scan_on_every_analytic_knife() {
     assert_ne!(a.points, b.points);
 }
 
-#[test]
-fn leaf_tables_name_each_triangles_corners_and_positions() {
-    let s = mc(&shell_volume(24, 6.0, 9.0));
-    let f = &s.forest;
+/// Every leaf's tables: its distinct vertices in order of first use by its
+/// triangles, their positions, and each triangle's corners as indices into
+/// them. Returns the most vertices a leaf lists.
+fn check_leaf_tables(mesh: &TriMesh, f: &Forest) -> usize {
     assert_eq!(f.corners.len(), f.triangles.len());
     assert_eq!(f.leaf_positions.len(), f.leaf_vertices.len());
     for (&v, &q) in f.leaf_vertices.iter().zip(&f.leaf_positions) {
-        assert_eq!(
-            q, s.mesh.positions[v as usize],
-            "leaf position of vertex {v}"
-        );
+        assert_eq!(q, mesh.positions[v as usize], "leaf position of vertex {v}");
     }
+    let mut most = 0;
     for c in &f.cells {
-        // Distinct, in order of first use by the leaf's triangles.
         let mut first_use = Vec::new();
+        let mut seen = std::collections::HashSet::new();
         for i in c.triangles.range() {
-            for v in s.mesh.triangles[f.triangles[i] as usize] {
-                if !first_use.contains(&v) {
+            for v in mesh.triangles[f.triangles[i] as usize] {
+                if seen.insert(v) {
                     first_use.push(v);
                 }
             }
         }
         assert_eq!(&f.leaf_vertices[c.vertices.range()], &first_use[..]);
+        most = most.max(first_use.len());
         for i in c.triangles.range() {
-            let want = s.mesh.triangles[f.triangles[i] as usize];
+            let want = mesh.triangles[f.triangles[i] as usize];
             let got = f.corners[i].map(|v| {
                 assert!(c.vertices.range().contains(&(v as usize)));
                 f.leaf_vertices[v as usize]
@@ -94,6 +93,39 @@ fn leaf_tables_name_each_triangles_corners_and_positions() {
             assert_eq!(got, want);
         }
     }
+    most
+}
+
+#[test]
+fn leaf_tables_name_each_triangles_corners_and_positions() {
+    let s = mc(&shell_volume(24, 6.0, 9.0));
+    check_leaf_tables(&s.mesh, &s.forest);
+    // A dense patch far smaller than the bounding box puts thousands of
+    // vertices into one leaf of the virtual grid (more than the build's
+    // first vertex table holds).
+    let n = 60u32;
+    let mut positions: Vec<glam::Vec3> = (0..n * n)
+        .map(|i| glam::Vec3::new((i % n) as f32 * 1e-5, (i / n) as f32 * 1e-5, 0.0))
+        .collect();
+    let mut triangles = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let a = x + n * y;
+            triangles.push([a, a + 1, a + n + 1]);
+            triangles.push([a, a + n + 1, a + n]);
+        }
+    }
+    let far = positions.len() as u32;
+    positions.extend([
+        glam::Vec3::splat(100.0),
+        glam::Vec3::new(101.0, 100.0, 100.0),
+        glam::Vec3::new(100.0, 101.0, 100.0),
+    ]);
+    triangles.push([far, far + 1, far + 2]);
+    let dense = TriMesh::new(positions, triangles).unwrap();
+    let f = Forest::from_triangles(dense.view()).forest;
+    let most = check_leaf_tables(&dense, &f);
+    assert!(most > 2048, "the dense leaf lists {most} vertices");
 }
 
 #[test]

@@ -8,7 +8,7 @@ use super::{CellNode, LayerNode, MeshView, RowNode, Span};
 use crate::foundation::aabb::Aabb;
 
 /// Least triangles per part of the parallel build (at most one part per
-/// thread: each part zeroes a table over the mesh's vertices).
+/// thread).
 pub(super) const PART_TRIANGLES: usize = 1 << 13;
 
 /// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
@@ -39,33 +39,88 @@ pub(super) struct Part {
     pub(super) leaf_vertices: Vec<u32>,
     pub(super) leaf_positions: Vec<Vec3>,
     pub(super) corners: Vec<[u32; 3]>,
-    /// Per mesh vertex `first_vertex + i` of the part's vertex range: tag of
-    /// the last leaf that listed it (its first triangle position + 1) and
-    /// its index in `leaf_vertices` there.
-    pub(super) seen: Vec<[u32; 2]>,
-    /// The least vertex id of the part's triangles.
-    pub(super) first_vertex: u32,
+    /// The vertices the current leaf has listed.
+    pub(super) seen: LeafVertices,
     /// Scratch of the counting sort: bucket starts, sorted ids.
     pub(super) buckets: Vec<u32>,
     pub(super) sorted: Vec<u32>,
 }
 
+/// The distinct vertices of the leaf being built and their indices in
+/// `leaf_vertices`: an open-addressing hash table (linear probing) small
+/// enough to stay in the L1 cache, its slots tagged with the leaf they
+/// belong to so that a new leaf starts without clearing it. It grows when a
+/// leaf lists more than half as many vertices as it has slots.
+#[derive(Debug)]
+pub(super) struct LeafVertices {
+    /// (leaf tag, vertex id, index) per slot; tag 0 is an empty slot.
+    slots: Vec<[u32; 3]>,
+    /// `32 − log2(slots.len())`: the hash's shift.
+    shift: u32,
+    /// Vertices listed by the current leaf.
+    count: usize,
+}
+
+impl LeafVertices {
+    const INITIAL_BITS: u32 = 10;
+
+    fn new() -> Self {
+        LeafVertices {
+            slots: vec![[0; 3]; 1 << Self::INITIAL_BITS],
+            shift: 32 - Self::INITIAL_BITS,
+            count: 0,
+        }
+    }
+
+    fn slot(&self, v: u32) -> usize {
+        (v.wrapping_mul(0x9E37_79B1) >> self.shift) as usize
+    }
+
+    /// The index of vertex `v` in leaf `tag`, or `None` after recording
+    /// `next` as its index.
+    #[inline]
+    fn get_or_insert(&mut self, tag: u32, v: u32, next: u32) -> Option<u32> {
+        let mask = self.slots.len() - 1;
+        let mut i = self.slot(v);
+        loop {
+            let s = &mut self.slots[i];
+            if s[0] != tag {
+                *s = [tag, v, next];
+                self.count += 1;
+                return None;
+            }
+            if s[1] == v {
+                return Some(s[2]);
+            }
+            i = (i + 1) & mask;
+        }
+    }
+
+    /// Starts leaf `tag` (a tag no earlier leaf used).
+    fn start(&mut self) {
+        self.count = 0;
+    }
+
+    /// Doubles the table when the current leaf fills half of it, keeping
+    /// the leaf's entries (`listed`: its vertices in index order from
+    /// `first`).
+    fn reserve(&mut self, tag: u32, listed: &[u32], first: u32) {
+        if 2 * (self.count + 3) <= self.slots.len() {
+            return;
+        }
+        let bits = 33 - self.shift;
+        self.slots = vec![[0; 3]; 1 << bits];
+        self.shift = 32 - bits;
+        self.count = 0;
+        for (k, &v) in listed.iter().enumerate() {
+            self.get_or_insert(tag, v, first + k as u32);
+        }
+    }
+}
+
 impl Part {
-    /// An empty part for the triangles `tris` of `mesh`: its vertex table
-    /// spans only the ids they use (a part of a marching-cubes surface
-    /// covers a slab of layers, so the parts' tables together are about
-    /// one table over the mesh's vertices, not one each).
-    pub(super) fn new(mesh: MeshView<'_>, tris: &[u32]) -> Part {
-        let (lo, hi) = tris
-            .iter()
-            .flat_map(|&t| mesh.triangles[t as usize])
-            .fold((u32::MAX, 0), |(lo, hi), v| (lo.min(v), hi.max(v)));
-        // No triangles: an empty range.
-        let (first_vertex, n_vertices) = if lo > hi {
-            (0, 0)
-        } else {
-            (lo, (hi - lo) as usize + 1)
-        };
+    /// An empty part for the triangles `tris`.
+    pub(super) fn new(tris: &[u32]) -> Part {
         let n_triangles = tris.len();
         Part {
             layers: Vec::new(),
@@ -74,8 +129,7 @@ impl Part {
             leaf_vertices: Vec::with_capacity(n_triangles),
             leaf_positions: Vec::with_capacity(n_triangles),
             corners: Vec::with_capacity(n_triangles),
-            seen: vec![[0; 2]; n_vertices],
-            first_vertex,
+            seen: LeafVertices::new(),
             buckets: Vec::new(),
             sorted: Vec::new(),
         }
@@ -198,19 +252,24 @@ impl Part {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
         let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        self.seen.start();
         for &t in tris {
+            self.seen
+                .reserve(tag, &self.leaf_vertices[start..], start as u32);
             let mut corner = [0u32; 3];
             for (c, v) in corner.iter_mut().zip(mesh.triangles[t as usize]) {
-                let seen = &mut self.seen[(v - self.first_vertex) as usize];
-                if seen[0] != tag {
-                    *seen = [tag, self.leaf_vertices.len() as u32];
-                    self.leaf_vertices.push(v);
-                    let p = mesh.positions[v as usize];
-                    self.leaf_positions.push(p);
-                    lo = lo.min(p.into());
-                    hi = hi.max(p.into());
-                }
-                *c = seen[1];
+                let next = self.leaf_vertices.len() as u32;
+                *c = match self.seen.get_or_insert(tag, v, next) {
+                    Some(i) => i,
+                    None => {
+                        self.leaf_vertices.push(v);
+                        let p = mesh.positions[v as usize];
+                        self.leaf_positions.push(p);
+                        lo = lo.min(p.into());
+                        hi = hi.max(p.into());
+                        next
+                    }
+                };
             }
             self.corners.push(corner);
         }

@@ -193,7 +193,7 @@ impl Forest {
         let parts: Vec<Part> = jobs
             .into_par_iter()
             .map(|(slice, runs)| {
-                let mut part = Part::new(mesh, slice);
+                let mut part = Part::new(slice);
                 let base = runs[0].start;
                 for r in runs {
                     part.layer(

@@ -253,7 +253,15 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
                 raw.n_groups,
             )
         },
-        || group_figures(&mesh, &raw.edges, &raw.groups, raw.n_groups, grid),
+        || {
+            let tris = TriangleKeys {
+                edges: &raw.edges,
+                cells: &raw.cells,
+                groups: &raw.groups,
+                n_groups: raw.n_groups,
+            };
+            group_figures(&mesh, &tris, grid)
+        },
     );
     Surface {
         mesh,
@@ -335,19 +343,23 @@ struct VertexSums {
     bbox: Aabb,
 }
 
+/// What the figures read of a raw surface beside the world mesh: vertex
+/// edge ids, triangle cells and groups.
+struct TriangleKeys<'a> {
+    edges: &'a [u64],
+    cells: &'a [u32],
+    groups: &'a [u32],
+    n_groups: usize,
+}
+
 /// Group figures. Edges: `E = (3F + B)/2`, which holds because every edge
 /// is used once (border) or twice (the table's manifold guarantee, checked
 /// independently by the tests); `B` counts directed edges lying in a
 /// border plane of the grid whose reverse is absent. Every vertex lies in
 /// one group (groups are vertex-connected), so vertex counts and boxes are
 /// summed over vertices; area and volume over triangles, in f64.
-fn group_figures(
-    mesh: &TriMesh,
-    edges: &[u64],
-    groups: &[u32],
-    n_groups: usize,
-    grid: Grid,
-) -> Vec<Group> {
+fn group_figures(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<Group> {
+    let (groups, n_groups) = (raw.groups, raw.n_groups);
     let p = &mesh.positions;
     let vertex_group: Vec<AtomicU32> = (0..p.len()).map(|_| AtomicU32::new(NO_GROUP)).collect();
     mesh.triangles
@@ -432,7 +444,7 @@ fn group_figures(
         .into_iter()
         .reduce(|a, b| a.iter().zip(&b).map(|(x, y)| x.add(y)).collect())
         .unwrap_or_else(|| vec![TriangleSums::default(); n_groups]);
-    let boundary = boundary_edges(mesh, edges, groups, n_groups, grid);
+    let boundary = boundary_edges(mesh, raw, grid);
     (0..n_groups)
         .map(|g| {
             let (t, v) = (&triangle_sums[g], &vertex_sums[g]);
@@ -455,51 +467,49 @@ fn group_figures(
 
 /// Per group, the edges used once: only edges with both ends in one border
 /// plane of the grid can be (the table puts all cell-boundary segments on
-/// cell faces), so only those are hashed.
-fn boundary_edges(
-    mesh: &TriMesh,
-    edges: &[u64],
-    groups: &[u32],
-    n_groups: usize,
-    grid: Grid,
-) -> Vec<u32> {
-    let mut out = vec![0u32; n_groups];
+/// cell faces), and only triangles of border cells have such edges (a
+/// vertex on a border plane lies on an edge of a border cell, and a
+/// triangle's vertices lie on its own cell's edges), so only those are
+/// examined and hashed.
+fn boundary_edges(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<u32> {
+    let mut out = vec![0u32; raw.n_groups];
     if grid.pad == 1 {
         return out;
     }
-    let [nx, ny, nz] = grid.dims;
-    let d = [nx, ny, nz];
-    // Vertices come in point order, so consecutive keys mostly share a grid
-    // row: a key's row is decoded (two divisions) only when it changes.
-    let mask: Vec<u8> = edges
-        .par_chunks(FIGURE_CHUNK)
-        .flat_map_iter(|keys| {
-            // Points `row.0..row.0 + nx` form the current row, at (y, z) = row.1.
-            let mut row = (usize::MAX, [0usize; 2]);
-            keys.iter().map(move |&key| {
-                let (point, axis) = ((key / 3) as usize, (key % 3) as usize);
-                if !(row.0..row.0.saturating_add(nx)).contains(&point) {
-                    let q = point / nx;
-                    row = (q * nx, [q % ny, q / ny]);
-                }
-                let c = [point - row.0, row.1[0], row.1[1]];
-                let mut m = 0u8;
-                for a in 0..3 {
-                    if a != axis {
-                        m |= u8::from(c[a] == 0) << (2 * a);
-                        m |= u8::from(c[a] == d[a] - 1) << (2 * a + 1);
-                    }
-                }
-                m
-            })
-        })
-        .collect();
+    let d = grid.dims;
+    let [cx, cy, cz] = d.map(|n| n.saturating_sub(1).max(1));
+    // Border planes a vertex lies in: bit 2a for coordinate 0 along axis
+    // a, bit 2a + 1 for the last one (the vertex's own axis excluded).
+    let planes = |v: u32| -> u8 {
+        let key = raw.edges[v as usize];
+        let (point, axis) = ((key / 3) as usize, (key % 3) as usize);
+        let c = [point % d[0], (point / d[0]) % d[1], point / (d[0] * d[1])];
+        let mut m = 0u8;
+        for a in (0..3).filter(|&a| a != axis) {
+            m |= u8::from(c[a] == 0) << (2 * a);
+            m |= u8::from(c[a] == d[a] - 1) << (2 * a + 1);
+        }
+        m
+    };
+    // Triangles come in cell order, so consecutive cells mostly share a
+    // row: a cell's row is decoded only when it changes.
+    let mut row = (usize::MAX, false);
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
-    for (t, &g) in mesh.triangles.iter().zip(groups) {
+    for ((t, &g), &c) in mesh.triangles.iter().zip(raw.groups).zip(raw.cells) {
+        let c = c as usize;
+        if !(row.0..row.0.saturating_add(cx)).contains(&c) {
+            let q = c / cx;
+            let (y, z) = (q % cy, q / cy);
+            row = (q * cx, y == 0 || y + 1 == cy || z == 0 || z + 1 == cz);
+        }
+        let x = c - row.0;
+        if !(row.1 || x == 0 || x + 1 == cx) {
+            continue;
+        }
+        let m = t.map(planes);
         for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if mask[a as usize] & mask[b as usize] != 0 {
-                candidates.push((a, b, g));
+            if m[k] & m[(k + 1) % 3] != 0 {
+                candidates.push((t[k], t[(k + 1) % 3], g));
             }
         }
     }

@@ -24,6 +24,51 @@ fn random_volumes_match_voxel_topology() {
     }
 }
 
+/// Open borders: per group, the border edges (directed edges whose reverse
+/// no triangle has) and χ = V − E + F counted by brute force over the
+/// mesh, on random fields whose surfaces meet every face of the grid.
+#[test]
+fn open_border_figures_match_a_brute_force_count() {
+    use std::collections::HashSet;
+    let open = McOptions::default();
+    let mut with_border = 0;
+    for seed in 1..=6u64 {
+        let vol = random_volume(seed, [9, 8, 7]);
+        for level in [60.5f32, 128.0, 200.5] {
+            let s = marching_cubes(&vol, IsoSpec::Level(level), &open, Backend::Cpu).unwrap();
+            let tris = &s.mesh.triangles;
+            let directed: HashSet<(u32, u32)> = tris
+                .iter()
+                .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+                .collect();
+            let n = s.groups.len();
+            let (mut border, mut faces) = (vec![0u32; n], vec![0i64; n]);
+            let mut vertices = vec![HashSet::new(); n];
+            for (t, &g) in tris.iter().zip(&s.triangle_groups) {
+                let g = g as usize;
+                faces[g] += 1;
+                vertices[g].extend(t.iter().copied());
+                for k in 0..3 {
+                    if !directed.contains(&(t[(k + 1) % 3], t[k])) {
+                        border[g] += 1;
+                    }
+                }
+            }
+            for (g, group) in s.groups.iter().enumerate() {
+                let edges = (3 * faces[g] + i64::from(border[g])) / 2;
+                let euler = vertices[g].len() as i64 - edges + faces[g];
+                assert_eq!(
+                    group.boundary_edges, border[g],
+                    "seed {seed} {level} group {g}"
+                );
+                assert_eq!(group.euler, euler, "seed {seed} {level} group {g}");
+                with_border += usize::from(border[g] > 0);
+            }
+        }
+    }
+    assert!(with_border > 10, "{with_border} groups reach the border");
+}
+
 #[test]
 fn every_single_cell_case_is_closed_and_matches_voxel_topology() {
     for case in 1..255u32 {

@@ -55,6 +55,7 @@
 mod array;
 mod image;
 mod poly;
+mod source;
 #[cfg(test)]
 mod tests;
 

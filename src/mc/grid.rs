@@ -22,7 +22,8 @@ use crate::foundation::alloc::zeroed;
 use crate::volume::Samples;
 
 /// Sample encodings of [`SampleGrid::kind`]; the values of
-/// `kernels/shared/mc_grid.wgsl`.
+/// `kernels/shared/mc_grid.wgsl`, whose decoding relies on them: 0 is
+/// `f32`, 1–2 are 16-bit and 3–4 8-bit, and the odd kinds are signed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
 pub enum SampleKind {

@@ -212,7 +212,7 @@ impl<'a> Field<'a> {
     }
 
     /// Row `y` of inner layer `z` as f32 (labels mapped to 0/1).
-    fn inner_row(&self, y: usize, z: usize, out: &mut [f32]) {
+    pub(crate) fn inner_row(&self, y: usize, z: usize, out: &mut [f32]) {
         let nx = self.volume.dims[0];
         let start = self.volume.index(0, y, z);
         let range = start..start + nx;

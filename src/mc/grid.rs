@@ -136,28 +136,22 @@ pub fn sample_words(field: &Field<'_>, k0: usize, k1: usize) -> Result<Vec<u32>>
     let layer = v.dims[0] * v.dims[1];
     let range = k0 * layer..k1 * layer;
     let what = "marching cubes: GPU sample words";
-    let label = match field.iso() {
-        IsoSpec::Label(l) => Some(l),
-        IsoSpec::Level(_) => None,
-    };
-    // Converted on the host: f32 values, or 0/1 flags in label mode.
-    macro_rules! converted {
-        ($s:expr) => {
-            pack(what, &$s[range], 1, |x| match label {
-                Some(l) => f32::from(u8::from(x as f64 == l)).to_bits(),
-                None => (x as f32).to_bits(),
-            })
-        };
-    }
     match v.data {
         Samples::F32(s) => pack(what, &s[range], 1, f32::to_bits),
         Samples::I16(s) => pack(what, &s[range], 2, |x| u32::from(x as u16)),
         Samples::U16(s) => pack(what, &s[range], 2, u32::from),
         Samples::I8(s) => pack(what, &s[range], 4, |x| u32::from(x as u8)),
         Samples::U8(s) => pack(what, &s[range], 4, u32::from),
-        Samples::U32(s) => converted!(s),
-        Samples::I32(s) => converted!(s),
-        Samples::F64(s) => converted!(s),
+        Samples::U32(_) | Samples::I32(_) | Samples::F64(_) => {
+            // Converted on the host exactly as the CPU path converts them
+            // (`Field::inner_row`: f32 values, 0/1 flags in label mode).
+            let mut words: Vec<u32> = zeroed(what, range.len())?;
+            let (vx, vy) = (v.dims[0], v.dims[1]);
+            words.par_chunks_mut(vx).enumerate().for_each(|(r, row)| {
+                field.inner_row(r % vy, k0 + r / vy, bytemuck::cast_slice_mut(row));
+            });
+            Ok(words)
+        }
     }
 }
 

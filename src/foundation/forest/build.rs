@@ -57,8 +57,6 @@ pub(super) struct LeafVertices {
     slots: Vec<[u32; 3]>,
     /// `32 − log2(slots.len())`: the hash's shift.
     shift: u32,
-    /// Vertices listed by the current leaf.
-    count: usize,
 }
 
 impl LeafVertices {
@@ -68,7 +66,6 @@ impl LeafVertices {
         LeafVertices {
             slots: vec![[0; 3]; 1 << Self::INITIAL_BITS],
             shift: 32 - Self::INITIAL_BITS,
-            count: 0,
         }
     }
 
@@ -86,7 +83,6 @@ impl LeafVertices {
             let s = &mut self.slots[i];
             if s[0] != tag {
                 *s = [tag, v, next];
-                self.count += 1;
                 return None;
             }
             if s[1] == v {
@@ -96,22 +92,16 @@ impl LeafVertices {
         }
     }
 
-    /// Starts leaf `tag` (a tag no earlier leaf used).
-    fn start(&mut self) {
-        self.count = 0;
-    }
-
-    /// Doubles the table when the current leaf fills half of it, keeping
-    /// the leaf's entries (`listed`: its vertices in index order from
-    /// `first`).
+    /// Doubles the table when three more vertices could fill more than
+    /// half of it, keeping leaf `tag`'s entries (`listed`: its vertices in
+    /// index order from `first`).
     fn reserve(&mut self, tag: u32, listed: &[u32], first: u32) {
-        if 2 * (self.count + 3) <= self.slots.len() {
+        if 2 * (listed.len() + 3) <= self.slots.len() {
             return;
         }
         let bits = 33 - self.shift;
         self.slots = vec![[0; 3]; 1 << bits];
         self.shift = 32 - bits;
-        self.count = 0;
         for (k, &v) in listed.iter().enumerate() {
             self.get_or_insert(tag, v, first + k as u32);
         }
@@ -252,7 +242,6 @@ impl Part {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
         let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-        self.seen.start();
         for &t in tris {
             self.seen
                 .reserve(tag, &self.leaf_vertices[start..], start as u32);

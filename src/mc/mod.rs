@@ -254,13 +254,14 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
             )
         },
         || {
-            let tris = TriangleKeys {
-                edges: &raw.edges,
-                cells: &raw.cells,
-                groups: &raw.groups,
-                n_groups: raw.n_groups,
-            };
-            group_figures(&mesh, &tris, grid)
+            group_figures(
+                &mesh,
+                &raw.edges,
+                &raw.cells,
+                &raw.groups,
+                raw.n_groups,
+                grid,
+            )
         },
     );
     Surface {
@@ -343,23 +344,20 @@ struct VertexSums {
     bbox: Aabb,
 }
 
-/// What the figures read of a raw surface beside the world mesh: vertex
-/// edge ids, triangle cells and groups.
-struct TriangleKeys<'a> {
-    edges: &'a [u64],
-    cells: &'a [u32],
-    groups: &'a [u32],
-    n_groups: usize,
-}
-
 /// Group figures. Edges: `E = (3F + B)/2`, which holds because every edge
 /// is used once (border) or twice (the table's manifold guarantee, checked
 /// independently by the tests); `B` counts directed edges lying in a
 /// border plane of the grid whose reverse is absent. Every vertex lies in
 /// one group (groups are vertex-connected), so vertex counts and boxes are
 /// summed over vertices; area and volume over triangles, in f64.
-fn group_figures(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<Group> {
-    let (groups, n_groups) = (raw.groups, raw.n_groups);
+fn group_figures(
+    mesh: &TriMesh,
+    edges: &[u64],
+    cells: &[u32],
+    groups: &[u32],
+    n_groups: usize,
+    grid: Grid,
+) -> Vec<Group> {
     let p = &mesh.positions;
     let vertex_group: Vec<AtomicU32> = (0..p.len()).map(|_| AtomicU32::new(NO_GROUP)).collect();
     mesh.triangles
@@ -444,7 +442,7 @@ fn group_figures(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<Grou
         .into_iter()
         .reduce(|a, b| a.iter().zip(&b).map(|(x, y)| x.add(y)).collect())
         .unwrap_or_else(|| vec![TriangleSums::default(); n_groups]);
-    let boundary = boundary_edges(mesh, raw, grid);
+    let boundary = boundary_edges(mesh, edges, cells, groups, n_groups, grid);
     (0..n_groups)
         .map(|g| {
             let (t, v) = (&triangle_sums[g], &vertex_sums[g]);
@@ -471,8 +469,15 @@ fn group_figures(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<Grou
 /// vertex on a border plane lies on an edge of a border cell, and a
 /// triangle's vertices lie on its own cell's edges), so only those are
 /// examined and hashed.
-fn boundary_edges(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<u32> {
-    let mut out = vec![0u32; raw.n_groups];
+fn boundary_edges(
+    mesh: &TriMesh,
+    edges: &[u64],
+    cells: &[u32],
+    groups: &[u32],
+    n_groups: usize,
+    grid: Grid,
+) -> Vec<u32> {
+    let mut out = vec![0u32; n_groups];
     if grid.pad == 1 {
         return out;
     }
@@ -481,7 +486,7 @@ fn boundary_edges(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<u32
     // Border planes a vertex lies in: bit 2a for coordinate 0 along axis
     // a, bit 2a + 1 for the last one (the vertex's own axis excluded).
     let planes = |v: u32| -> u8 {
-        let key = raw.edges[v as usize];
+        let key = edges[v as usize];
         let (point, axis) = ((key / 3) as usize, (key % 3) as usize);
         let c = [point % d[0], (point / d[0]) % d[1], point / (d[0] * d[1])];
         let mut m = 0u8;
@@ -495,7 +500,7 @@ fn boundary_edges(mesh: &TriMesh, raw: &TriangleKeys<'_>, grid: Grid) -> Vec<u32
     // row: a cell's row is decoded only when it changes.
     let mut row = (usize::MAX, false);
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
-    for ((t, &g), &c) in mesh.triangles.iter().zip(raw.groups).zip(raw.cells) {
+    for ((t, &g), &c) in mesh.triangles.iter().zip(groups).zip(cells) {
         let c = c as usize;
         if !(row.0..row.0.saturating_add(cx)).contains(&c) {
             let q = c / cx;

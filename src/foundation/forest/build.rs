@@ -40,10 +40,15 @@ pub(super) struct Part {
     pub(super) leaf_positions: Vec<Vec3>,
     pub(super) corners: Vec<[u32; 3]>,
     /// The vertices the current leaf has listed.
-    pub(super) seen: LeafVertices,
-    /// Scratch of the counting sort: bucket starts, sorted ids.
-    pub(super) buckets: Vec<u32>,
-    pub(super) sorted: Vec<u32>,
+    seen: LeafVertices,
+    /// Scratch of one run: its cell keys (in sorted order once sorted),
+    /// the counting sort's bucket starts, sorted ids and keys, and the
+    /// run's triangles gathered in sorted order.
+    keys: Vec<u32>,
+    buckets: Vec<u32>,
+    sorted: Vec<u32>,
+    sorted_keys: Vec<u32>,
+    gathered: Vec<[u32; 3]>,
 }
 
 /// The distinct vertices of the leaf being built and their indices in
@@ -120,13 +125,24 @@ impl Part {
             leaf_positions: Vec::with_capacity(n_triangles),
             corners: Vec::with_capacity(n_triangles),
             seen: LeafVertices::new(),
+            keys: Vec::new(),
             buckets: Vec::new(),
             sorted: Vec::new(),
+            sorted_keys: Vec::new(),
+            gathered: Vec::new(),
         }
     }
 
     /// Sorts `tris` (the ids of `run`, ascending) by cell and appends the
     /// run's layer node with its rows and leaves.
+    ///
+    /// The run is built in passes, each a loop over arrays: the sort, which
+    /// also places each triangle's vertex triple (read in id order, a
+    /// stream); the leaves' vertex tables and corners from those triples;
+    /// the leaves' positions gathered; the boxes. The gather's loads do
+    /// not depend on each other, so their cache misses overlap, where the
+    /// vertex table's branches between them would let only few be in
+    /// flight.
     pub(super) fn layer(
         &mut self,
         mesh: MeshView<'_>,
@@ -135,47 +151,63 @@ impl Part {
         run: &LayerRun,
         tris: &mut [u32],
     ) {
-        self.sort_by_cell(cells, tris, run.z as usize * grid.layer, grid.layer);
-        let row_start = self.rows.len() as u32;
-        let mut lbox = Aabb::EMPTY;
-        let key_of = |i: usize| cells[tris[i] as usize];
+        self.sort_by_cell(mesh, cells, tris, run.z as usize * grid.layer, grid.layer);
+        let (first_row, first_vertex) = (self.rows.len(), self.leaf_vertices.len());
         let mut i = 0;
         while i < tris.len() {
-            let row = key_of(i) as usize / grid.cx;
+            let row = self.keys[i] as usize / grid.cx;
             // Keys of the row: `row_start..row_end` (no division per triangle).
             let row_start = (row * grid.cx) as u32;
             let row_end = row_start + grid.cx as u32;
             let cell_start = self.cells.len() as u32;
-            let mut rbox = Aabb::EMPTY;
-            while i < tris.len() && key_of(i) < row_end {
-                let key = key_of(i);
-                // A leaf holds a few dozen triangles: a linear scan.
-                let mut end = i + 1;
-                while end < tris.len() && key_of(end) == key {
-                    end += 1;
-                }
-                let leaf = self.leaf(mesh, &tris[i..end], run.start + i);
-                rbox = rbox.union(leaf.bbox);
+            while i < tris.len() && self.keys[i] < row_end {
+                let key = self.keys[i];
+                // The leaf's end: the keys are sorted.
+                let end = i + self.keys[i..].partition_point(|&k| k == key);
+                let vertices = self.leaf(i..end, run.start + i);
                 self.cells.push(CellNode {
                     x: key - row_start,
+                    bbox: Aabb::EMPTY,
                     triangles: Span {
                         start: (run.start + i) as u32,
                         end: (run.start + end) as u32,
                     },
+                    vertices,
                     next: self.cells.len() as u32 + 1,
-                    ..leaf
                 });
                 i = end;
             }
             self.rows.push(RowNode {
                 y: (row % grid.cy) as u32,
-                bbox: rbox,
+                bbox: Aabb::EMPTY,
                 cells: Span {
                     start: cell_start,
                     end: self.cells.len() as u32,
                 },
             });
-            lbox = lbox.union(rbox);
+        }
+        self.leaf_positions.extend(
+            self.leaf_vertices[first_vertex..]
+                .iter()
+                .map(|&v| mesh.positions[v as usize]),
+        );
+        let mut lbox = Aabb::EMPTY;
+        for row in &mut self.rows[first_row..] {
+            for c in &mut self.cells[row.cells.range()] {
+                // The box of the distinct vertices, which is that of the
+                // triangles.
+                let (lo, hi) = self.leaf_positions[c.vertices.range()]
+                    .iter()
+                    .fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |(lo, hi), &p| {
+                        (lo.min(p.into()), hi.max(p.into()))
+                    });
+                c.bbox = Aabb {
+                    min: lo.into(),
+                    max: hi.into(),
+                };
+                row.bbox = row.bbox.union(c.bbox);
+            }
+            lbox = lbox.union(row.bbox);
         }
         if run.last_of_group
             && let Some(last) = self.cells.last_mut()
@@ -186,94 +218,105 @@ impl Part {
             z: run.z,
             bbox: lbox,
             rows: Span {
-                start: row_start,
+                start: first_row as u32,
                 end: self.rows.len() as u32,
             },
         });
     }
 
     /// Stable sort of `tris` by `cells[t]`, keys in `first..first + len`
-    /// (the run's layer): a counting sort over the layer when the run is
-    /// long against it, else over the keys' range when that is short, else
-    /// a sort by (key, id).
-    fn sort_by_cell(&mut self, cells: &[u32], tris: &mut [u32], first: usize, len: usize) {
-        let key = |t: u32| cells[t as usize];
+    /// (the run's layer), leaving the sorted keys in `keys` and the
+    /// triangles' vertex triples in `gathered`: a counting
+    /// sort over the layer when the run is long against it, else over the
+    /// keys' range when that is short, else a sort by (key, id).
+    fn sort_by_cell(
+        &mut self,
+        mesh: MeshView<'_>,
+        cells: &[u32],
+        tris: &mut [u32],
+        first: usize,
+        len: usize,
+    ) {
+        self.gathered.clear();
+        self.keys.clear();
+        self.keys.extend(tris.iter().map(|&t| cells[t as usize]));
         let short = |range: usize| range <= 2 * tris.len() + 64;
         let (lo, range) = if short(len) {
             (first as u32, len)
         } else {
-            let (lo, hi) = tris.iter().fold((u32::MAX, 0), |(lo, hi), &t| {
-                (lo.min(key(t)), hi.max(key(t)))
-            });
+            let (lo, hi) =
+                (self.keys.iter()).fold((u32::MAX, 0), |(lo, hi), &k| (lo.min(k), hi.max(k)));
             if lo >= hi {
+                self.gathered
+                    .extend(tris.iter().map(|&t| mesh.triangles[t as usize]));
                 return;
             }
             (lo, (hi - lo) as usize + 1)
         };
         if !short(range) {
-            tris.sort_unstable_by_key(|&t| u64::from(key(t)) << 32 | u64::from(t));
+            let mut pairs: Vec<u64> = (self.keys.iter().zip(tris.iter()))
+                .map(|(&k, &t)| u64::from(k) << 32 | u64::from(t))
+                .collect();
+            pairs.sort_unstable();
+            for ((k, t), p) in self.keys.iter_mut().zip(tris.iter_mut()).zip(pairs) {
+                (*k, *t) = ((p >> 32) as u32, p as u32);
+            }
+            self.gathered
+                .extend(tris.iter().map(|&t| mesh.triangles[t as usize]));
             return;
         }
         self.buckets.clear();
         self.buckets.resize(range + 1, 0);
-        for &t in tris.iter() {
-            self.buckets[(key(t) - lo) as usize + 1] += 1;
+        for &k in &self.keys {
+            self.buckets[(k - lo) as usize + 1] += 1;
         }
         for k in 0..range {
             self.buckets[k + 1] += self.buckets[k];
         }
         self.sorted.clear();
         self.sorted.resize(tris.len(), 0);
-        for &t in tris.iter() {
-            let b = &mut self.buckets[(key(t) - lo) as usize];
-            self.sorted[*b as usize] = t;
-            *b += 1;
+        self.sorted_keys.clear();
+        self.sorted_keys.resize(tris.len(), 0);
+        self.gathered.resize(tris.len(), [0; 3]);
+        // Distinct slices, so that the bucket is read once per triangle,
+        // not again after each store.
+        let (buckets, sorted) = (&mut self.buckets[..], &mut self.sorted[..]);
+        let (sorted_keys, gathered) = (&mut self.sorted_keys[..], &mut self.gathered[..]);
+        for (&t, &k) in tris.iter().zip(&self.keys) {
+            let slot = &mut buckets[(k - lo) as usize];
+            let b = *slot as usize;
+            *slot += 1;
+            sorted[b] = t;
+            sorted_keys[b] = k;
+            gathered[b] = mesh.triangles[t as usize];
         }
         tris.copy_from_slice(&self.sorted);
+        std::mem::swap(&mut self.keys, &mut self.sorted_keys);
     }
 
-    /// Appends the leaf's distinct vertices (in order of first use by its
-    /// triangles, with their positions) and its triangles' corners, in one
-    /// pass over the triangles; returns a leaf node holding its box and
-    /// vertex span (the box of the distinct vertices, which is that of the
-    /// triangles). `first` is the position of the leaf's first triangle in
-    /// the order.
-    fn leaf(&mut self, mesh: MeshView<'_>, tris: &[u32], first: usize) -> CellNode {
+    /// Appends the distinct vertices of the leaf of the run's triangles
+    /// `range` (in `gathered`), in order of first use, and the triangles'
+    /// corners; returns the leaf's vertex span. `first` is the position of
+    /// the leaf's first triangle in the order.
+    fn leaf(&mut self, range: std::ops::Range<usize>, first: usize) -> Span {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
-        let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-        for &t in tris {
+        for tri in &self.gathered[range] {
             self.seen
                 .reserve(tag, &self.leaf_vertices[start..], start as u32);
             let mut corner = [0u32; 3];
-            for (c, v) in corner.iter_mut().zip(mesh.triangles[t as usize]) {
+            for (c, &v) in corner.iter_mut().zip(tri) {
                 let next = self.leaf_vertices.len() as u32;
-                *c = match self.seen.get_or_insert(tag, v, next) {
-                    Some(i) => i,
-                    None => {
-                        self.leaf_vertices.push(v);
-                        let p = mesh.positions[v as usize];
-                        self.leaf_positions.push(p);
-                        lo = lo.min(p.into());
-                        hi = hi.max(p.into());
-                        next
-                    }
-                };
+                *c = self.seen.get_or_insert(tag, v, next).unwrap_or_else(|| {
+                    self.leaf_vertices.push(v);
+                    next
+                });
             }
             self.corners.push(corner);
         }
-        CellNode {
-            x: 0,
-            bbox: Aabb {
-                min: lo.into(),
-                max: hi.into(),
-            },
-            triangles: Span { start: 0, end: 0 },
-            vertices: Span {
-                start: start as u32,
-                end: self.leaf_vertices.len() as u32,
-            },
-            next: u32::MAX,
+        Span {
+            start: start as u32,
+            end: self.leaf_vertices.len() as u32,
         }
     }
 }
@@ -306,10 +349,14 @@ pub(super) fn order_by_group_and_layer(
     }
     let mut next = start.clone();
     let mut out = vec![0u32; cells.len()];
+    // Slices, so that a group's cursor is read once per triangle, not
+    // again after the store.
+    let (next_at, placed) = (&mut next[..], &mut out[..]);
     let mut place = |t: u32| {
-        let s = &mut next[groups[t as usize] as usize];
-        out[*s as usize] = t;
+        let s = &mut next_at[groups[t as usize] as usize];
+        let at = *s as usize;
         *s += 1;
+        placed[at] = t;
     };
     if monotone {
         (0..cells.len() as u32).for_each(&mut place);

@@ -331,11 +331,21 @@ pub(super) fn order_by_group_and_layer(
     groups: &[u32],
     n_groups: usize,
 ) -> (Vec<u32>, Vec<u32>) {
+    // Runs of one group along the ids (marching cubes emits long ones):
+    // counted and placed a run at a time.
+    let mut group_runs = Vec::new();
     let mut start = vec![0u32; n_groups + 1];
+    let mut i = 0;
+    while i < groups.len() {
+        let g = groups[i];
+        let end = i + groups[i..].iter().take_while(|&&h| h == g).count();
+        group_runs.push((g, i as u32, end as u32));
+        start[g as usize + 1] += (end - i) as u32;
+        i = end;
+    }
     // Keys `lo..hi` form the current layer.
     let (mut lo, mut hi, mut monotone) = (0usize, 0usize, true);
-    for (&c, &g) in cells.iter().zip(groups) {
-        start[g as usize + 1] += 1;
+    for &c in cells {
         let c = c as usize;
         if c >= hi {
             lo = c - c % layer;
@@ -349,17 +359,14 @@ pub(super) fn order_by_group_and_layer(
     }
     let mut next = start.clone();
     let mut out = vec![0u32; cells.len()];
-    // Slices, so that a group's cursor is read once per triangle, not
-    // again after the store.
-    let (next_at, placed) = (&mut next[..], &mut out[..]);
-    let mut place = |t: u32| {
-        let s = &mut next_at[groups[t as usize] as usize];
-        let at = *s as usize;
-        *s += 1;
-        placed[at] = t;
-    };
     if monotone {
-        (0..cells.len() as u32).for_each(&mut place);
+        for &(g, a, b) in &group_runs {
+            let at = next[g as usize] as usize;
+            next[g as usize] += b - a;
+            (out[at..at + (b - a) as usize].iter_mut())
+                .zip(a..b)
+                .for_each(|(o, t)| *o = t);
+        }
     } else {
         let n_layers = cells.iter().max().map_or(0, |&m| m as usize / layer + 1);
         let mut at = vec![0u32; n_layers + 1];
@@ -375,7 +382,15 @@ pub(super) fn order_by_group_and_layer(
             by_layer[*a as usize] = t as u32;
             *a += 1;
         }
-        by_layer.into_iter().for_each(&mut place);
+        // Slices, so that a group's cursor is read once per triangle, not
+        // again after the store.
+        let (next_at, placed) = (&mut next[..], &mut out[..]);
+        for t in by_layer {
+            let s = &mut next_at[groups[t as usize] as usize];
+            let at = *s as usize;
+            *s += 1;
+            placed[at] = t;
+        }
     }
     (out, start)
 }

@@ -2,6 +2,7 @@
 //! of another mesh is refused.
 
 use super::*;
+use chisel::foundation::forest::LEAF_VERTICES;
 
 /// Everything but the counts: crossed triangles, cut vertex numbering,
 /// points (bit for bit) and sides.
@@ -84,11 +85,12 @@ fn check_leaf_tables(mesh: &TriMesh, f: &Forest) -> usize {
         }
         assert_eq!(&f.leaf_vertices[c.vertices.range()], &first_use[..]);
         most = most.max(first_use.len());
+        assert!(first_use.len() <= LEAF_VERTICES);
         for i in c.triangles.range() {
             let want = mesh.triangles[f.triangles[i] as usize];
             let got = f.corners[i].map(|v| {
-                assert!(c.vertices.range().contains(&(v as usize)));
-                f.leaf_vertices[v as usize]
+                assert!(usize::from(v) < c.vertices.len());
+                f.leaf_vertices[c.vertices.start as usize + usize::from(v)]
             });
             assert_eq!(got, want);
         }
@@ -103,7 +105,15 @@ fn leaf_tables_name_each_triangles_corners_and_positions() {
     // A dense patch far smaller than the bounding box puts thousands of
     // vertices into one leaf of the virtual grid (more than the build's
     // first vertex table holds).
-    let n = 60u32;
+    let dense = dense_patch(60);
+    let f = Forest::from_triangles(dense.view()).forest;
+    let most = check_leaf_tables(&dense, &f);
+    assert!(most > 2048, "the dense leaf lists {most} vertices");
+}
+
+/// A square patch of `n`×`n` vertices 1e-5 apart and one triangle 100
+/// away: the patch falls into one cell of the virtual grid.
+fn dense_patch(n: u32) -> TriMesh {
     let mut positions: Vec<glam::Vec3> = (0..n * n)
         .map(|i| glam::Vec3::new((i % n) as f32 * 1e-5, (i / n) as f32 * 1e-5, 0.0))
         .collect();
@@ -122,10 +132,34 @@ fn leaf_tables_name_each_triangles_corners_and_positions() {
         glam::Vec3::new(100.0, 101.0, 100.0),
     ]);
     triangles.push([far, far + 1, far + 2]);
-    let dense = TriMesh::new(positions, triangles).unwrap();
+    TriMesh::new(positions, triangles).unwrap()
+}
+
+#[test]
+fn a_cell_listing_more_vertices_than_a_leaf_holds_gets_several_leaves() {
+    // 300² = 90,000 vertices in one cell: two leaves, each within
+    // `LEAF_VERTICES`, and the tree still finds what the scan finds.
+    let dense = dense_patch(300);
     let f = Forest::from_triangles(dense.view()).forest;
     let most = check_leaf_tables(&dense, &f);
-    assert!(most > 2048, "the dense leaf lists {most} vertices");
+    assert!(
+        most > LEAF_VERTICES / 2,
+        "the fullest leaf lists {most} vertices"
+    );
+    let split = f.rows.iter().any(|r| {
+        let cells = &f.cells[r.cells.range()];
+        cells.windows(2).any(|w| w[0].x == w[1].x)
+    });
+    assert!(split, "the dense cell is split into leaves with one key");
+    for k in [
+        plane([1.5e-3, 1.5e-3, 0.0], [1.0, 0.3, 0.1]),
+        plane([0.7e-3, 2.9e-3, 0.0], [0.2, 1.0, 0.0]),
+    ] {
+        let tree = locate(&dense, &f, &k).unwrap();
+        let scan = locate_brute_force(&dense, &k).unwrap();
+        assert!(!tree.triangles.is_empty());
+        same_located(&tree, &scan, "dense patch");
+    }
 }
 
 #[test]

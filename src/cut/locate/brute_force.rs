@@ -54,17 +54,13 @@ fn scan_analytic<A: Analytic>(mesh: &TriMesh, k: A, stats: CutStats) -> Located 
         })
         .collect::<Vec<_>>()
         .concat();
-    let corner = |t: u32, c: usize| {
-        let v = mesh.triangles[t as usize][c];
-        (v, mesh.positions[v as usize])
-    };
     let crossed = if A::SIGN_CHANGE_CROSSES {
         mixed
     } else {
-        let reaches = |&t: &u32| knife_reaches(k, ends(corner, k, t));
+        let reaches = |&t: &u32| knife_reaches(k, ends(mesh, k, t));
         mixed.into_par_iter().filter(reaches).collect()
     };
-    finish_locate(&crossed, |&t| t, corner, k, stats)
+    finish_locate(mesh, &crossed, k, stats)
 }
 
 /// The scan for a triangulated knife: corefinement of every triangle.

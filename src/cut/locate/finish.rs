@@ -7,6 +7,8 @@ use std::collections::HashMap;
 
 use glam::Vec3;
 
+use super::{End, ends};
+use crate::TriMesh;
 use crate::cut::corefine;
 use crate::cut::knife::Analytic;
 use crate::cut::{CutStats, KnifeSegment, Located, PointOrigin};
@@ -106,20 +108,18 @@ const CROSSED_EDGES: [(usize, usize); 8] = [
     (0, 0), // all negative: not crossed
 ];
 
-/// Cut vertices of the crossed triangles `items`, in ascending id order,
-/// numbered by first use in that order (so tree and scan number them
-/// identically); `id` gives an item's triangle id, `corner` the vertex id
-/// and position of its corner `c` (in winding order). Only the two edges
-/// whose ends change side are looked up; a triangle none of whose edges the
-/// knife reaches (a rectangle's border) is dropped.
-pub(super) fn finish_locate<T: Copy, A: Analytic>(
-    items: &[T],
-    id: impl Fn(&T) -> u32,
-    corner: impl Fn(T, usize) -> (u32, Vec3),
+/// Cut vertices of the crossed triangles `crossed` (ids into `mesh`), in
+/// ascending id order, numbered by first use in that order (so tree and
+/// scan number them identically). Only the two edges whose ends change side
+/// are looked up; a triangle none of whose edges the knife reaches (a
+/// rectangle's border) is dropped.
+pub(super) fn finish_locate<A: Analytic>(
+    mesh: &TriMesh,
+    crossed: &[u32],
     k: A,
     mut stats: CutStats,
 ) -> Located {
-    let n = items.len();
+    let n = crossed.len();
     // A mixed triangle has exactly two edges whose ends change side.
     let mut ids = EdgeTable::with_capacity(2 * n);
     let mut coincident: Vec<(u32, u32)> = Vec::new();
@@ -131,15 +131,15 @@ pub(super) fn finish_locate<T: Copy, A: Analytic>(
         edges: Vec::with_capacity(n),
         ..Located::default()
     };
-    for item in items {
-        let f: [f64; 3] = std::array::from_fn(|c| k.eval(corner(*item, c).1.as_dvec3()));
-        let signs = (0..3).fold(0, |s, c| s | usize::from(f[c] < 0.0) << c);
+    for &t in crossed {
+        let ends = ends(mesh, k, t);
+        let signs = (0..3).fold(0, |s, c| s | usize::from(ends[c].2 < 0.0) << c);
         if signs == 0 || signs == 7 {
             continue;
         }
         let (e0, e1) = CROSSED_EDGES[signs];
-        let x = cut_edge(&mut ids, &mut out, k, &corner, *item, &f, e0);
-        let y = cut_edge(&mut ids, &mut out, k, &corner, *item, &f, e1);
+        let x = cut_edge(&mut ids, &mut out, k, &ends, e0);
+        let y = cut_edge(&mut ids, &mut out, k, &ends, e1);
         if x & y == u32::MAX {
             continue;
         }
@@ -159,7 +159,7 @@ pub(super) fn finish_locate<T: Copy, A: Analytic>(
             pick(e0 == 1, x, pick(e1 == 1, y, u32::MAX)),
             pick(e1 == 2, y, u32::MAX),
         ];
-        out.triangles.push(id(item));
+        out.triangles.push(t);
         out.edge_cuts.push(cuts);
     }
     if !coincident.is_empty() {
@@ -171,7 +171,7 @@ pub(super) fn finish_locate<T: Copy, A: Analytic>(
     out
 }
 
-/// The cut vertex of edge `e` of `item` (corners e, e + 1), whose ends
+/// The cut vertex of edge `e` of a triangle (corners e, e + 1 of `ends`), whose ends
 /// change side (made at its first use, from its lower-id end), or
 /// `u32::MAX` when the knife does not reach the crossing.
 ///
@@ -181,25 +181,18 @@ pub(super) fn finish_locate<T: Copy, A: Analytic>(
 /// the edge `(v, v)` with v's side (and found under that key, not under the
 /// edge's).
 #[inline(always)]
-fn cut_edge<T: Copy, A: Analytic>(
+fn cut_edge<A: Analytic>(
     ids: &mut EdgeTable,
     out: &mut Located,
     k: A,
-    corner: impl Fn(T, usize) -> (u32, Vec3),
-    item: T,
-    f: &[f64; 3],
+    ends: &[End; 3],
     e: usize,
 ) -> u32 {
     let (c0, c1) = (e, if e == 2 { 0 } else { e + 1 });
     // The lower-id end first, chosen by index (no branch on the data).
-    let lower = if corner(item, c0).0 < corner(item, c1).0 {
-        c0
-    } else {
-        c1
-    };
+    let lower = if ends[c0].0 < ends[c1].0 { c0 } else { c1 };
     let upper = c0 + c1 - lower;
-    let ((i, a), (j, b)) = (corner(item, lower), corner(item, upper));
-    let (fa, fb) = (f[lower], f[upper]);
+    let ((i, a, fa), (j, b, fb)) = (ends[lower], ends[upper]);
     let slot = match ids.find((i, j), &out.edges) {
         Ok(id) => return id,
         Err(slot) => slot,

@@ -11,17 +11,18 @@ mod tree;
 use glam::Vec3;
 
 use super::knife::Analytic;
+use crate::TriMesh;
 pub(crate) use brute_force::locate_brute_force_prepared;
 pub(crate) use tree::locate_prepared;
 
 /// One end of a triangle edge: vertex id, position, side value.
 type End = (u32, Vec3, f64);
 
-/// The corners of the triangle behind `item`, with their side values.
+/// The corners of triangle `t`, in winding order, with their side values.
 #[inline(always)]
-fn ends<T: Copy, A: Analytic>(corner: impl Fn(T, usize) -> (u32, Vec3), k: A, item: T) -> [End; 3] {
-    std::array::from_fn(|c| {
-        let (v, q) = corner(item, c);
+fn ends<A: Analytic>(mesh: &TriMesh, k: A, t: u32) -> [End; 3] {
+    mesh.triangles[t as usize].map(|v| {
+        let q = mesh.positions[v as usize];
         (v, q, k.eval(q.as_dvec3()))
     })
 }

@@ -38,59 +38,55 @@ pub(crate) fn locate_prepared(
     };
     Ok(match k.analytic() {
         None => return locate_mesh_knife(mesh, forest, k, stats),
-        Some(AnalyticKnife::Plane(a)) => locate_analytic(forest, a, stats),
-        Some(AnalyticKnife::Rect(a)) => locate_analytic(forest, a, stats),
-        Some(AnalyticKnife::Sphere(a)) => locate_analytic(forest, a, stats),
+        Some(AnalyticKnife::Plane(a)) => locate_analytic(mesh, forest, a, stats),
+        Some(AnalyticKnife::Rect(a)) => locate_analytic(mesh, forest, a, stats),
+        Some(AnalyticKnife::Sphere(a)) => locate_analytic(mesh, forest, a, stats),
     })
 }
 
 /// The tree query for an analytic knife (compiled per knife kind).
-fn locate_analytic<A: Analytic>(forest: &Forest, k: A, mut stats: CutStats) -> Located {
+fn locate_analytic<A: Analytic>(
+    mesh: &TriMesh,
+    forest: &Forest,
+    k: A,
+    mut stats: CutStats,
+) -> Located {
     // Analytic knife: per expanded leaf, each of its distinct vertices is
     // evaluated once (from the leaf's contiguous position table), then its
     // triangles are tested from the contiguous corner table without a
     // branch; a mixed one (for a rectangle: one whose crossing the
-    // rectangle reaches) is kept as the key `id << 32 | entry`, its place in
-    // the forest's tables, from which its cut points are made.
-    let corner = |key: u64, c: usize| {
-        let i = forest.corners[key as u32 as usize][c] as usize;
-        (forest.leaf_vertices[i], forest.leaf_positions[i])
-    };
+    // rectangle reaches) is kept, and its cut points are made from the mesh.
     let mut neg: Vec<u8> = Vec::new();
-    let mut keys: Vec<u64> = Vec::new();
+    let mut crossed: Vec<u32> = Vec::new();
     let expanded = walk(forest, &k, &mut stats, &mut |c: &CellNode| {
-        let (vs, tris) = (c.vertices.range(), c.triangles.range());
-        let v0 = c.vertices.start;
+        let tris = c.triangles.range();
         neg.clear();
         neg.extend(
-            forest.leaf_positions[vs]
+            forest.leaf_positions[c.vertices.range()]
                 .iter()
                 .map(|q| u8::from(k.eval(q.as_dvec3()) < 0.0)),
         );
-        let before = keys.len();
-        keys.resize(before + tris.len(), 0);
-        let (neg, out) = (&neg[..], &mut keys[before..]);
+        let before = crossed.len();
+        crossed.resize(before + tris.len(), 0);
+        let (neg, out) = (&neg[..], &mut crossed[before..]);
         let mut kept = 0;
-        for ((&t, corners), e) in (forest.triangles[tris.clone()].iter())
-            .zip(&forest.corners[tris.clone()])
-            .zip(tris.start as u64..)
-        {
-            let [a, b, c] = corners.map(|i| neg[i.wrapping_sub(v0) as usize]);
-            out[kept] = u64::from(t) << 32 | e;
+        for (&t, corners) in (forest.triangles[tris.clone()].iter()).zip(&forest.corners[tris]) {
+            let [a, b, c] = corners.map(|i| neg[usize::from(i)]);
+            out[kept] = t;
             kept += usize::from((a ^ b) | (b ^ c) != 0);
         }
-        keys.truncate(before + kept);
+        crossed.truncate(before + kept);
         if !A::SIGN_CHANGE_CROSSES {
             let mut i = before;
-            for j in before..keys.len() {
-                if knife_reaches(k, ends(corner, k, keys[j])) {
-                    keys[i] = keys[j];
+            for j in before..crossed.len() {
+                if knife_reaches(k, ends(mesh, k, crossed[j])) {
+                    crossed[i] = crossed[j];
                     i += 1;
                 }
             }
-            keys.truncate(i);
+            crossed.truncate(i);
         }
-        keys.len() - before
+        crossed.len() - before
     });
     for &(s, e) in &expanded {
         if e > s {
@@ -99,9 +95,9 @@ fn locate_analytic<A: Analytic>(forest: &Forest, k: A, mut stats: CutStats) -> L
             stats.classes.separated += 1;
         }
     }
-    // Ascending ids (unique, the high halves of the keys).
-    radsort::sort_by_key(&mut keys, |&key| (key >> 32) as u32);
-    finish_locate(&keys, |&key| (key >> 32) as u32, corner, k, stats)
+    // Ascending ids (unique).
+    radsort::sort(&mut crossed);
+    finish_locate(mesh, &crossed, k, stats)
 }
 
 /// The tree query for a triangulated knife: candidate triangles from the

@@ -4,7 +4,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::{CellNode, LayerNode, MeshView, RowNode, Span};
+use super::{CellNode, LEAF_VERTICES, LayerNode, MeshView, RowNode, Span};
 use crate::foundation::aabb::Aabb;
 
 /// Least triangles per part of the parallel build (at most one part per
@@ -38,7 +38,7 @@ pub(super) struct Part {
     pub(super) cells: Vec<CellNode>,
     pub(super) leaf_vertices: Vec<u32>,
     pub(super) leaf_positions: Vec<Vec3>,
-    pub(super) corners: Vec<[u32; 3]>,
+    pub(super) corners: Vec<[u16; 3]>,
     /// The vertices the current leaf has listed.
     seen: LeafVertices,
     /// Scratch of one run: its cell keys (in sorted order once sorted),
@@ -99,8 +99,8 @@ impl LeafVertices {
 
     /// Doubles the table when three more vertices could fill more than
     /// half of it, keeping leaf `tag`'s entries (`listed`: its vertices in
-    /// index order from `first`).
-    fn reserve(&mut self, tag: u32, listed: &[u32], first: u32) {
+    /// index order).
+    fn reserve(&mut self, tag: u32, listed: &[u32]) {
         if 2 * (listed.len() + 3) <= self.slots.len() {
             return;
         }
@@ -108,7 +108,7 @@ impl LeafVertices {
         self.slots = vec![[0; 3]; 1 << bits];
         self.shift = 32 - bits;
         for (k, &v) in listed.iter().enumerate() {
-            self.get_or_insert(tag, v, first + k as u32);
+            self.get_or_insert(tag, v, k as u32);
         }
     }
 }
@@ -162,20 +162,24 @@ impl Part {
             let cell_start = self.cells.len() as u32;
             while i < tris.len() && self.keys[i] < row_end {
                 let key = self.keys[i];
-                // The leaf's end: the keys are sorted.
+                // The cell's end: the keys are sorted.
                 let end = i + self.keys[i..].partition_point(|&k| k == key);
-                let vertices = self.leaf(i..end, run.start + i);
-                self.cells.push(CellNode {
-                    x: key - row_start,
-                    bbox: Aabb::EMPTY,
-                    triangles: Span {
-                        start: (run.start + i) as u32,
-                        end: (run.start + end) as u32,
-                    },
-                    vertices,
-                    next: self.cells.len() as u32 + 1,
-                });
-                i = end;
+                // One leaf, or several where the cell's triangles list more
+                // than `LEAF_VERTICES` vertices.
+                while i < end {
+                    let (vertices, stop) = self.leaf(i..end, run.start + i);
+                    self.cells.push(CellNode {
+                        x: key - row_start,
+                        bbox: Aabb::EMPTY,
+                        triangles: Span {
+                            start: (run.start + i) as u32,
+                            end: (run.start + stop) as u32,
+                        },
+                        vertices,
+                        next: self.cells.len() as u32 + 1,
+                    });
+                    i = stop;
+                }
             }
             self.rows.push(RowNode {
                 y: (row % grid.cy) as u32,
@@ -294,30 +298,39 @@ impl Part {
         std::mem::swap(&mut self.keys, &mut self.sorted_keys);
     }
 
-    /// Appends the distinct vertices of the leaf of the run's triangles
+    /// Appends the distinct vertices of a leaf of the run's triangles
     /// `range` (in `gathered`), in order of first use, and the triangles'
-    /// corners; returns the leaf's vertex span. `first` is the position of
-    /// the leaf's first triangle in the order.
-    fn leaf(&mut self, range: std::ops::Range<usize>, first: usize) -> Span {
+    /// corners as offsets into them; returns the leaf's vertex span and
+    /// where it ends in `range`: at its end, or before the first triangle
+    /// that could list more than [`LEAF_VERTICES`]. `first` is the position
+    /// of the leaf's first triangle in the order.
+    fn leaf(&mut self, range: std::ops::Range<usize>, first: usize) -> (Span, usize) {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
-        for tri in &self.gathered[range] {
-            self.seen
-                .reserve(tag, &self.leaf_vertices[start..], start as u32);
-            let mut corner = [0u32; 3];
+        let mut stop = range.end;
+        for (i, tri) in range.clone().zip(&self.gathered[range]) {
+            let listed = &self.leaf_vertices[start..];
+            if listed.len() + 3 > LEAF_VERTICES {
+                stop = i;
+                break;
+            }
+            self.seen.reserve(tag, listed);
+            let mut corner = [0u16; 3];
             for (c, &v) in corner.iter_mut().zip(tri) {
-                let next = self.leaf_vertices.len() as u32;
-                *c = self.seen.get_or_insert(tag, v, next).unwrap_or_else(|| {
+                let next = (self.leaf_vertices.len() - start) as u32;
+                let at = self.seen.get_or_insert(tag, v, next).unwrap_or_else(|| {
                     self.leaf_vertices.push(v);
                     next
                 });
+                *c = at as u16;
             }
             self.corners.push(corner);
         }
-        Span {
+        let vertices = Span {
             start: start as u32,
             end: self.leaf_vertices.len() as u32,
-        }
+        };
+        (vertices, stop)
     }
 }
 

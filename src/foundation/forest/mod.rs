@@ -24,6 +24,12 @@ use build::{KeyGrid, LayerRun, PART_TRIANGLES, Part, layer_runs, order_by_group_
 /// Target triangles per leaf of a virtual grid ([`Forest::from_triangles`]).
 pub const LEAF_TRIANGLES: usize = 32;
 
+/// Most distinct vertices one leaf lists ([`Forest::corners`] are 16-bit
+/// offsets into them). A marching-cubes leaf block lists a few hundred at
+/// most; a cell of a virtual grid whose triangles list more (a dense patch
+/// far smaller than the mesh's box) gets several leaves with the same key.
+pub const LEAF_VERTICES: usize = 1 << 16;
+
 /// A triangle mesh as the forest reads it: positions and vertex-index
 /// triples (the host mesh type lies in a layer above).
 #[derive(Debug, Clone, Copy)]
@@ -95,7 +101,8 @@ pub struct RowNode {
     pub cells: Span,
 }
 
-/// A leaf: the triangles of one cell of one group.
+/// A leaf: the triangles of one cell of one group (or a run of them, see
+/// [`LEAF_VERTICES`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CellNode {
     pub x: u32,
@@ -119,11 +126,11 @@ pub struct Forest {
     pub cells: Vec<CellNode>,
     /// Triangle ids ordered by (group, cell); leaves index this.
     pub triangles: Vec<u32>,
-    /// Per entry of `triangles`, its corners as indices into
-    /// `leaf_vertices` (inside its leaf's `vertices` span), in the
+    /// Per entry of `triangles`, its corners as offsets into its leaf's
+    /// vertices (`leaf_vertices[vertices.start + offset]`), in the
     /// triangle's winding: a query evaluates each vertex of a leaf once and
     /// tests the leaf's triangles from a contiguous table.
-    pub corners: Vec<[u32; 3]>,
+    pub corners: Vec<[u16; 3]>,
     /// Per leaf, its distinct mesh vertex ids, in order of first use by
     /// the leaf's triangles (in `triangles` order, corners in winding
     /// order).
@@ -224,7 +231,7 @@ impl Forest {
     pub(crate) fn touch_leaf(&self, c: &CellNode) -> u32 {
         let (t, v) = (c.triangles.range(), c.vertices.range());
         let line = |size: usize| 64 / size;
-        (self.corners[t.clone()].iter().step_by(line(12))).fold(0, |a, x| a ^ x[0])
+        (self.corners[t.clone()].iter().step_by(line(6))).fold(0, |a, x| a ^ u32::from(x[0]))
             ^ (self.triangles[t].iter().step_by(line(4))).fold(0, |a, x| a ^ x)
             ^ (self.leaf_vertices[v.clone()].iter().step_by(line(4))).fold(0, |a, x| a ^ x)
             ^ (self.leaf_positions[v].iter().step_by(line(12))).fold(0, |a, x| a ^ x.x.to_bits())
@@ -254,7 +261,7 @@ impl Forest {
         self.leaf_positions
             .reserve_exact(total(|p| p.leaf_positions.len()));
         self.corners.reserve_exact(total(|p| p.corners.len()));
-        for mut p in rest {
+        for p in rest {
             let rows = self.rows.len() as u32;
             let cells = self.cells.len() as u32;
             let vertices = self.leaf_vertices.len() as u32;
@@ -281,10 +288,6 @@ impl Forest {
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
             self.leaf_positions.extend_from_slice(&p.leaf_positions);
-            p.corners
-                .as_flattened_mut()
-                .iter_mut()
-                .for_each(|v| *v += vertices);
             self.corners.extend_from_slice(&p.corners);
         }
         let mut first = 0usize;

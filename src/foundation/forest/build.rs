@@ -30,15 +30,19 @@ pub(super) struct LayerRun {
 }
 
 /// Nodes and leaf tables of consecutive runs; spans are local to the part
-/// except the triangle spans, which index the whole order.
+/// except the triangle spans, which index the whole order. The corners
+/// are written in place, into the part's slice of the forest's table.
 #[derive(Debug)]
-pub(super) struct Part {
+pub(super) struct Part<'a> {
     pub(super) layers: Vec<LayerNode>,
     pub(super) rows: Vec<RowNode>,
     pub(super) cells: Vec<CellNode>,
     pub(super) leaf_vertices: Vec<u32>,
     pub(super) leaf_positions: Vec<Vec3>,
-    pub(super) corners: Vec<[u16; 3]>,
+    /// The part's slice of [`super::Forest::corners`] and how much of it
+    /// is written.
+    corners: &'a mut [[u16; 3]],
+    n_corners: usize,
     /// The vertices the current leaf has listed.
     seen: LeafVertices,
     /// Scratch of one run: its cell keys (in sorted order once sorted),
@@ -113,17 +117,18 @@ impl LeafVertices {
     }
 }
 
-impl Part {
-    /// An empty part for the triangles `tris`.
-    pub(super) fn new(tris: &[u32]) -> Part {
-        let n_triangles = tris.len();
+impl<'a> Part<'a> {
+    /// An empty part whose triangles' corners go to `corners`.
+    pub(super) fn new(corners: &'a mut [[u16; 3]]) -> Self {
+        let n_triangles = corners.len();
         Part {
             layers: Vec::new(),
             rows: Vec::new(),
             cells: Vec::new(),
             leaf_vertices: Vec::with_capacity(n_triangles),
             leaf_positions: Vec::with_capacity(n_triangles),
-            corners: Vec::with_capacity(n_triangles),
+            corners,
+            n_corners: 0,
             seen: LeafVertices::new(),
             keys: Vec::new(),
             buckets: Vec::new(),
@@ -324,7 +329,8 @@ impl Part {
                 });
                 *c = at as u16;
             }
-            self.corners.push(corner);
+            self.corners[self.n_corners] = corner;
+            self.n_corners += 1;
         }
         let vertices = Span {
             start: start as u32,

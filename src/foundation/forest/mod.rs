@@ -186,21 +186,26 @@ impl Forest {
         let runs = layer_runs(&order, &group_starts, cells, grid.layer);
         let n_parts = (order.len() / PART_TRIANGLES).clamp(1, rayon::current_num_threads());
         let target = order.len().div_ceil(n_parts).max(1);
-        // Contiguous parts of whole runs, each with its slice of `order`.
-        let mut jobs: Vec<(&mut [u32], &[LayerRun])> = Vec::with_capacity(n_parts);
-        let (mut rest, mut first, mut taken) = (order.as_mut_slice(), 0usize, 0usize);
+        let mut corners = vec![[0u16; 3]; order.len()];
+        // Contiguous parts of whole runs, each with its slices of `order`
+        // and `corners`.
+        let mut jobs: Vec<(&mut [u32], &mut [[u16; 3]], &[LayerRun])> = Vec::with_capacity(n_parts);
+        let (mut rest, mut rest_corners) = (order.as_mut_slice(), corners.as_mut_slice());
+        let (mut first, mut taken) = (0usize, 0usize);
         for (i, r) in runs.iter().enumerate() {
             if r.end - taken >= target || i + 1 == runs.len() {
                 let (part, tail) = rest.split_at_mut(r.end - taken);
-                jobs.push((part, &runs[first..=i]));
-                (rest, first, taken) = (tail, i + 1, r.end);
+                let (part_corners, tail_corners) = rest_corners.split_at_mut(r.end - taken);
+                jobs.push((part, part_corners, &runs[first..=i]));
+                (rest, rest_corners) = (tail, tail_corners);
+                (first, taken) = (i + 1, r.end);
             }
         }
         let n_vertices = mesh.positions.len();
         let parts: Vec<Part> = jobs
             .into_par_iter()
-            .map(|(slice, runs)| {
-                let mut part = Part::new(slice);
+            .map(|(slice, corners, runs)| {
+                let mut part = Part::new(corners);
                 let base = runs[0].start;
                 for r in runs {
                     part.layer(
@@ -220,6 +225,7 @@ impl Forest {
             ..Forest::default()
         };
         f.concatenate(parts, &runs);
+        f.corners = corners;
         f.triangles = order;
         f.axis_sorted = f.boxes_sorted();
         f
@@ -237,11 +243,11 @@ impl Forest {
             ^ (self.leaf_positions[v].iter().step_by(line(12))).fold(0, |a, x| a ^ x.x.to_bits())
     }
 
-    /// Takes the first part's nodes and tables as the forest's (their spans
-    /// are already global: no copy), appends the other parts' (their spans
-    /// shifted to the concatenation) and makes the group nodes over `runs`
-    /// (one layer node per run, in order).
-    fn concatenate(&mut self, parts: Vec<Part>, runs: &[LayerRun]) {
+    /// Takes the first part's nodes and leaf tables as the forest's (their
+    /// spans are already global: no copy), appends the other parts' (their
+    /// spans shifted to the concatenation) and makes the group nodes over
+    /// `runs` (one layer node per run, in order).
+    fn concatenate(&mut self, parts: Vec<Part<'_>>, runs: &[LayerRun]) {
         let mut parts = parts.into_iter();
         if let Some(p) = parts.next() {
             self.layers = p.layers;
@@ -249,9 +255,8 @@ impl Forest {
             self.cells = p.cells;
             self.leaf_vertices = p.leaf_vertices;
             self.leaf_positions = p.leaf_positions;
-            self.corners = p.corners;
         }
-        let rest: Vec<Part> = parts.collect();
+        let rest: Vec<Part<'_>> = parts.collect();
         let total = |f: fn(&Part) -> usize| rest.iter().map(f).sum::<usize>();
         self.layers.reserve_exact(total(|p| p.layers.len()));
         self.rows.reserve_exact(total(|p| p.rows.len()));
@@ -260,7 +265,6 @@ impl Forest {
             .reserve_exact(total(|p| p.leaf_vertices.len()));
         self.leaf_positions
             .reserve_exact(total(|p| p.leaf_positions.len()));
-        self.corners.reserve_exact(total(|p| p.corners.len()));
         for p in rest {
             let rows = self.rows.len() as u32;
             let cells = self.cells.len() as u32;
@@ -288,7 +292,6 @@ impl Forest {
             }));
             self.leaf_vertices.extend_from_slice(&p.leaf_vertices);
             self.leaf_positions.extend_from_slice(&p.leaf_positions);
-            self.corners.extend_from_slice(&p.corners);
         }
         let mut first = 0usize;
         for (i, r) in runs.iter().enumerate() {

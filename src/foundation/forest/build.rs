@@ -7,9 +7,11 @@ use glam::{Vec3, Vec3A};
 use super::{CellNode, LEAF_VERTICES, LayerNode, MeshView, RowNode, Span};
 use crate::foundation::aabb::Aabb;
 
-/// Least triangles per part of the parallel build (at most one part per
-/// thread).
+/// Least triangles per part of the parallel build.
 pub(super) const PART_TRIANGLES: usize = 1 << 13;
+
+/// Most parts per thread of the parallel build (with more than one thread).
+pub(super) const PARTS_PER_THREAD: usize = 4;
 
 /// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
 #[derive(Debug, Clone, Copy)]

@@ -19,7 +19,9 @@ use rayon::prelude::*;
 
 use super::aabb::Aabb;
 use super::union_find::vertex_components;
-use build::{KeyGrid, LayerRun, PART_TRIANGLES, Part, layer_runs, order_by_group_and_layer};
+use build::{
+    KeyGrid, LayerRun, PART_TRIANGLES, PARTS_PER_THREAD, Part, layer_runs, order_by_group_and_layer,
+};
 
 /// Target triangles per leaf of a virtual grid ([`Forest::from_triangles`]).
 pub const LEAF_TRIANGLES: usize = 32;
@@ -184,7 +186,13 @@ impl Forest {
         let (mut order, group_starts) =
             order_by_group_and_layer(cells, grid.layer, groups, n_groups);
         let runs = layer_runs(&order, &group_starts, cells, grid.layer);
-        let n_parts = (order.len() / PART_TRIANGLES).clamp(1, rayon::current_num_threads());
+        // Several parts per thread, so that a thread that comes back from
+        // work beside the build (marching cubes' figure passes) finds parts
+        // left to take; one part on one thread (each further part is copied
+        // once more when the parts are concatenated).
+        let threads = rayon::current_num_threads();
+        let per_thread = if threads > 1 { PARTS_PER_THREAD } else { 1 };
+        let n_parts = (order.len() / PART_TRIANGLES).clamp(1, per_thread * threads);
         let target = order.len().div_ceil(n_parts).max(1);
         let mut corners = vec![[0u16; 3]; order.len()];
         // Contiguous parts of whole runs, each with its slices of `order`

@@ -197,7 +197,7 @@ impl Forest {
         let mut corners = vec![[0u16; 3]; order.len()];
         // Contiguous parts of whole runs, each with its slices of `order`
         // and `corners`.
-        let mut jobs: Vec<(&mut [u32], &mut [[u16; 3]], &[LayerRun])> = Vec::with_capacity(n_parts);
+        let mut jobs = Vec::with_capacity(n_parts);
         let (mut rest, mut rest_corners) = (order.as_mut_slice(), corners.as_mut_slice());
         let (mut first, mut taken) = (0usize, 0usize);
         for (i, r) in runs.iter().enumerate() {

@@ -171,9 +171,9 @@ pub(super) fn finish_locate<A: Analytic>(
     out
 }
 
-/// The cut vertex of edge `e` of a triangle (corners e, e + 1 of `ends`), whose ends
-/// change side (made at its first use, from its lower-id end), or
-/// `u32::MAX` when the knife does not reach the crossing.
+/// The cut vertex of edge `e` of a triangle (corners e, e + 1 of `ends`),
+/// whose ends change side (made at its first use, from its lower-id end),
+/// or `u32::MAX` when the knife does not reach the crossing.
 ///
 /// A crossing that lands on an end (a vertex on the knife, or rounded onto
 /// it) is that vertex's cut, shared by all its crossed edges: no two cut

@@ -41,10 +41,10 @@ pub(super) struct Part<'a> {
     pub(super) cells: Vec<CellNode>,
     pub(super) leaf_vertices: Vec<u32>,
     pub(super) leaf_positions: Vec<Vec3>,
-    /// The part's slice of [`super::Forest::corners`] and how much of it
-    /// is written.
+    /// The part's slice of [`super::Forest::corners`], and the position in
+    /// the order of its first entry.
     corners: &'a mut [[u16; 3]],
-    n_corners: usize,
+    base: usize,
     /// The vertices the current leaf has listed.
     seen: LeafVertices,
     /// Scratch of one run: its cell keys (in sorted order once sorted),
@@ -120,8 +120,9 @@ impl LeafVertices {
 }
 
 impl<'a> Part<'a> {
-    /// An empty part whose triangles' corners go to `corners`.
-    pub(super) fn new(corners: &'a mut [[u16; 3]]) -> Self {
+    /// An empty part whose triangles (from position `base` of the order
+    /// on) write their corners to `corners`.
+    pub(super) fn new(corners: &'a mut [[u16; 3]], base: usize) -> Self {
         let n_triangles = corners.len();
         Part {
             layers: Vec::new(),
@@ -130,7 +131,7 @@ impl<'a> Part<'a> {
             leaf_vertices: Vec::with_capacity(n_triangles),
             leaf_positions: Vec::with_capacity(n_triangles),
             corners,
-            n_corners: 0,
+            base,
             seen: LeafVertices::new(),
             keys: Vec::new(),
             buckets: Vec::new(),
@@ -257,12 +258,7 @@ impl<'a> Part<'a> {
         } else {
             let (lo, hi) =
                 (self.keys.iter()).fold((u32::MAX, 0), |(lo, hi), &k| (lo.min(k), hi.max(k)));
-            if lo >= hi {
-                self.gathered
-                    .extend(tris.iter().map(|&t| mesh.triangles[t as usize]));
-                return;
-            }
-            (lo, (hi - lo) as usize + 1)
+            (lo, hi.saturating_sub(lo) as usize + 1)
         };
         if !short(range) {
             let mut pairs: Vec<u64> = (self.keys.iter().zip(tris.iter()))
@@ -314,8 +310,9 @@ impl<'a> Part<'a> {
     fn leaf(&mut self, range: std::ops::Range<usize>, first: usize) -> (Span, usize) {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
+        let corners = &mut self.corners[first - self.base..];
         let mut stop = range.end;
-        for (i, tri) in range.clone().zip(&self.gathered[range]) {
+        for ((i, tri), out) in range.clone().zip(&self.gathered[range]).zip(corners) {
             let listed = &self.leaf_vertices[start..];
             if listed.len() + 3 > LEAF_VERTICES {
                 stop = i;
@@ -331,8 +328,7 @@ impl<'a> Part<'a> {
                 });
                 *c = at as u16;
             }
-            self.corners[self.n_corners] = corner;
-            self.n_corners += 1;
+            *out = corner;
         }
         let vertices = Span {
             start: start as u32,

@@ -213,8 +213,8 @@ impl Forest {
         let parts: Vec<Part> = jobs
             .into_par_iter()
             .map(|(slice, corners, runs)| {
-                let mut part = Part::new(corners);
                 let base = runs[0].start;
+                let mut part = Part::new(corners, base);
                 for r in runs {
                     part.layer(
                         mesh,

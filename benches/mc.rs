@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 use chisel::Backend;
 use chisel::foundation::{Forest, vertex_components};
 use chisel::gpu::Gpu;
-use chisel::mc::{Field, IsoSpec, LEAF_BLOCK, McOptions, Surface, gpu, marching_cubes};
+use chisel::mc::{Field, IsoSpec, LEAF_BLOCK, McOptions, gpu, marching_cubes};
 use criterion::{Criterion, Throughput};
 
 #[path = "common/mod.rs"]
@@ -84,9 +84,18 @@ fn main() {
             b.iter(|| marching_cubes(vol, iso, &opts, Backend::Cpu))
         });
         if let Ok(s) = marching_cubes(vol, iso, &opts, Backend::Cpu) {
-            let (keys, dims) = leaf_keys(&s);
+            let cells = s.grid.dims.map(|d| d - 1);
             let n_groups = s.groups.len();
-            let build = || Forest::build(s.mesh.view(), &keys, dims, &s.triangle_groups, n_groups);
+            let build = || {
+                Forest::build(
+                    s.mesh.view(),
+                    &s.triangle_cells,
+                    cells,
+                    LEAF_BLOCK,
+                    &s.triangle_groups,
+                    n_groups,
+                )
+            };
             // Only the marching-cubes entry knows the surface is closed and
             // wound outward; the rest of the forest must be the same.
             let same = |f: Forest| {
@@ -98,7 +107,7 @@ fn main() {
             if same(build()) {
                 group.bench_function(format!("forest/{name}"), |b| b.iter(build));
             } else {
-                eprintln!("mc/{name}: forest skipped (leaf keys differ from marching_cubes')");
+                eprintln!("mc/{name}: forest skipped (differs from marching_cubes')");
             }
             group.bench_function(format!("vertex_components/{name}"), |b| {
                 b.iter(|| vertex_components(s.mesh.n_vertices(), &s.mesh.triangles))
@@ -147,24 +156,6 @@ fn main() {
     }
     group.finish();
     c.final_summary();
-}
-
-/// The forest's leaf keys of a surface (blocks of [`LEAF_BLOCK`]³ cells,
-/// as `marching_cubes` makes them) and the block grid.
-fn leaf_keys(s: &Surface) -> (Vec<u32>, [usize; 3]) {
-    let cd = s.grid.dims.map(|d| d.saturating_sub(1).max(1));
-    let bd = cd.map(|c| c.div_ceil(LEAF_BLOCK));
-    let keys = s
-        .triangle_cells
-        .iter()
-        .map(|&c| {
-            let c = c as usize;
-            let (x, y, z) = (c % cd[0], (c / cd[0]) % cd[1], c / (cd[0] * cd[1]));
-            let b = LEAF_BLOCK;
-            (x / b + bd[0] * (y / b + bd[1] * (z / b))) as u32
-        })
-        .collect();
-    (keys, bd)
 }
 
 /// Median wall time of a few runs, for the ratio line printed next to criterion's figures.

@@ -101,12 +101,18 @@ pub fn assemble(raw: GpuRaw, grouping: bool) -> RawSurface {
     } else {
         (Vec::new(), 0)
     };
+    let vertex_groups = if grouping {
+        super::vertex_groups(raw.positions.len(), &triangles, &groups)
+    } else {
+        Vec::new()
+    };
     RawSurface {
         positions,
         edges,
         triangles,
         cells,
         groups,
+        vertex_groups,
         n_groups,
     }
 }

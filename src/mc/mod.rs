@@ -76,8 +76,10 @@ pub(crate) fn exclusive_offsets(
 /// Edge of a forest leaf block in marching-cubes cells. The seed's leaf is
 /// one voxel cell (≈ 2 triangles); a leaf of 4³ cells (≈ 30 triangles on a
 /// surface) makes the tree ~50× smaller and the cut query several times
-/// faster, while keeping the same layer → row → cell structure.
+/// faster, while keeping the same layer → row → cell structure. A power of
+/// two: the forest finds a cell's block by shifts.
 pub const LEAF_BLOCK: usize = 4;
+const _: () = assert!(LEAF_BLOCK.is_power_of_two());
 
 /// Which surface to extract.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -234,10 +236,7 @@ fn finish_mesh(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
 pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
     // To world coordinates in place (a vertex array is not copied); axes
     // with a reflection turn the index-space winding inside out.
-    let (mesh, blocks) = rayon::join(
-        || world_mesh(field, raw.positions, raw.triangles),
-        || leaf_blocks(&raw.cells, field.dims),
-    );
+    let mesh = world_mesh(field, raw.positions, raw.triangles);
     let grid = Grid {
         dims: field.dims,
         pad: field.pad,
@@ -247,8 +246,9 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
             closed_outward: field.pad == 1,
             ..Forest::build(
                 mesh.view(),
-                &blocks.keys,
-                blocks.dims,
+                &raw.cells,
+                field.dims.map(|d| d.saturating_sub(1)),
+                LEAF_BLOCK,
                 &raw.groups,
                 raw.n_groups,
             )
@@ -259,6 +259,7 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
                 &raw.edges,
                 &raw.cells,
                 &raw.groups,
+                &raw.vertex_groups,
                 raw.n_groups,
                 grid,
             )
@@ -275,42 +276,6 @@ pub fn finish(field: &Field<'_>, raw: cpu::RawSurface) -> Surface {
     }
 }
 
-/// Leaf keys of the forest: blocks of [`LEAF_BLOCK`]³ marching-cubes
-/// cells (layer = block layer, row = block row, leaf = block).
-struct LeafBlocks {
-    /// #F block `bx + bdx·(by + bdy·bz)` of each triangle.
-    keys: Vec<u32>,
-    /// Block grid `[bdx, bdy, bdz]`.
-    dims: [usize; 3],
-}
-
-/// The block of each triangle's cell (`cells`: keys `x + cx·(y + cy·z)`).
-/// Consecutive triangles mostly lie in one cell row (marching cubes emits
-/// in cell order), so a key is decoded only when the row changes; inside
-/// a row the block is the row's first block plus `x / LEAF_BLOCK`.
-fn leaf_blocks(cells: &[u32], dims: [usize; 3]) -> LeafBlocks {
-    let b = LEAF_BLOCK;
-    let cd = dims.map(|d| d.saturating_sub(1).max(1));
-    let bd = cd.map(|c| c.div_ceil(b));
-    let mut keys = vec![0u32; cells.len()];
-    keys.par_chunks_mut(FIGURE_CHUNK)
-        .zip(cells.par_chunks(FIGURE_CHUNK))
-        .for_each(|(keys, cells)| {
-            // Cells `row.0..row.1` form the current row, of first block `row.2`.
-            let mut row = (0usize, 0usize, 0usize);
-            for (k, &c) in keys.iter_mut().zip(cells) {
-                let c = c as usize;
-                if !(row.0..row.1).contains(&c) {
-                    let (x, q) = (c % cd[0], c / cd[0]);
-                    let (y, z) = (q % cd[1], q / cd[1]);
-                    row = (c - x, c - x + cd[0], bd[0] * (y / b + bd[1] * (z / b)));
-                }
-                *k = (row.2 + (c - row.0) / b) as u32;
-            }
-        });
-    LeafBlocks { keys, dims: bd }
-}
-
 /// Chunk of triangles or vertices per task of the figure passes; partial
 /// sums are combined in chunk order, so the figures do not depend on the
 /// number of threads.
@@ -318,6 +283,28 @@ const FIGURE_CHUNK: usize = 1 << 16;
 
 /// Group of a vertex used by no triangle.
 const NO_GROUP: u32 = u32::MAX;
+
+/// The group of each vertex from the groups of the triangles using it
+/// (which all share it; [`NO_GROUP`] where none does), for a path that
+/// groups triangles only (the GPU's host grouping). The CPU path numbers
+/// its vertices' groups while it stitches its chunks.
+pub(crate) fn vertex_groups(n_vertices: usize, triangles: &[[u32; 3]], groups: &[u32]) -> Vec<u32> {
+    let vertex_group: Vec<AtomicU32> = (0..n_vertices).map(|_| AtomicU32::new(NO_GROUP)).collect();
+    triangles
+        .par_chunks(FIGURE_CHUNK)
+        .zip(groups.par_chunks(FIGURE_CHUNK))
+        .for_each(|(tris, gs)| {
+            for (t, &g) in tris.iter().zip(gs) {
+                for &v in t {
+                    vertex_group[v as usize].store(g, Ordering::Relaxed);
+                }
+            }
+        });
+    vertex_group
+        .into_iter()
+        .map(AtomicU32::into_inner)
+        .collect()
+}
 
 /// Per-group sums over triangles.
 #[derive(Debug, Clone, Copy, Default)]
@@ -344,7 +331,8 @@ struct VertexSums {
     bbox: Aabb,
 }
 
-/// Group figures. Edges: `E = (3F + B)/2`, which holds because every edge
+/// Group figures from the groups of the triangles and of the vertices.
+/// Edges: `E = (3F + B)/2`, which holds because every edge
 /// is used once (border) or twice (the table's manifold guarantee, checked
 /// independently by the tests); `B` counts directed edges lying in a
 /// border plane of the grid whose reverse is absent. Every vertex lies in
@@ -355,21 +343,11 @@ fn group_figures(
     edges: &[u64],
     cells: &[u32],
     groups: &[u32],
+    vertex_group: &[u32],
     n_groups: usize,
     grid: Grid,
 ) -> Vec<Group> {
     let p = &mesh.positions;
-    let vertex_group: Vec<AtomicU32> = (0..p.len()).map(|_| AtomicU32::new(NO_GROUP)).collect();
-    mesh.triangles
-        .par_chunks(FIGURE_CHUNK)
-        .zip(groups.par_chunks(FIGURE_CHUNK))
-        .for_each(|(tris, gs)| {
-            for (t, &g) in tris.iter().zip(gs) {
-                for &v in t {
-                    vertex_group[v as usize].store(g, Ordering::Relaxed);
-                }
-            }
-        });
     let no_vertices = VertexSums {
         vertices: 0,
         bbox: Aabb::EMPTY,
@@ -381,8 +359,8 @@ fn group_figures(
             // Slot n_groups: vertices of no group (none in a mesh from
             // marching cubes, but they still count for the bounds).
             let mut sums = vec![no_vertices; n_groups + 1];
-            for (&q, g) in ps.iter().zip(gs) {
-                let g = (g.load(Ordering::Relaxed) as usize).min(n_groups);
+            for (&q, &g) in ps.iter().zip(gs) {
+                let g = (g as usize).min(n_groups);
                 let s = &mut sums[g];
                 s.vertices += 1;
                 s.bbox = s.bbox.union(Aabb { min: q, max: q });

@@ -3,6 +3,7 @@
 //! thread-count independence.
 
 use chisel::Backend;
+use chisel::foundation::Forest;
 use chisel::mc::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
 
@@ -286,6 +287,32 @@ fn forest_covers_every_triangle_once_with_true_boxes() {
     let s = marching_cubes(&vol, IsoSpec::Level(128.0), &CLOSE, Backend::Cpu).unwrap();
     let f = &s.forest;
     assert_eq!(f.groups.len(), s.groups.len());
+    // The build's block of each cell (by shifts, decoded once per row)
+    // against the blocks computed here, given as keys of a one-cell leaf.
+    let b = chisel::mc::LEAF_BLOCK;
+    let g = s.grid.dims.map(|d| d - 1);
+    let block = |key: usize| {
+        let (x, y, z) = (key % g[0], (key / g[0]) % g[1], key / (g[0] * g[1]));
+        x / b + f.cell_dims[0] * (y / b + f.cell_dims[1] * (z / b))
+    };
+    let keys: Vec<u32> = (s.triangle_cells.iter())
+        .map(|&c| block(c as usize) as u32)
+        .collect();
+    let by_keys = Forest::build(
+        s.mesh.view(),
+        &keys,
+        f.cell_dims,
+        1,
+        &s.triangle_groups,
+        s.groups.len(),
+    );
+    assert_eq!(
+        Forest {
+            closed_outward: true,
+            ..by_keys
+        },
+        *f
+    );
     let mut seen = vec![false; s.mesh.triangles.len()];
     for (g, node) in f.groups.iter().enumerate() {
         let mut leaf = f.rows[f.layers[node.layers.start as usize].rows.start as usize]
@@ -311,13 +338,7 @@ fn forest_covers_every_triangle_once_with_true_boxes() {
                     for &t in &f.triangles[cell.triangles.range()] {
                         assert_eq!(s.triangle_groups[t as usize], g as u32);
                         // Leaves are blocks of LEAF_BLOCK³ marching-cubes cells.
-                        let key = s.triangle_cells[t as usize] as usize;
-                        let b = chisel::mc::LEAF_BLOCK;
-                        let g = s.grid.dims.map(|d| d - 1);
-                        let key = {
-                            let (x, y, z) = (key % g[0], (key / g[0]) % g[1], key / (g[0] * g[1]));
-                            x / b + f.cell_dims[0] * (y / b + f.cell_dims[1] * (z / b))
-                        };
+                        let key = block(s.triangle_cells[t as usize] as usize);
                         let cd = f.cell_dims;
                         assert_eq!(
                             (key % cd[0], (key / cd[0]) % cd[1], key / (cd[0] * cd[1])),

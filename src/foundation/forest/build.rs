@@ -13,12 +13,69 @@ pub(super) const PART_TRIANGLES: usize = 1 << 13;
 /// Most parts per thread of the parallel build (with more than one thread).
 pub(super) const PARTS_PER_THREAD: usize = 4;
 
-/// Shape of the cell keys: key `x + cx·(y + cy·z)`, `layer = cx·cy`.
+/// Shape of the keys: cell keys `x + cx·(y + cy·z)`, and the leaf blocks
+/// of `2^shift` cells a side they fall in (block keys `bx + bdx·(by +
+/// bdy·bz)`, the leaves' keys).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct KeyGrid {
-    pub(super) cx: usize,
-    pub(super) cy: usize,
+    /// Cells per row and per column.
+    cx: usize,
+    cy: usize,
+    shift: u32,
+    /// Blocks per row and per column, and blocks per block layer.
+    pub(super) bdx: usize,
+    pub(super) bdy: usize,
     pub(super) layer: usize,
+}
+
+impl KeyGrid {
+    /// The keys of a grid of `cell_dims` cells in blocks of `2^shift`.
+    pub(super) fn new(cell_dims: [usize; 3], shift: u32) -> Self {
+        let [cx, cy, _] = cell_dims.map(|d| d.max(1));
+        let blocks = |c: usize| c.div_ceil(1 << shift);
+        let (bdx, bdy) = (blocks(cx), blocks(cy));
+        KeyGrid {
+            cx,
+            cy,
+            shift,
+            bdx,
+            bdy,
+            layer: bdx * bdy,
+        }
+    }
+
+    /// The block grid of `cell_dims`.
+    pub(super) fn block_dims(&self, cell_dims: [usize; 3]) -> [usize; 3] {
+        cell_dims.map(|d| d.max(1).div_ceil(1 << self.shift))
+    }
+
+    /// Cells per block layer: a cell key divided by it is its block layer.
+    pub(super) fn cells_per_block_layer(&self) -> usize {
+        (self.cx * self.cy) << self.shift
+    }
+
+    /// Appends the block key of each of `tris`' cells to `out`. The cells
+    /// of triangles in id order mostly share a row (marching cubes emits
+    /// in cell order), so a key is decoded only when the row changes;
+    /// inside a row the block is the row's first block plus `x >> shift`.
+    fn block_keys(&self, cells: &[u32], tris: &[u32], out: &mut Vec<u32>) {
+        if self.shift == 0 {
+            out.extend(tris.iter().map(|&t| cells[t as usize]));
+            return;
+        }
+        // Cells `row.0..row.1` form the current row, of first block `row.2`.
+        let mut row = (0usize, 0usize, 0usize);
+        out.extend(tris.iter().map(|&t| {
+            let c = cells[t as usize] as usize;
+            if !(row.0..row.1).contains(&c) {
+                let (x, q) = (c % self.cx, c / self.cx);
+                let (y, z) = (q % self.cy, q / self.cy);
+                let first = self.bdx * ((y >> self.shift) + self.bdy * (z >> self.shift));
+                row = (c - x, c - x + self.cx, first);
+            }
+            (row.2 + ((c - row.0) >> self.shift)) as u32
+        }));
+    }
 }
 
 /// The triangles of one group in one cell layer: `order[start..end]`.
@@ -159,14 +216,14 @@ impl<'a> Part<'a> {
         run: &LayerRun,
         tris: &mut [u32],
     ) {
-        self.sort_by_cell(mesh, cells, tris, run.z as usize * grid.layer, grid.layer);
+        self.sort_by_cell(mesh, cells, grid, tris, run.z as usize * grid.layer);
         let (first_row, first_vertex) = (self.rows.len(), self.leaf_vertices.len());
         let mut i = 0;
         while i < tris.len() {
-            let row = self.keys[i] as usize / grid.cx;
+            let row = self.keys[i] as usize / grid.bdx;
             // Keys of the row: `row_start..row_end` (no division per triangle).
-            let row_start = (row * grid.cx) as u32;
-            let row_end = row_start + grid.cx as u32;
+            let row_start = (row * grid.bdx) as u32;
+            let row_end = row_start + grid.bdx as u32;
             let cell_start = self.cells.len() as u32;
             while i < tris.len() && self.keys[i] < row_end {
                 let key = self.keys[i];
@@ -190,7 +247,7 @@ impl<'a> Part<'a> {
                 }
             }
             self.rows.push(RowNode {
-                y: (row % grid.cy) as u32,
+                y: (row % grid.bdy) as u32,
                 bbox: Aabb::EMPTY,
                 cells: Span {
                     start: cell_start,
@@ -236,22 +293,24 @@ impl<'a> Part<'a> {
         });
     }
 
-    /// Stable sort of `tris` by `cells[t]`, keys in `first..first + len`
-    /// (the run's layer), leaving the sorted keys in `keys` and the
-    /// triangles' vertex triples in `gathered`: a counting
-    /// sort over the layer when the run is long against it, else over the
-    /// keys' range when that is short, else a sort by (key, id).
+    /// Stable sort of `tris` by the block key of `cells[t]`, keys in
+    /// `first..first + grid.layer` (the run's block layer), leaving the
+    /// sorted keys in `keys` and the triangles' vertex triples in
+    /// `gathered`: a counting sort over the layer when the run is long
+    /// against it, else over the keys' range when that is short, else a
+    /// sort by (key, id).
     fn sort_by_cell(
         &mut self,
         mesh: MeshView<'_>,
         cells: &[u32],
+        grid: KeyGrid,
         tris: &mut [u32],
         first: usize,
-        len: usize,
     ) {
+        let len = grid.layer;
         self.gathered.clear();
         self.keys.clear();
-        self.keys.extend(tris.iter().map(|&t| cells[t as usize]));
+        grid.block_keys(cells, tris, &mut self.keys);
         let short = |range: usize| range <= 2 * tris.len() + 64;
         let (lo, range) = if short(len) {
             (first as u32, len)

@@ -9,8 +9,9 @@
 //!
 //! Marching-cubes surfaces use the real cell grid (each triangle remembers
 //! its cell, recorded in the same pass that makes it), grouped into leaf
-//! blocks of `mc::LEAF_BLOCK`³ cells; any other mesh (a file, a triangulated
-//! knife) gets a virtual grid over its bounding box.
+//! blocks of `mc::LEAF_BLOCK`³ cells as the build sorts them; any other
+//! mesh (a file, a triangulated knife) gets a virtual grid over its
+//! bounding box.
 
 mod build;
 
@@ -120,7 +121,8 @@ pub struct CellNode {
 /// The B+ tree forest of a model (one tree per group).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Forest {
-    /// Cell grid size `[cx, cy, cz]` the cell keys refer to.
+    /// Leaf grid size `[cx, cy, cz]` (in leaf blocks of cells) the leaves'
+    /// `x`, the rows' `y` and the layers' `z` refer to.
     pub cell_dims: [usize; 3],
     pub groups: Vec<GroupNode>,
     pub layers: Vec<LayerNode>,
@@ -159,14 +161,17 @@ pub struct Forest {
 }
 
 impl Forest {
-    /// Builds the forest from per-triangle cell keys (`x + cx·(y + cy·z)`)
-    /// and group ids (`0..n_groups`).
+    /// Builds the forest from per-triangle cell keys (`x + cx·(y + cy·z)`
+    /// on a grid of `cell_dims` cells) and group ids (`0..n_groups`), one
+    /// leaf per block of `leaf_block`³ cells (a power of two; another value
+    /// counts as the power of two below it; 1: a leaf per cell). The tree's
+    /// layers, rows and leaves are those of the block grid.
     ///
-    /// Triangles are ordered by (group, cell, id): one stable counting sort
-    /// by group, which keeps each group's triangles in cell-layer order when
+    /// Triangles are ordered by (group, block, id): one stable counting sort
+    /// by group, which keeps each group's triangles in block-layer order when
     /// the layers never decrease along the ids (marching cubes emits
     /// triangles in cell order; otherwise a counting sort by layer comes
-    /// first), then every (group, layer) run is sorted by cell on its own.
+    /// first), then every (group, layer) run is sorted by block on its own.
     /// The runs, with their rows, leaves, boxes and leaf vertex tables, are
     /// built in parallel in contiguous parts and concatenated in order, so
     /// the forest does not depend on the number of threads.
@@ -174,18 +179,15 @@ impl Forest {
         mesh: MeshView<'_>,
         cells: &[u32],
         cell_dims: [usize; 3],
+        leaf_block: usize,
         groups: &[u32],
         n_groups: usize,
     ) -> Forest {
-        let [cx, cy, _] = cell_dims.map(|d| d.max(1));
-        let grid = KeyGrid {
-            cx,
-            cy,
-            layer: cx * cy,
-        };
+        let grid = KeyGrid::new(cell_dims, leaf_block.max(1).ilog2());
+        let block_layer = grid.cells_per_block_layer();
         let (mut order, group_starts) =
-            order_by_group_and_layer(cells, grid.layer, groups, n_groups);
-        let runs = layer_runs(&order, &group_starts, cells, grid.layer);
+            order_by_group_and_layer(cells, block_layer, groups, n_groups);
+        let runs = layer_runs(&order, &group_starts, cells, block_layer);
         // Several parts per thread, so that a thread that comes back from
         // work beside the build (marching cubes' figure passes) finds parts
         // left to take; one part on one thread (each further part is copied
@@ -228,7 +230,7 @@ impl Forest {
             })
             .collect();
         let mut f = Forest {
-            cell_dims,
+            cell_dims: grid.block_dims(cell_dims),
             n_vertices,
             ..Forest::default()
         };
@@ -383,7 +385,7 @@ impl Forest {
                     as u32
             })
             .collect();
-        let forest = Forest::build(mesh, &cells, dims, &groups, n_groups);
+        let forest = Forest::build(mesh, &cells, dims, 1, &groups, n_groups);
         GroupedForest {
             forest,
             groups,

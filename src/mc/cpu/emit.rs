@@ -15,8 +15,8 @@ pub(super) struct ChunkOut<'a> {
     pub(super) own_end: usize,
     /// Global id of the first vertex of layer `z0`.
     pub(super) first_vertex: u32,
-    /// Vertices on layers `z0..=z1`.
-    pub(super) n_vertices: usize,
+    /// Vertices on layer `z1` when the next chunk owns it (the seam), else 0.
+    pub(super) n_seam: usize,
     pub(super) positions: &'a mut [[f32; 3]],
     pub(super) edges: &'a mut [u64],
     pub(super) triangles: &'a mut [[u32; 3]],
@@ -25,15 +25,18 @@ pub(super) struct ChunkOut<'a> {
     pub(super) grouping: bool,
     /// Local union-find node of each triangle; empty without grouping.
     pub(super) tri_node: &'a mut [u32],
+    /// Local union-find node of each vertex the chunk owns (layers
+    /// `z0..own_end`); empty without grouping.
+    pub(super) vertex_node: &'a mut [u32],
 }
 
 /// One chunk's grouping state.
 pub(super) struct ChunkGroups {
     pub(super) uf: UnionFind,
-    /// Union-find node of each vertex of layers `z0..=z1` (by id − first
-    /// id), or NONE.
-    pub(super) vertex_node: Vec<u32>,
-    pub(super) first_vertex: u32,
+    /// Union-find node of each vertex of the seam layer (by id − its first
+    /// id; see [`ChunkOut::n_seam`]), or NONE: the chunk's own nodes there,
+    /// which the next chunk's first layer is united with.
+    pub(super) seam_node: Vec<u32>,
 }
 
 /// Write cursors of a chunk.
@@ -42,6 +45,20 @@ struct Emit<'a, 'o> {
     groups: ChunkGroups,
     n_positions: usize,
     n_triangles: usize,
+}
+
+impl Emit<'_, '_> {
+    /// The union-find node slot of vertex `id` (owned, or on the seam).
+    #[inline]
+    fn vertex_node(&mut self, id: u32) -> &mut u32 {
+        let k = (id - self.out.first_vertex) as usize;
+        let own = self.out.vertex_node.len();
+        if k < own {
+            &mut self.out.vertex_node[k]
+        } else {
+            &mut self.groups.seam_node[k - own]
+        }
+    }
 }
 
 /// The numbered crossing edges of one point layer: per row and word the
@@ -68,15 +85,15 @@ impl Crossings {
 pub(super) fn run_chunk(bits: &Bits, layers: &[LayerScan], mut out: ChunkOut<'_>) -> ChunkGroups {
     let rows = &bits.rows;
     let (z0, z1, own_end) = (out.z0, out.z1, out.own_end);
+    out.vertex_node.fill(NONE);
     let mut emit = Emit {
         groups: ChunkGroups {
             uf: UnionFind::default(),
-            vertex_node: if !out.grouping {
-                Vec::new()
+            seam_node: if out.grouping {
+                vec![NONE; out.n_seam]
             } else {
-                vec![NONE; out.n_vertices]
+                Vec::new()
             },
-            first_vertex: out.first_vertex,
         },
         out: &mut out,
         n_positions: 0,
@@ -85,7 +102,7 @@ pub(super) fn run_chunk(bits: &Bits, layers: &[LayerScan], mut out: ChunkOut<'_>
     // Crossings of layers z, z + 1 in slot (k − z0) mod 2.
     let mut crossings = [Crossings::new(rows), Crossings::new(rows)];
     let mut vertex_rows = VertexRows::new(rows);
-    let mut next_id = emit.groups.first_vertex;
+    let mut next_id = emit.out.first_vertex;
     number_points(
         bits,
         layers,
@@ -280,7 +297,7 @@ fn emit_cells(
                     let v = [id(tri[0]), id(tri[1]), id(tri[2])];
                     let i = emit.n_triangles;
                     if emit.out.grouping {
-                        emit.out.tri_node[i] = join_group(&mut emit.groups, v);
+                        emit.out.tri_node[i] = join_group(emit, v);
                     }
                     emit.out.triangles[i] = v;
                     emit.out.cells[i] = cell;
@@ -294,24 +311,24 @@ fn emit_cells(
 /// One-pass grouping: the new triangle `v` joins the groups of the
 /// triangles already using its vertices (seed §1: add to one group, start a
 /// new group, or merge several). Returns its union-find node.
-fn join_group(groups: &mut ChunkGroups, v: [u32; 3]) -> u32 {
-    let base = groups.first_vertex;
+fn join_group(emit: &mut Emit<'_, '_>, v: [u32; 3]) -> u32 {
     let mut node = NONE;
     for &i in &v {
-        let g = groups.vertex_node[(i - base) as usize];
+        let g = *emit.vertex_node(i);
         if g != NONE && g != node {
+            let uf = &mut emit.groups.uf;
             node = if node == NONE {
-                groups.uf.find(g)
+                uf.find(g)
             } else {
-                groups.uf.union(node, g)
+                uf.union(node, g)
             };
         }
     }
     if node == NONE {
-        node = groups.uf.push();
+        node = emit.groups.uf.push();
     }
     for &i in &v {
-        let slot = &mut groups.vertex_node[(i - base) as usize];
+        let slot = emit.vertex_node(i);
         if *slot == NONE {
             *slot = node;
         }

@@ -75,6 +75,9 @@ pub struct RawSurface {
     pub cells: Vec<u32>,
     /// #F group of each triangle (canonical: groups numbered by first triangle).
     pub groups: Vec<u32>,
+    /// #V group of each vertex (the group of the triangles using it;
+    /// `u32::MAX` for a vertex no triangle uses).
+    pub vertex_groups: Vec<u32>,
     /// Number of groups.
     pub n_groups: usize,
 }
@@ -107,6 +110,9 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
     // Union-find node of each triangle, then its group.
     let n_g = if grouping { n_t } else { 0 };
     let mut groups = zeroed("marching cubes: triangle groups", n_g)?;
+    // Union-find node of each vertex, then its group.
+    let n_vg = if grouping { n_v } else { 0 };
+    let mut vertex_groups = zeroed("marching cubes: vertex groups", n_vg)?;
     let mut outs = Vec::with_capacity(chunks.len());
     {
         let (mut p, mut e) = (positions.as_mut_slice(), edges.as_mut_slice());
@@ -115,6 +121,7 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
             cells.as_mut_slice(),
             groups.as_mut_slice(),
         );
+        let mut vg = vertex_groups.as_mut_slice();
         for (k, &(z0, z1)) in chunks.iter().enumerate() {
             let own_end = if k + 1 == chunks.len() { nz } else { z1 };
             let nv = (vbase[own_end] - vbase[z0]) as usize;
@@ -124,19 +131,21 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
             let (t0, t1) = std::mem::take(&mut t).split_at_mut(nt);
             let (c0, c1) = std::mem::take(&mut c).split_at_mut(nt);
             let (g0, g1) = std::mem::take(&mut g).split_at_mut(if grouping { nt } else { 0 });
-            (p, e, t, c, g) = (p1, e1, t1, c1, g1);
+            let (vg0, vg1) = std::mem::take(&mut vg).split_at_mut(if grouping { nv } else { 0 });
+            (p, e, t, c, g, vg) = (p1, e1, t1, c1, g1, vg1);
             outs.push(ChunkOut {
                 z0,
                 z1,
                 own_end,
                 first_vertex: vbase[z0],
-                n_vertices: (vbase[z1 + 1] - vbase[z0]) as usize,
+                n_seam: (vbase[z1 + 1] - vbase[own_end]) as usize,
                 positions: p0,
                 edges: e0,
                 triangles: t0,
                 cells: c0,
                 grouping,
                 tri_node: g0,
+                vertex_node: vg0,
             });
         }
     }
@@ -145,7 +154,14 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
         .map(|out| run_chunk(&bits, &layers, out))
         .collect();
     let n_groups = if grouping {
-        stitch(&chunk_groups, &chunks, &vbase, &tbase, &mut groups)
+        stitch(
+            &chunk_groups,
+            &chunks,
+            &vbase,
+            &tbase,
+            &mut groups,
+            &mut vertex_groups,
+        )
     } else {
         0
     };
@@ -155,6 +171,7 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
         triangles,
         cells,
         groups,
+        vertex_groups,
         n_groups,
     })
 }

@@ -1,6 +1,7 @@
 //! Chunk *stitching*: takes the chunks' groupings ([`ChunkGroups`]) and the
-//! triangles' chunk-local union-find nodes, and returns every triangle's
-//! canonical group (numbered by first triangle) and the number of groups.
+//! triangles' and vertices' chunk-local union-find nodes, and returns every
+//! triangle's and vertex's canonical group (numbered by first triangle) and
+//! the number of groups.
 
 use rayon::prelude::*;
 
@@ -11,13 +12,16 @@ use crate::foundation::UnionFind;
 /// Joins the chunks' grouping: one union-find over all chunks' nodes, the
 /// vertices of each shared layer united, then `groups` (per triangle: the
 /// chunk-local node on entry) becomes the canonical group, numbered by
-/// first triangle. Returns the number of groups.
+/// first triangle, and so does `vertex_groups` (per vertex: the node of
+/// the chunk that owns it; NONE, for a vertex no triangle uses, stays).
+/// Returns the number of groups.
 pub(super) fn stitch(
     chunk_groups: &[ChunkGroups],
     chunks: &[(usize, usize)],
     vbase: &[u32],
     tbase: &[u32],
     groups: &mut [u32],
+    vertex_groups: &mut [u32],
 ) -> usize {
     let mut node_base = Vec::with_capacity(chunk_groups.len());
     let mut n_nodes = 0u32;
@@ -29,13 +33,11 @@ pub(super) fn stitch(
     for c in chunk_groups {
         uf.append(&c.uf);
     }
-    // Seams: chunk k's first layer is chunk k − 1's last.
+    // Seams: chunk k's first layer (which it owns) is chunk k − 1's last.
     for k in 1..chunk_groups.len() {
-        let (prev, next) = (&chunk_groups[k - 1], &chunk_groups[k]);
         let z = chunks[k].0;
-        for id in vbase[z]..vbase[z + 1] {
-            let a = prev.vertex_node[(id - prev.first_vertex) as usize];
-            let b = next.vertex_node[(id - next.first_vertex) as usize];
+        let own = &vertex_groups[vbase[z] as usize..vbase[z + 1] as usize];
+        for (&a, &b) in chunk_groups[k - 1].seam_node.iter().zip(own) {
             if a != NONE && b != NONE {
                 uf.union(node_base[k - 1] + a, node_base[k] + b);
             }
@@ -81,5 +83,24 @@ pub(super) fn stitch(
             *g = canonical[*g as usize];
         }
     });
+    // Vertices: chunk k owns layers z0 up to the next chunk's first.
+    let mut owned = Vec::with_capacity(chunks.len());
+    let mut rest = vertex_groups;
+    for (k, &(z0, _)) in chunks.iter().enumerate() {
+        let end = chunks
+            .get(k + 1)
+            .map_or(vbase[vbase.len() - 1], |c| vbase[c.0]);
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut((end - vbase[z0]) as usize);
+        owned.push(head);
+        rest = tail;
+    }
+    owned
+        .into_par_iter()
+        .zip(&node_base)
+        .for_each(|(vertices, &base)| {
+            for g in vertices.iter_mut().filter(|g| **g != NONE) {
+                *g = canonical[root[(base + *g) as usize] as usize];
+            }
+        });
     n_groups as usize
 }

@@ -390,6 +390,39 @@ fn cpu_output_does_not_depend_on_thread_count() {
     }
 }
 
+/// The stitch numbers every vertex's group from the chunks' union-find
+/// nodes (the seam layers' from the chunk below): it must be the group of
+/// every triangle using the vertex, at any number of chunks.
+#[test]
+fn vertex_groups_are_their_triangles_groups_at_any_thread_count() {
+    let vol = random_volume(5, [37, 29, 41]);
+    for close in [false, true] {
+        let field = chisel::mc::Field::new(&vol, IsoSpec::Level(127.5), close).unwrap();
+        for threads in [1, 2, 3, 7] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let raw = pool
+                .install(|| chisel::mc::cpu::marching_cubes(&field, true))
+                .unwrap();
+            assert!(raw.n_groups > 1, "want several groups");
+            assert_eq!(raw.vertex_groups.len(), raw.positions.len());
+            let mut used = vec![false; raw.positions.len()];
+            for (t, &g) in raw.triangles.iter().zip(&raw.groups) {
+                for &v in t {
+                    assert_eq!(
+                        raw.vertex_groups[v as usize], g,
+                        "vertex {v}, {threads} threads, close {close}"
+                    );
+                    used[v as usize] = true;
+                }
+            }
+            assert!(used.iter().all(|&u| u), "every vertex is used");
+        }
+    }
+}
+
 #[test]
 fn mesh_only_gives_the_same_mesh_without_groups() {
     for (k, close_border) in [false, true].into_iter().enumerate() {

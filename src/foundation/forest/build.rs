@@ -22,9 +22,8 @@ pub(super) struct KeyGrid {
     cx: usize,
     cy: usize,
     shift: u32,
-    /// Blocks per row and per column, and blocks per block layer.
-    pub(super) bdx: usize,
-    pub(super) bdy: usize,
+    /// The block grid `[bdx, bdy, bdz]`, and blocks per block layer.
+    pub(super) blocks: [usize; 3],
     pub(super) layer: usize,
 }
 
@@ -32,21 +31,14 @@ impl KeyGrid {
     /// The keys of a grid of `cell_dims` cells in blocks of `2^shift`.
     pub(super) fn new(cell_dims: [usize; 3], shift: u32) -> Self {
         let [cx, cy, _] = cell_dims.map(|d| d.max(1));
-        let blocks = |c: usize| c.div_ceil(1 << shift);
-        let (bdx, bdy) = (blocks(cx), blocks(cy));
+        let blocks = cell_dims.map(|d| d.max(1).div_ceil(1 << shift));
         KeyGrid {
             cx,
             cy,
             shift,
-            bdx,
-            bdy,
-            layer: bdx * bdy,
+            blocks,
+            layer: blocks[0] * blocks[1],
         }
-    }
-
-    /// The block grid of `cell_dims`.
-    pub(super) fn block_dims(&self, cell_dims: [usize; 3]) -> [usize; 3] {
-        cell_dims.map(|d| d.max(1).div_ceil(1 << self.shift))
     }
 
     /// Cells per block layer: a cell key divided by it is its block layer.
@@ -70,7 +62,8 @@ impl KeyGrid {
             if !(row.0..row.1).contains(&c) {
                 let (x, q) = (c % self.cx, c / self.cx);
                 let (y, z) = (q % self.cy, q / self.cy);
-                let first = self.bdx * ((y >> self.shift) + self.bdy * (z >> self.shift));
+                let [bdx, bdy, _] = self.blocks;
+                let first = bdx * ((y >> self.shift) + bdy * (z >> self.shift));
                 row = (c - x, c - x + self.cx, first);
             }
             (row.2 + ((c - row.0) >> self.shift)) as u32
@@ -220,10 +213,11 @@ impl<'a> Part<'a> {
         let (first_row, first_vertex) = (self.rows.len(), self.leaf_vertices.len());
         let mut i = 0;
         while i < tris.len() {
-            let row = self.keys[i] as usize / grid.bdx;
+            let bdx = grid.blocks[0];
+            let row = self.keys[i] as usize / bdx;
             // Keys of the row: `row_start..row_end` (no division per triangle).
-            let row_start = (row * grid.bdx) as u32;
-            let row_end = row_start + grid.bdx as u32;
+            let row_start = (row * bdx) as u32;
+            let row_end = row_start + bdx as u32;
             let cell_start = self.cells.len() as u32;
             while i < tris.len() && self.keys[i] < row_end {
                 let key = self.keys[i];
@@ -247,7 +241,7 @@ impl<'a> Part<'a> {
                 }
             }
             self.rows.push(RowNode {
-                y: (row % grid.bdy) as u32,
+                y: (row % grid.blocks[1]) as u32,
                 bbox: Aabb::EMPTY,
                 cells: Span {
                     start: cell_start,

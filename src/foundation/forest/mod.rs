@@ -230,7 +230,7 @@ impl Forest {
             })
             .collect();
         let mut f = Forest {
-            cell_dims: grid.block_dims(cell_dims),
+            cell_dims: grid.blocks,
             n_vertices,
             ..Forest::default()
         };

@@ -123,7 +123,7 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
         );
         let mut vg = vertex_groups.as_mut_slice();
         for (k, &(z0, z1)) in chunks.iter().enumerate() {
-            let own_end = if k + 1 == chunks.len() { nz } else { z1 };
+            let own_end = own_end(&chunks, k, nz);
             let nv = (vbase[own_end] - vbase[z0]) as usize;
             let nt = (tbase[z1] - tbase[z0]) as usize;
             let (p0, p1) = std::mem::take(&mut p).split_at_mut(nv);
@@ -174,6 +174,12 @@ pub fn marching_cubes(field: &Field<'_>, grouping: bool) -> Result<RawSurface> {
         vertex_groups,
         n_groups,
     })
+}
+
+/// The end of the point layers chunk `k` owns (from its first): the next
+/// chunk's first layer, which both share, belongs to the next chunk.
+fn own_end(chunks: &[(usize, usize)], k: usize, nz: usize) -> usize {
+    chunks.get(k + 1).map_or(nz, |c| c.0)
 }
 
 /// Cell layers `z0..z1` of each chunk: about `4 × threads` chunks of equal

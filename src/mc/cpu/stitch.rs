@@ -5,8 +5,8 @@
 
 use rayon::prelude::*;
 
-use super::NONE;
 use super::emit::ChunkGroups;
+use super::{NONE, own_end};
 use crate::foundation::UnionFind;
 
 /// Joins the chunks' grouping: one union-find over all chunks' nodes, the
@@ -87,9 +87,7 @@ pub(super) fn stitch(
     let mut owned = Vec::with_capacity(chunks.len());
     let mut rest = vertex_groups;
     for (k, &(z0, _)) in chunks.iter().enumerate() {
-        let end = chunks
-            .get(k + 1)
-            .map_or(vbase[vbase.len() - 1], |c| vbase[c.0]);
+        let end = vbase[own_end(chunks, k, vbase.len() - 1)];
         let (head, tail) = std::mem::take(&mut rest).split_at_mut((end - vbase[z0]) as usize);
         owned.push(head);
         rest = tail;

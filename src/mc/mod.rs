@@ -39,7 +39,7 @@ pub mod tables;
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use rayon::prelude::*;
 
 pub use field::Field;
@@ -331,6 +331,36 @@ struct VertexSums {
     bbox: Aabb,
 }
 
+/// Consecutive vertices of one group: their count and bounds, kept in
+/// registers until the group changes.
+struct VertexRun {
+    group: usize,
+    vertices: u32,
+    lo: Vec3A,
+    hi: Vec3A,
+}
+
+impl VertexRun {
+    fn new(group: usize) -> Self {
+        VertexRun {
+            group,
+            vertices: 0,
+            lo: Vec3A::INFINITY,
+            hi: Vec3A::NEG_INFINITY,
+        }
+    }
+
+    /// Adds the run to its group's sums (an empty run changes nothing).
+    fn add_to(&self, sums: &mut [VertexSums]) {
+        let s = &mut sums[self.group];
+        s.vertices += self.vertices;
+        s.bbox = s.bbox.union(Aabb {
+            min: self.lo.into(),
+            max: self.hi.into(),
+        });
+    }
+}
+
 /// Group figures from the groups of the triangles and of the vertices.
 /// Edges: `E = (3F + B)/2`, which holds because every edge
 /// is used once (border) or twice (the table's manifold guarantee, checked
@@ -359,12 +389,20 @@ fn group_figures(
             // Slot n_groups: vertices of no group (none in a mesh from
             // marching cubes, but they still count for the bounds).
             let mut sums = vec![no_vertices; n_groups + 1];
+            // Runs of one group are summed in locals, as the triangles are.
+            let slot = |g: u32| (g as usize).min(n_groups);
+            let mut run = VertexRun::new(gs.first().map_or(0, |&g| slot(g)));
             for (&q, &g) in ps.iter().zip(gs) {
-                let g = (g as usize).min(n_groups);
-                let s = &mut sums[g];
-                s.vertices += 1;
-                s.bbox = s.bbox.union(Aabb { min: q, max: q });
+                let g = slot(g);
+                if g != run.group {
+                    run.add_to(&mut sums);
+                    run = VertexRun::new(g);
+                }
+                run.vertices += 1;
+                run.lo = run.lo.min(q.into());
+                run.hi = run.hi.max(q.into());
             }
+            run.add_to(&mut sums);
             sums
         })
         .collect::<Vec<_>>()
@@ -478,7 +516,8 @@ fn boundary_edges(
     // row: a cell's row is decoded only when it changes.
     let mut row = (usize::MAX, false);
     let mut candidates: Vec<(u32, u32, u32)> = Vec::new();
-    for ((t, &g), &c) in mesh.triangles.iter().zip(groups).zip(cells) {
+    // Only the cells are read for every triangle.
+    for (i, &c) in cells.iter().enumerate() {
         let c = c as usize;
         if !(row.0..row.0.saturating_add(cx)).contains(&c) {
             let q = c / cx;
@@ -489,6 +528,7 @@ fn boundary_edges(
         if !(row.1 || x == 0 || x + 1 == cx) {
             continue;
         }
+        let (t, g) = (mesh.triangles[i], groups[i]);
         let m = t.map(planes);
         for k in 0..3 {
             if m[k] & m[(k + 1) % 3] != 0 {

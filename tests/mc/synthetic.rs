@@ -6,6 +6,7 @@ use chisel::Backend;
 use chisel::foundation::Forest;
 use chisel::mc::{IsoSpec, McOptions, marching_cubes};
 use chisel::volume::{Volume, VolumeData};
+use glam::Vec3;
 
 use crate::oracle::check_topology;
 use crate::{CLOSE, ball, random_volume, torus};
@@ -45,10 +46,13 @@ fn open_border_figures_match_a_brute_force_count() {
             let n = s.groups.len();
             let (mut border, mut faces) = (vec![0u32; n], vec![0i64; n]);
             let mut vertices = vec![HashSet::new(); n];
+            let mut area = vec![0f64; n];
+            let p = |v: u32| s.mesh.positions[v as usize].as_dvec3();
             for (t, &g) in tris.iter().zip(&s.triangle_groups) {
                 let g = g as usize;
                 faces[g] += 1;
                 vertices[g].extend(t.iter().copied());
+                area[g] += 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
                 for k in 0..3 {
                     if !directed.contains(&(t[(k + 1) % 3], t[k])) {
                         border[g] += 1;
@@ -63,6 +67,21 @@ fn open_border_figures_match_a_brute_force_count() {
                     "seed {seed} {level} group {g}"
                 );
                 assert_eq!(group.euler, euler, "seed {seed} {level} group {g}");
+                assert_eq!(i64::from(group.triangles), faces[g]);
+                assert_eq!(group.vertices as usize, vertices[g].len());
+                let corners = vertices[g].iter().map(|&v| s.mesh.positions[v as usize]);
+                let (lo, hi) = corners.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q), hi.max(q))
+                });
+                assert_eq!(
+                    (group.bbox.min, group.bbox.max),
+                    (lo, hi),
+                    "seed {seed} {level} group {g}"
+                );
+                assert!(
+                    (group.area - area[g]).abs() <= 1e-9 * area[g],
+                    "seed {seed} {level} group {g}"
+                );
                 with_border += usize::from(border[g] > 0);
             }
         }

@@ -108,16 +108,25 @@ pub(super) struct Part<'a> {
 }
 
 /// The distinct vertices of the leaf being built and their indices in
-/// `leaf_vertices`: an open-addressing hash table (linear probing) small
-/// enough to stay in the L1 cache, its slots tagged with the leaf they
-/// belong to so that a new leaf starts without clearing it. It grows when a
-/// leaf lists more than half as many vertices as it has slots.
+/// `leaf_vertices`, each entry tagged with the leaf it belongs to so that a
+/// new leaf starts without clearing anything. Two tables:
+/// - a *window*, indexed by a vertex id's offset from the run's least id,
+///   for runs whose ids lie within [`LeafVertices::WINDOW`] of each other
+///   (marching cubes numbers the vertices of a block layer together);
+/// - otherwise an open-addressing hash table (linear probing) small enough
+///   to stay in the L1 cache, which grows when a leaf lists more than half
+///   as many vertices as it has slots.
 #[derive(Debug)]
 pub(super) struct LeafVertices {
     /// (leaf tag, vertex id, index) per slot; tag 0 is an empty slot.
     slots: Vec<[u32; 3]>,
     /// `32 − log2(slots.len())`: the hash's shift.
     shift: u32,
+    /// (leaf tag, index) of vertex `first + i`; tag 0 is unset.
+    window: Vec<[u32; 2]>,
+    /// The current run's least vertex id `first`, when the run uses the
+    /// window.
+    window_first: Option<u32>,
 }
 
 impl LeafVertices {
@@ -127,7 +136,30 @@ impl LeafVertices {
         LeafVertices {
             slots: vec![[0; 3]; 1 << Self::INITIAL_BITS],
             shift: 32 - Self::INITIAL_BITS,
+            window: Vec::new(),
+            window_first: None,
         }
+    }
+
+    /// Most vertex ids a run's window spans (512 KiB of entries).
+    const WINDOW: usize = 1 << 16;
+
+    /// Picks the table for a run whose triangles are `tris`: the window
+    /// when their vertex ids span at most [`Self::WINDOW`] ids. Entries
+    /// left by earlier runs carry other leaves' tags.
+    fn start_run(&mut self, tris: &[[u32; 3]]) {
+        let (lo, hi) =
+            (tris.iter().flatten()).fold((u32::MAX, 0), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let span = hi.checked_sub(lo).map(|d| d as usize + 1);
+        self.window_first = match span {
+            Some(n) if n <= Self::WINDOW => {
+                if self.window.len() < n {
+                    self.window.resize(n, [0; 2]);
+                }
+                Some(lo)
+            }
+            _ => None,
+        };
     }
 
     fn slot(&self, v: u32) -> usize {
@@ -153,9 +185,37 @@ impl LeafVertices {
         }
     }
 
-    /// Doubles the table when three more vertices could fill more than
-    /// half of it, keeping leaf `tag`'s entries (`listed`: its vertices in
-    /// index order).
+    /// Lists the distinct vertices of leaf `tag`'s triangles `tris` through
+    /// the window, appending them to `listed` and each triangle's offsets
+    /// into them to `corners`; false (nothing done) when the run does not
+    /// use the window.
+    fn list_in_window(
+        &mut self,
+        tag: u32,
+        tris: &[[u32; 3]],
+        listed: &mut Vec<u32>,
+        corners: &mut [[u16; 3]],
+    ) -> bool {
+        let Some(first) = self.window_first else {
+            return false;
+        };
+        let start = listed.len();
+        for (tri, corner) in tris.iter().zip(corners) {
+            for (c, &v) in corner.iter_mut().zip(tri) {
+                let s = &mut self.window[(v - first) as usize];
+                if s[0] != tag {
+                    *s = [tag, (listed.len() - start) as u32];
+                    listed.push(v);
+                }
+                *c = s[1] as u16;
+            }
+        }
+        true
+    }
+
+    /// Doubles the hash table when three more vertices could fill more
+    /// than half of it, keeping leaf `tag`'s entries (`listed`: its
+    /// vertices in index order).
     fn reserve(&mut self, tag: u32, listed: &[u32]) {
         if 2 * (listed.len() + 3) <= self.slots.len() {
             return;
@@ -210,6 +270,7 @@ impl<'a> Part<'a> {
         tris: &mut [u32],
     ) {
         self.sort_by_cell(mesh, cells, grid, tris, run.z as usize * grid.layer);
+        self.seen.start_run(&self.gathered);
         let (first_row, first_vertex) = (self.rows.len(), self.leaf_vertices.len());
         let mut i = 0;
         while i < tris.len() {
@@ -330,8 +391,12 @@ impl<'a> Part<'a> {
         for &k in &self.keys {
             self.buckets[(k - lo) as usize + 1] += 1;
         }
-        for k in 0..range {
-            self.buckets[k + 1] += self.buckets[k];
+        // Bucket starts (the running sum in a register, not reloaded
+        // from the bucket just stored).
+        let mut sum = 0;
+        for b in &mut self.buckets {
+            sum += *b;
+            *b = sum;
         }
         self.sorted.clear();
         self.sorted.resize(tris.len(), 0);
@@ -364,6 +429,20 @@ impl<'a> Part<'a> {
         let tag = first as u32 + 1;
         let start = self.leaf_vertices.len();
         let corners = &mut self.corners[first - self.base..];
+        let vertices = |listed: &Vec<u32>| Span {
+            start: start as u32,
+            end: listed.len() as u32,
+        };
+        // A leaf of at most `LEAF_VERTICES / 3` triangles cannot list too
+        // many vertices (marching cubes' leaves never do).
+        let tris = &self.gathered[range.clone()];
+        if 3 * tris.len() <= LEAF_VERTICES
+            && self
+                .seen
+                .list_in_window(tag, tris, &mut self.leaf_vertices, corners)
+        {
+            return (vertices(&self.leaf_vertices), range.end);
+        }
         let mut stop = range.end;
         for ((i, tri), out) in range.clone().zip(&self.gathered[range]).zip(corners) {
             let listed = &self.leaf_vertices[start..];
@@ -383,11 +462,7 @@ impl<'a> Part<'a> {
             }
             *out = corner;
         }
-        let vertices = Span {
-            start: start as u32,
-            end: self.leaf_vertices.len() as u32,
-        };
-        (vertices, stop)
+        (vertices(&self.leaf_vertices), stop)
     }
 }
 

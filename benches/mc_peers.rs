@@ -1,7 +1,7 @@
 //! Marching cubes against its peers, side by side in one run: chisel's CPU
 //! path at one thread and at all threads (with grouping, per-group figures
 //! and the forest, and `mesh_only` without them) alternating, round by
-//! round, with VTK's `vtkFlyingEdges3D` and `vtkMarchingCubes` and
+//! round and each round starting one tool later, with VTK's `vtkFlyingEdges3D` and `vtkMarchingCubes` and
 //! scikit-image's `marching_cubes`, timed in a Python worker
 //! (`scripts/mc_peers.py`) on the same samples. Medians of the rounds; the
 //! point and triangle counts are compared with Flying Edges'. Then the
@@ -44,14 +44,14 @@ struct Case {
     level: f32,
 }
 
-/// The chisel variants timed, in the order of each round.
+/// The chisel variants timed (the first tools of the first round).
 const CHISEL: [(&str, bool, bool); 3] = [
     ("chisel_1_thread", true, false),
     ("chisel_all_threads", false, false),
     ("chisel_mesh_only_1_thread", true, true),
 ];
 
-/// The peer tools, in the order of each round.
+/// The peer tools, after chisel's in the first round.
 const PEERS: [&str; 3] = ["flying_edges", "marching_cubes", "skimage"];
 
 fn main() {
@@ -105,28 +105,33 @@ fn run() -> Result<(), Error> {
         } else {
             rounds
         };
+        // Each round starts one tool later, so that every tool takes every
+        // place in the order: a run right after the slow peers' (which
+        // churn hundreds of megabytes) is not always the same tool's.
+        let n_tools = CHISEL.len() + PEERS.len();
         for round in 0..rounds {
-            for (k, &(_, single, mesh_only)) in CHISEL.iter().enumerate() {
-                let opts = McOptions {
-                    close_border: false,
-                    mesh_only,
-                };
-                let go = || {
-                    let start = Instant::now();
-                    let s = marching_cubes(&case.volume, iso, &opts, Backend::Cpu)?;
-                    Ok::<_, chisel::Error>((start.elapsed().as_secs_f64(), s))
-                };
-                let (t, s) = if single { one.install(go)? } else { go()? };
-                times[k].push(t);
-                counts[k] = (s.mesh.n_vertices(), s.mesh.triangles.len());
-            }
-            let Some(w) = &mut worker else { continue };
-            for (k, tool) in PEERS.iter().enumerate() {
-                if *tool != "flying_edges" && round >= slow_rounds {
+            for k in (0..n_tools).map(|i| (i + round) % n_tools) {
+                if let Some(&(_, single, mesh_only)) = CHISEL.get(k) {
+                    let opts = McOptions {
+                        close_border: false,
+                        mesh_only,
+                    };
+                    let go = || {
+                        let start = Instant::now();
+                        let s = marching_cubes(&case.volume, iso, &opts, Backend::Cpu)?;
+                        Ok::<_, chisel::Error>((start.elapsed().as_secs_f64(), s))
+                    };
+                    let (t, s) = if single { one.install(go)? } else { go()? };
+                    times[k].push(t);
+                    counts[k] = (s.mesh.n_vertices(), s.mesh.triangles.len());
+                    continue;
+                }
+                let Some(w) = &mut worker else { continue };
+                let tool = PEERS[k - CHISEL.len()];
+                if tool != "flying_edges" && round >= slow_rounds {
                     continue;
                 }
                 let r = w.call(&json!({"cmd": "run", "tool": tool, "level": case.level}))?;
-                let k = CHISEL.len() + k;
                 times[k].push(r["seconds"].as_f64().ok_or("worker: no seconds")?);
                 counts[k] = (
                     r["points"].as_u64().ok_or("worker: no points")? as usize,

@@ -43,9 +43,21 @@ pub(super) fn stitch(
             }
         }
     }
+    // A node is made by the triangle that starts it, so nodes are numbered
+    // in triangle order (chunk by chunk), and a set's root, its smallest
+    // node, was made by its first triangle: the canonical numbers (by
+    // first triangle) are the roots' ranks, found without walking the
+    // triangles.
     let root = uf.roots();
-    // Per chunk: global roots in place and the distinct roots in order of
-    // first triangle; then canonical numbers in chunk order.
+    let mut canonical = vec![NONE; n_nodes as usize];
+    let mut n_groups = 0u32;
+    for (n, &r) in root.iter().enumerate() {
+        if r as usize == n {
+            canonical[n] = n_groups;
+            n_groups += 1;
+        }
+    }
+    // Per chunk, each triangle's local node to its group.
     let mut slices = Vec::with_capacity(chunks.len());
     let mut rest = groups;
     for &(z0, z1) in chunks {
@@ -53,36 +65,14 @@ pub(super) fn stitch(
         slices.push(head);
         rest = tail;
     }
-    let firsts: Vec<Vec<u32>> = slices
-        .par_iter_mut()
+    slices
+        .into_par_iter()
         .zip(&node_base)
-        .map(|(tris, &base)| {
-            let mut seen = std::collections::HashSet::new();
-            let mut order = Vec::new();
-            let mut prev = NONE;
+        .for_each(|(tris, &base)| {
             for g in tris.iter_mut() {
-                *g = root[(base + *g) as usize];
-                if *g != prev && seen.insert(*g) {
-                    order.push(*g);
-                }
-                prev = *g;
+                *g = canonical[root[(base + *g) as usize] as usize];
             }
-            order
-        })
-        .collect();
-    let mut canonical = vec![NONE; n_nodes as usize];
-    let mut n_groups = 0u32;
-    for r in firsts.iter().flatten() {
-        if canonical[*r as usize] == NONE {
-            canonical[*r as usize] = n_groups;
-            n_groups += 1;
-        }
-    }
-    slices.into_par_iter().for_each(|tris| {
-        for g in tris.iter_mut() {
-            *g = canonical[*g as usize];
-        }
-    });
+        });
     // Vertices: chunk k owns layers z0 up to the next chunk's first.
     let mut owned = Vec::with_capacity(chunks.len());
     let mut rest = vertex_groups;

@@ -1,7 +1,8 @@
 //! Marching cubes against its peers, side by side in one run: chisel's CPU
 //! path at one thread and at all threads (with grouping, per-group figures
 //! and the forest, and `mesh_only` without them) alternating, round by
-//! round and each round starting one tool later, with VTK's `vtkFlyingEdges3D` and `vtkMarchingCubes` and
+//! round and each round starting one tool later, with VTK's
+//! `vtkFlyingEdges3D` and `vtkMarchingCubes` and
 //! scikit-image's `marching_cubes`, timed in a Python worker
 //! (`scripts/mc_peers.py`) on the same samples. Medians of the rounds; the
 //! point and triangle counts are compared with Flying Edges'. Then the

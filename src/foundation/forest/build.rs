@@ -272,9 +272,9 @@ impl<'a> Part<'a> {
         self.sort_by_cell(mesh, cells, grid, tris, run.z as usize * grid.layer);
         self.seen.start_run(&self.gathered);
         let (first_row, first_vertex) = (self.rows.len(), self.leaf_vertices.len());
+        let bdx = grid.blocks[0];
         let mut i = 0;
         while i < tris.len() {
-            let bdx = grid.blocks[0];
             let row = self.keys[i] as usize / bdx;
             // Keys of the row: `row_start..row_end` (no division per triangle).
             let row_start = (row * bdx) as u32;

@@ -47,15 +47,18 @@ pub(super) fn stitch(
     // in triangle order (chunk by chunk), and a set's root, its smallest
     // node, was made by its first triangle: the canonical numbers (by
     // first triangle) are the roots' ranks, found without walking the
-    // triangles.
-    let root = uf.roots();
-    let mut canonical = vec![NONE; n_nodes as usize];
+    // triangles. A root comes before its members, so one ascending pass
+    // gives every node its group.
+    let mut group = uf.roots();
     let mut n_groups = 0u32;
-    for (n, &r) in root.iter().enumerate() {
-        if r as usize == n {
-            canonical[n] = n_groups;
+    for n in 0..group.len() {
+        let r = group[n] as usize;
+        group[n] = if r == n {
             n_groups += 1;
-        }
+            n_groups - 1
+        } else {
+            group[r]
+        };
     }
     // Per chunk, each triangle's local node to its group.
     let mut slices = Vec::with_capacity(chunks.len());
@@ -70,7 +73,7 @@ pub(super) fn stitch(
         .zip(&node_base)
         .for_each(|(tris, &base)| {
             for g in tris.iter_mut() {
-                *g = canonical[root[(base + *g) as usize] as usize];
+                *g = group[(base + *g) as usize];
             }
         });
     // Vertices: chunk k owns layers z0 up to the next chunk's first.
@@ -87,7 +90,7 @@ pub(super) fn stitch(
         .zip(&node_base)
         .for_each(|(vertices, &base)| {
             for g in vertices.iter_mut().filter(|g| **g != NONE) {
-                *g = canonical[root[(base + *g) as usize] as usize];
+                *g = group[(base + *g) as usize];
             }
         });
     n_groups as usize

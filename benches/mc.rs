@@ -130,22 +130,23 @@ fn main() {
             group.bench_function(format!("gpu_end_to_end/{name}"), |b| {
                 b.iter(|| marching_cubes(vol, iso, &opts, Backend::Gpu(g)))
             });
-            // The three kernels alone, on the GPU clock (median of runs; a
+            // The four kernels alone, on the GPU clock (median of runs; a
             // criterion loop over it would re-run the whole pipeline for
             // every few milliseconds of kernel time).
             if let Ok(field) = Field::new(vol, iso, opts.close_border) {
                 let runs = if quick() { 3 } else { 5 };
-                let mut k: Vec<[f64; 3]> = (0..runs)
+                let mut k: Vec<[f64; 4]> = (0..runs)
                     .filter_map(|_| gpu::marching_cubes_raw(g, &field).ok()?.kernel_seconds)
                     .collect();
                 k.sort_by(|a, b| a.iter().sum::<f64>().total_cmp(&b.iter().sum()));
-                if let Some(&[c, v, t]) = k.get(k.len() / 2) {
-                    let total = c + v + t;
+                if let Some(&[i, c, v, t]) = k.get(k.len() / 2) {
+                    let total = i + c + v + t;
                     eprintln!(
                         "mc/{name}: gpu_kernels {:.3} ms = {:.1} M voxels/s (GPU clock, median of \
-                         {runs}): classify {:.3}, vertices {:.3}, triangles {:.3} ms",
+                         {runs}): inside {:.3}, classify {:.3}, vertices {:.3}, triangles {:.3} ms",
                         total * 1e3,
                         voxels as f64 / total / 1e6,
+                        i * 1e3,
                         c * 1e3,
                         v * 1e3,
                         t * 1e3

@@ -7,10 +7,10 @@
 // corner it is (none when x = nx − 1 or y = ny − 1). Blocks of WG_SIZE
 // points per layer, numbered as in mc_classify.
 // Buffers:
-//   params:        grid (dims, sample words, level), slab position, t_start (see Params)
-//   samples:       the volume's samples in their own type, packed in u32
-//                  words (shared/mc_grid.wgsl, params.grid)
+//   params:        bit rows (dims, first layer), slab position, t_start
+//                  (see Params)
 //   table:         257 case offsets, then 3 local edges per triangle
+//   inside_bits:   mc_inside's flags (shared/mc_bits.wgsl, params.rows)
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  triangle counts (block w holds the difference of
 //                  entries w + 1 and w)
@@ -24,10 +24,10 @@
 
 #import block_scan
 #import dispatch
-#import mc_grid
+#import mc_bits
 
 struct Params {
-    grid: SampleGrid,
+    rows: BitRows,
     z_begin: u32,
     n_layers: u32,
     blocks_per_layer: u32,
@@ -38,8 +38,8 @@ struct Params {
 const WG_SIZE: u32 = SCAN_WG;
 
 @group(0) @binding(0) var<uniform> params: Params;
-// binding 1: samples (shared/mc_grid.wgsl)
-@group(0) @binding(2) var<storage, read> table: array<u32>;
+@group(0) @binding(1) var<storage, read> table: array<u32>;
+// binding 2: inside_bits (shared/mc_bits.wgsl)
 @group(0) @binding(3) var<storage, read> block_offsets: array<u32>;
 @group(0) @binding(4) var<storage, read> vert_base: array<u32>;
 @group(0) @binding(5) var<storage, read_write> triangles: array<vec4<u32>>;
@@ -47,23 +47,22 @@ const WG_SIZE: u32 = SCAN_WG;
 // The block's count (from block_offsets), read by all as a uniform value.
 var<workgroup> sh_count: u32;
 
-fn inside(x: u32, y: u32, z: u32) -> u32 {
-    let v = grid_sample(params.grid, x, y, z);
-    return select(0u, 1u, v >= params.grid.level);
+fn flag(x: u32, y: u32, z: u32) -> u32 {
+    return inside(params.rows, x, y, z);
 }
 
 // Vertex id of the edge (point o, axis).
 fn vertex(o: vec3<u32>, axis: u32) -> u32 {
-    let m = inside(o.x, o.y, o.z);
+    let m = flag(o.x, o.y, o.z);
     var rank = 0u;
-    if axis > 0u && o.x + 1u < params.grid.nx && inside(o.x + 1u, o.y, o.z) != m {
+    if axis > 0u && o.x + 1u < params.rows.nx && flag(o.x + 1u, o.y, o.z) != m {
         rank += 1u;
     }
-    if axis > 1u && o.y + 1u < params.grid.ny && inside(o.x, o.y + 1u, o.z) != m {
+    if axis > 1u && o.y + 1u < params.rows.ny && flag(o.x, o.y + 1u, o.z) != m {
         rank += 1u;
     }
-    let n_layer = params.grid.nx * params.grid.ny;
-    return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.grid.nx + o.x] + rank;
+    let n_layer = params.rows.nx * params.rows.ny;
+    return vert_base[(o.z - params.vb_first) * n_layer + o.y * params.rows.nx + o.x] + rank;
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -81,17 +80,17 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     if workgroupUniformLoad(&sh_count) == 0u {
         return;
     }
-    let n_layer = params.grid.nx * params.grid.ny;
-    let x = q % params.grid.nx;
-    let y = q / params.grid.nx;
+    let n_layer = params.rows.nx * params.rows.ny;
+    let x = q % params.rows.nx;
+    let y = q / params.rows.nx;
     let z = params.z_begin + layer;
     let in_range = layer < params.n_layers && q < n_layer
-        && x + 1u < params.grid.nx && y + 1u < params.grid.ny;
+        && x + 1u < params.rows.nx && y + 1u < params.rows.ny;
     var case_ix = 0u;
     var nt = 0u;
     if in_range {
         for (var c = 0u; c < 8u; c++) {
-            case_ix |= inside(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
+            case_ix |= flag(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
         }
         nt = table[case_ix + 1u] - table[case_ix];
     }
@@ -100,7 +99,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         return;
     }
     let out0 = block_offsets[w] + inclusive - nt - params.t_start;
-    let cell = x + (params.grid.nx - 1u) * (y + (params.grid.ny - 1u) * z);
+    let cell = x + (params.rows.nx - 1u) * (y + (params.rows.ny - 1u) * z);
     let first = table[case_ix];
     for (var k = 0u; k < nt; k++) {
         var v = vec3<u32>(0u);

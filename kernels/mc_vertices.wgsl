@@ -7,9 +7,13 @@
 // layer `z_begin`, blocks of WG_SIZE points per layer as in mc_classify
 // (same block numbering, so block_offsets lines up with its counts).
 // Buffers:
-//   params:        grid (dims, sample words, level), slab position, v_start (see Params)
+//   params:        grid (dims, sample words, level), bit rows, slab
+//                  position, v_start (see Params)
 //   samples:       the volume's samples in their own type, packed in u32
-//                  words (shared/mc_grid.wgsl, params.grid)
+//                  words (shared/mc_grid.wgsl, params.grid), read only at
+//                  the ends of crossing edges
+//   inside_bits:   mc_inside's flags (shared/mc_bits.wgsl, params.rows),
+//                  which find the crossing edges
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  vertex counts over the whole grid (host scan), so block
 //                  w holds block_offsets[w + 1] − block_offsets[w] vertices
@@ -17,7 +21,7 @@
 //   positions:     vec4<f32> out for the first `n_owned` layers:
 //                  xyz = position in grid index space, w = bitcast edge id
 //                  3·point + axis; element = vertex id − v_start
-// Interpolation (same f32 expression as the mirror):
+// Interpolation (same f32 expression as the mirror), the only sample reads:
 //   t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN), a at p, b at
 //   p + e_axis; u[axis] = f32(p[axis]) + t. T_MIN = 2⁻¹⁰ keeps vertices
 //   inside their edges (no zero-area triangles; mc::cpu::T_MIN).
@@ -26,9 +30,11 @@
 #import block_scan
 #import dispatch
 #import mc_grid
+#import mc_bits
 
 struct Params {
     grid: SampleGrid,
+    rows: BitRows,
     z_begin: u32,
     n_layers: u32,
     n_owned: u32,
@@ -41,15 +47,25 @@ const T_MIN: f32 = 0.0009765625;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // binding 1: samples (shared/mc_grid.wgsl)
-@group(0) @binding(2) var<storage, read> block_offsets: array<u32>;
-@group(0) @binding(3) var<storage, read_write> vert_base: array<u32>;
-@group(0) @binding(4) var<storage, read_write> positions: array<vec4<f32>>;
+// binding 2: inside_bits (shared/mc_bits.wgsl)
+@group(0) @binding(3) var<storage, read> block_offsets: array<u32>;
+@group(0) @binding(4) var<storage, read_write> vert_base: array<u32>;
+@group(0) @binding(5) var<storage, read_write> positions: array<vec4<f32>>;
 
 // The block's count (from block_offsets), read by all as a uniform value.
 var<workgroup> sh_count: u32;
 
 fn sample(x: u32, y: u32, z: u32) -> f32 {
     return grid_sample(params.grid, x, y, z);
+}
+
+// Vertex k − v_start: on the edge (p, axis) whose ends hold samples a, b.
+fn write_vertex(k: u32, p: vec3<u32>, axis: u32, a: f32, b: f32) {
+    let t = clamp((params.grid.level - a) / (b - a), T_MIN, 1.0 - T_MIN);
+    var u = vec3<f32>(p);
+    u[axis] += t;
+    let point = p.x + params.grid.nx * (p.y + params.grid.ny * p.z);
+    positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));
 }
 
 @compute @workgroup_size(WG_SIZE)
@@ -72,25 +88,13 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let x = q % params.grid.nx;
     let y = q / params.grid.nx;
     let z = params.z_begin + layer;
-    // Far-end sample of each crossing edge; `crossing` bit a set for axis a.
+    // `crossing` bit a set for a crossing edge along axis a.
     var crossing = 0u;
-    var a = 0.0;
-    var far = vec3<f32>(0.0);
     if in_range {
-        a = sample(x, y, z);
-        let m = a >= params.grid.level;
-        if x + 1u < params.grid.nx {
-            far.x = sample(x + 1u, y, z);
-            if (far.x >= params.grid.level) != m { crossing |= 1u; }
-        }
-        if y + 1u < params.grid.ny {
-            far.y = sample(x, y + 1u, z);
-            if (far.y >= params.grid.level) != m { crossing |= 2u; }
-        }
-        if z + 1u < params.grid.nz {
-            far.z = sample(x, y, z + 1u);
-            if (far.z >= params.grid.level) != m { crossing |= 4u; }
-        }
+        let m = inside(params.rows, x, y, z);
+        if x + 1u < params.grid.nx && inside(params.rows, x + 1u, y, z) != m { crossing |= 1u; }
+        if y + 1u < params.grid.ny && inside(params.rows, x, y + 1u, z) != m { crossing |= 2u; }
+        if z + 1u < params.grid.nz && inside(params.rows, x, y, z + 1u) != m { crossing |= 4u; }
     }
     let nv = countOneBits(crossing);
     let inclusive = block_scan(lid.x, nv);
@@ -99,18 +103,21 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     }
     let base = block_offsets[w] + inclusive - nv;
     vert_base[layer * n_layer + q] = base;
-    if layer >= params.n_owned {
+    if layer >= params.n_owned || crossing == 0u {
         return;
     }
-    let point = q + n_layer * z;
+    let p = vec3<u32>(x, y, z);
+    let a = sample(x, y, z);
     var k = base - params.v_start;
-    for (var axis = 0u; axis < 3u; axis++) {
-        if (crossing & (1u << axis)) != 0u {
-            let t = clamp((params.grid.level - a) / (far[axis] - a), T_MIN, 1.0 - T_MIN);
-            var u = vec3<f32>(f32(x), f32(y), f32(z));
-            u[axis] += t;
-            positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));
-            k += 1u;
-        }
+    if (crossing & 1u) != 0u {
+        write_vertex(k, p, 0u, a, sample(x + 1u, y, z));
+        k += 1u;
+    }
+    if (crossing & 2u) != 0u {
+        write_vertex(k, p, 1u, a, sample(x, y + 1u, z));
+        k += 1u;
+    }
+    if (crossing & 4u) != 0u {
+        write_vertex(k, p, 2u, a, sample(x, y, z + 1u));
     }
 }

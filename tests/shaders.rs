@@ -152,10 +152,21 @@ fn params_sample(kernel: Kernel) -> Sample {
             encase_bytes(&exclusive_scan::gpu::Params { n: 0xC1 }),
             vec![("n", 0xC1)],
         ),
-        Kernel::McClassify => {
-            let (grid, mut fields) = sample_grid_sample(0xD0);
-            let p = mc::gpu::ClassifyParams {
+        Kernel::McInside => {
+            let (grid, mut fields) = sample_grid_sample(0xC0);
+            let p = mc::gpu::InsideParams {
                 grid,
+                z_begin: 0xC5,
+                n_layers: 0xC6,
+                row_words: 0xC7,
+            };
+            fields.extend([("z_begin", 0xC5), ("n_layers", 0xC6), ("row_words", 0xC7)]);
+            (encase_bytes(&p), fields)
+        }
+        Kernel::McClassify => {
+            let (rows, mut fields) = bit_rows_sample(0xD0);
+            let p = mc::gpu::ClassifyParams {
+                rows,
                 z_begin: 0xD5,
                 n_layers: 0xD6,
                 blocks_per_layer: 0xD7,
@@ -169,8 +180,11 @@ fn params_sample(kernel: Kernel) -> Sample {
         }
         Kernel::McVertices => {
             let (grid, mut fields) = sample_grid_sample(0xE0);
+            let (rows, row_fields) = bit_rows_sample(0xEA);
+            fields.extend(row_fields);
             let p = mc::gpu::VerticesParams {
                 grid,
+                rows,
                 z_begin: 0xE5,
                 n_layers: 0xE6,
                 n_owned: 0xE7,
@@ -187,9 +201,9 @@ fn params_sample(kernel: Kernel) -> Sample {
             (encase_bytes(&p), fields)
         }
         Kernel::McTriangles => {
-            let (grid, mut fields) = sample_grid_sample(0xF0);
+            let (rows, mut fields) = bit_rows_sample(0xF0);
             let p = mc::gpu::TrianglesParams {
-                grid,
+                rows,
                 z_begin: 0xF5,
                 n_layers: 0xF6,
                 blocks_per_layer: 0xF7,
@@ -314,6 +328,33 @@ fn params_sample(kernel: Kernel) -> Sample {
 /// `particle_update`'s `Params` with distinct values (floats by their bits).
 /// The marching-cubes kernels' `grid` member with distinct values from
 /// `base << 8`, and its flattened fields (`grid.<name>`).
+/// A `BitRows` with distinct words from `base`, and its flattened fields
+/// (`rows.<field>`).
+fn bit_rows_sample(base: u32) -> (mc::grid::BitRows, Vec<(&'static str, u32)>) {
+    let v = |k: u32| (base << 8) + k;
+    let rows = mc::grid::BitRows {
+        nx: v(1),
+        ny: v(2),
+        nz: v(3),
+        z_first: v(4),
+        row_words: v(5),
+        unused0: v(6),
+        unused1: v(7),
+        unused2: v(8),
+    };
+    let names = [
+        "rows.nx",
+        "rows.ny",
+        "rows.nz",
+        "rows.z_first",
+        "rows.row_words",
+        "rows.unused0",
+        "rows.unused1",
+        "rows.unused2",
+    ];
+    (rows, names.into_iter().zip((1..).map(v)).collect())
+}
+
 fn sample_grid_sample(base: u32) -> (mc::grid::SampleGrid, Vec<(&'static str, u32)>) {
     let v = |k: u32| (base << 8) + k;
     let f = |k: u32| f32::from_bits(v(k));
@@ -443,7 +484,12 @@ fn mirrors_use_their_kernels_constants() {
     for k in [Kernel::ExclusiveScanBlocks, Kernel::ExclusiveScanAdd] {
         assert_eq!(spec(k).wg_size as usize, exclusive_scan::cpu::WG_SIZE);
     }
-    for k in [Kernel::McClassify, Kernel::McVertices, Kernel::McTriangles] {
+    for k in [
+        Kernel::McInside,
+        Kernel::McClassify,
+        Kernel::McVertices,
+        Kernel::McTriangles,
+    ] {
         assert_eq!(spec(k).wg_size, mc::mirror::WG_SIZE);
     }
     let blobby = spec(Kernel::BlobbyEnergy);

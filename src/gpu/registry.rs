@@ -74,6 +74,8 @@ registry! {
     SpringChebyshev => "spring_chebyshev",
     /// Max |v|² and max window change of a relaxation, as u32 keys.
     TissueReduceMax => "tissue_reduce_max",
+    /// Marching cubes: the inside flag of every point, one bit each in bit rows.
+    McInside => "mc_inside",
     /// Marching cubes: per-point vertex and triangle counts, summed per block.
     McClassify => "mc_classify",
     /// Marching cubes: welded vertices at scanned offsets, per-point first vertex id.
@@ -144,6 +146,7 @@ const SHARED: &[(&str, &str)] = &[
     ),
     ("bvh_ray", include_str!("../../kernels/shared/bvh_ray.wgsl")),
     ("mc_grid", include_str!("../../kernels/shared/mc_grid.wgsl")),
+    ("mc_bits", include_str!("../../kernels/shared/mc_bits.wgsl")),
 ];
 
 /// Expands `#import <name>` lines with `kernels/shared/<name>.wgsl`

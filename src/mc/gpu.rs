@@ -1,5 +1,14 @@
-//! GPU marching cubes: `mc_classify` → host exclusive scan of the block
-//! sums → `mc_vertices` → `mc_triangles`, in slabs of z layers.
+//! GPU marching cubes: `mc_inside` → `mc_classify` → host exclusive scan of
+//! the block sums → `mc_vertices` → `mc_triangles`, in slabs of z layers.
+//!
+//! Inside flags: `mc_inside` packs the inside flag of every point into bit
+//! rows ([`super::grid::BitRows`]: one read of each sample, one bit kept),
+//! from which the other kernels find cases and crossing edges; only
+//! `mc_vertices` reads samples again, at the two ends of each crossing
+//! edge. With the samples resident (below) the flags of the whole grid are
+//! made once for both passes; otherwise each slab makes its own, a
+//! classify slab for its layers and the one above, an emission slab for
+//! its layers and the two above.
 //!
 //! Scan: each kernel scans its own 256-point block in workgroup memory; the
 //! host scans the per-block sums of the whole grid (one `u32` pair per 256
@@ -24,18 +33,29 @@
 
 use super::cpu::RawSurface;
 use super::field::Field;
-use super::grid::{SampleGrid, inner_layers, sample_bytes, sample_grid, sample_words};
+use super::grid::{BitRows, SampleGrid, inner_layers, sample_bytes, sample_grid, sample_words};
 use super::{exclusive_offsets, tables};
 use crate::foundation::vertex_components;
-use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, UniformBuffer};
+use crate::gpu::{BoundKernel, Gpu, GpuArray, Kernel, PassTimer, UniformBuffer};
 use crate::parity::find_sentinel;
 use crate::{Error, Result};
+
+/// Uniform parameters of `mc_inside`.
+#[derive(Debug, Clone, Copy, encase::ShaderType)]
+pub struct InsideParams {
+    /// The padded grid and its sample words.
+    pub grid: SampleGrid,
+    pub z_begin: u32,
+    pub n_layers: u32,
+    /// Words a bit row ([`BitRows::row_words`]).
+    pub row_words: u32,
+}
 
 /// Uniform parameters of `mc_classify`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct ClassifyParams {
-    /// The padded grid and its sample words.
-    pub grid: SampleGrid,
+    /// The padded grid and the layers of the inside flags.
+    pub rows: BitRows,
     pub z_begin: u32,
     pub n_layers: u32,
     pub blocks_per_layer: u32,
@@ -46,6 +66,8 @@ pub struct ClassifyParams {
 pub struct VerticesParams {
     /// The padded grid and its sample words.
     pub grid: SampleGrid,
+    /// The layers of the inside flags.
+    pub rows: BitRows,
     pub z_begin: u32,
     pub n_layers: u32,
     pub n_owned: u32,
@@ -56,8 +78,8 @@ pub struct VerticesParams {
 /// Uniform parameters of `mc_triangles`.
 #[derive(Debug, Clone, Copy, encase::ShaderType)]
 pub struct TrianglesParams {
-    /// The padded grid and its sample words.
-    pub grid: SampleGrid,
+    /// The padded grid and the layers of the inside flags.
+    pub rows: BitRows,
     pub z_begin: u32,
     pub n_layers: u32,
     pub blocks_per_layer: u32,
@@ -72,10 +94,11 @@ pub struct GpuRaw {
     pub positions: Vec<[f32; 4]>,
     /// #F `[v0, v1, v2, cell]`.
     pub triangles: Vec<[u32; 4]>,
-    /// GPU-clock seconds of `mc_classify`, `mc_vertices` and
-    /// `mc_triangles`, each over all slabs (timestamp queries; `None` when
-    /// the device has none). Excludes uploads, readbacks and the host scan.
-    pub kernel_seconds: Option<[f64; 3]>,
+    /// GPU-clock seconds of `mc_inside`, `mc_classify`, `mc_vertices` and
+    /// `mc_triangles`, each over all slabs (`mc_inside` over both passes;
+    /// timestamp queries; `None` when the device has none). Excludes
+    /// uploads, readbacks and the host scan.
+    pub kernel_seconds: Option<[f64; 4]>,
 }
 
 /// Marching cubes of `field` on the GPU, grouping finished on the host.
@@ -145,12 +168,14 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     // hold inner layers, which are no larger).
     let sample_layer_bytes = (layer * sample_bytes(field)) as u64;
     let samples_bytes = |n: usize| (n as u64 * sample_layer_bytes).next_multiple_of(4);
+    // Bytes of the inside flags of `n` layers.
+    let flag_bytes = |n: usize| BitRows::new(field, 0).words(n) as u64 * 4;
     // A classify slab holds its layers plus one above.
-    let classify_layers = (max / sample_layer_bytes).saturating_sub(1) as usize;
+    let classify_layers = (max / sample_layer_bytes.max(flag_bytes(1))).saturating_sub(1) as usize;
     if classify_layers == 0 {
         return Err(Error::limit(
-            "marching cubes: bytes of two sample layers (one storage binding)",
-            samples_bytes(2),
+            "marching cubes: bytes of two sample or inside-flag layers (one storage binding)",
+            samples_bytes(2).max(flag_bytes(2)),
             max,
         ));
     }
@@ -161,13 +186,38 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     } else {
         None
     };
-    let mut kernel_seconds = gpu.features.timestamps.then_some([0.0; 3]);
-    // Pass times of kernels `first..`, added to their sums.
-    let mut add_time = |first: usize, t: Option<Vec<f64>>| {
+    let mut kernel_seconds = gpu.features.timestamps.then_some([0.0; 4]);
+    // Pass times of kernels `which` (0 `mc_inside`, 1 `mc_classify`, 2
+    // `mc_vertices`, 3 `mc_triangles`), added to their sums.
+    let mut add_time = |which: &[usize], t: Option<Vec<f64>>| {
         if let (Some(sums), Some(t)) = (kernel_seconds.as_mut(), t) {
-            for (sum, t) in sums[first..].iter_mut().zip(t) {
-                *sum += t;
+            for (&k, t) in which.iter().zip(t) {
+                sums[k] += t;
             }
+        }
+    };
+
+    // The inside flags of the whole grid, made once for both passes when
+    // the samples are resident and the flags fit one binding; else each
+    // slab makes its own.
+    let resident_flags = match &resident {
+        Some(all) if flag_bytes(nz) <= max => {
+            let samples = Samples {
+                buffer: all,
+                grid: sample_grid(field, 0),
+            };
+            let flags = Flags::new(gpu, field, samples, 0, nz)?;
+            add_time(&[0], flags.make(gpu)?);
+            Some(flags)
+        }
+        _ => None,
+    };
+    // The kernels of a slab's passes: with its own flags or not.
+    let which = |first: &'static [usize], rest: &'static [usize]| {
+        if resident_flags.is_some() {
+            rest
+        } else {
+            first
         }
     };
 
@@ -178,9 +228,14 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let b = (a + classify_layers).min(nz);
         let mut slot = None;
         let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 1).min(nz))?;
-        let (c, t) = classify(gpu, &table, samples, a, b - a, bpl)?;
+        let mut own = None;
+        let flags = match &resident_flags {
+            Some(f) => f,
+            None => own.insert(Flags::new(gpu, field, samples, a, (b + 1).min(nz))?),
+        };
+        let (c, t) = classify(gpu, &table, flags, resident_flags.is_none(), a, b - a, bpl)?;
         counts.extend(c);
-        add_time(0, t);
+        add_time(which(&[0, 1], &[1]), t);
         a = b;
     }
 
@@ -207,7 +262,12 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let vert_base = ((b + 1).min(nz) - a) as u64 * layer_bytes;
         let verts: u64 = layer_v[a..b].iter().sum::<u64>() * 16;
         let tris: u64 = layer_t[a..b.min(nz - 1)].iter().sum::<u64>() * 16;
-        samples <= max && vert_base <= max && verts <= max && tris <= max
+        let flags = if resident_flags.is_some() {
+            0
+        } else {
+            flag_bytes((b + 2).min(nz) - a)
+        };
+        samples <= max && flags <= max && vert_base <= max && verts <= max && tris <= max
     };
     let mut a = 0;
     while a < nz {
@@ -234,6 +294,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
             gpu,
             field,
             resident.as_ref(),
+            resident_flags.as_ref(),
             &table,
             dims,
             bpl,
@@ -243,7 +304,7 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         )?;
         out.positions.extend(p);
         out.triangles.extend(t);
-        add_time(1, seconds);
+        add_time(which(&[0, 2, 3], &[2, 3]), seconds);
         a = b;
     }
     out.kernel_seconds = kernel_seconds;
@@ -294,15 +355,74 @@ struct Slab {
     n_t: usize,
 }
 
+/// The inside flags of padded layers `z0..z1` (`mc_inside`), bound and
+/// ready to record: the output words and the rows that read them.
+struct Flags {
+    rows: BitRows,
+    bits: GpuArray<u32>,
+    bound: BoundKernel,
+}
+
+impl Flags {
+    fn new(
+        gpu: &Gpu,
+        field: &Field<'_>,
+        samples: Samples<'_>,
+        z0: usize,
+        z1: usize,
+    ) -> Result<Self> {
+        let rows = BitRows::new(field, z0);
+        let params = UniformBuffer::new(
+            gpu,
+            "mc_inside.params",
+            &InsideParams {
+                grid: samples.grid,
+                z_begin: z0 as u32,
+                n_layers: (z1 - z0) as u32,
+                row_words: rows.row_words,
+            },
+        )?;
+        // Every word is written by the kernel.
+        let bits = GpuArray::zeroed(gpu, "mc_inside.bits", rows.words(z1 - z0))?;
+        let bound = bind_inside(gpu, &params, samples.buffer, &bits)?;
+        Ok(Flags { rows, bits, bound })
+    }
+
+    /// Records the `mc_inside` pass (one invocation per word).
+    fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<(&PassTimer, u32)>,
+    ) {
+        self.bound
+            .record(gpu, encoder, self.bits.len() as u32, timer);
+    }
+
+    /// Runs the `mc_inside` pass on its own; its GPU seconds.
+    fn make(&self, gpu: &Gpu) -> Result<PassSeconds> {
+        let timer = gpu.pass_timer(1);
+        let mut encoder = gpu.encoder("mc_inside");
+        self.record(gpu, &mut encoder, timer.as_ref().map(|t| (t, 0)));
+        let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
+        gpu.submit_and_wait(encoder)?;
+        times.map(|t| t.finish(gpu)).transpose()
+    }
+}
+
 /// Inner layers `k0..k1` as one storage buffer of sample words.
 fn upload_layers(gpu: &Gpu, field: &Field<'_>, k0: usize, k1: usize) -> Result<GpuArray<u32>> {
     GpuArray::from_slice(gpu, "mc.samples", &sample_words(field, k0, k1)?)
 }
 
+/// The block counts of layers `z_begin..z_begin + n_layers` from `flags`
+/// (made first when `make_flags`), and the GPU seconds of the passes
+/// (`mc_inside` when made, `mc_classify`).
 fn classify(
     gpu: &Gpu,
     table: &GpuArray<u32>,
-    samples: Samples<'_>,
+    flags: &Flags,
+    make_flags: bool,
     z_begin: usize,
     n_layers: usize,
     bpl: usize,
@@ -313,23 +433,23 @@ fn classify(
         gpu,
         "mc_classify.params",
         &ClassifyParams {
-            grid: samples.grid,
+            rows: flags.rows,
             z_begin: z_begin as u32,
             n_layers: n_layers as u32,
             blocks_per_layer: bpl as u32,
         },
     )?;
     let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks, [u32::MAX; 2])?;
-    let bound = bind_classify(gpu, &params, samples.buffer, table, &counts)?;
-    let timer = gpu.pass_timer(1);
+    let bound = bind_classify(gpu, &params, table, &flags.bits, &counts)?;
+    let made = u32::from(make_flags);
+    let timer = gpu.pass_timer(made + 1);
     let mut encoder = gpu.encoder("mc_classify");
+    let at = |i| timer.as_ref().map(|t| (t, i));
+    if make_flags {
+        flags.record(gpu, &mut encoder, at(0));
+    }
     let n_invocations = n_blocks as u32 * bound.wg_size();
-    bound.record(
-        gpu,
-        &mut encoder,
-        n_invocations,
-        timer.as_ref().map(|t| (t, 0)),
-    );
+    bound.record(gpu, &mut encoder, n_invocations, at(made));
     let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
     let staged = counts.stage(gpu, &mut encoder)?;
     gpu.submit_and_wait(encoder)?;
@@ -352,7 +472,8 @@ fn sentinel(kernel: Kernel, index: usize) -> Error {
 /// GPU seconds of each pass of one submission (with timestamp queries).
 type PassSeconds = Option<Vec<f64>>;
 
-/// Positions, triangles and the two kernels' GPU seconds of one slab.
+/// Positions, triangles and the kernels' GPU seconds of one slab
+/// (`mc_inside` when it made its own flags, `mc_vertices`, `mc_triangles`).
 type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, PassSeconds);
 
 #[expect(
@@ -363,6 +484,7 @@ fn emit(
     gpu: &Gpu,
     field: &Field<'_>,
     resident: Option<&GpuArray<u32>>,
+    resident_flags: Option<&Flags>,
     table: &GpuArray<u32>,
     dims: [u32; 3],
     bpl: usize,
@@ -376,6 +498,11 @@ fn emit(
     let cell_layers = b.min(nz - 1).saturating_sub(a);
     let mut slot = None;
     let samples = Samples::get(resident, &mut slot, gpu, field, a, (b + 2).min(nz))?;
+    let mut own = None;
+    let flags = match resident_flags {
+        Some(f) => f,
+        None => own.insert(Flags::new(gpu, field, samples, a, (b + 2).min(nz))?),
+    };
     let layer = (dims[0] * dims[1]) as usize;
     // Each slab's offsets and the next one (the kernels take a block's
     // count as the difference).
@@ -397,6 +524,7 @@ fn emit(
         "mc_vertices.params",
         &VerticesParams {
             grid: samples.grid,
+            rows: flags.rows,
             z_begin: a as u32,
             n_layers: vb_layers as u32,
             n_owned: (b - a) as u32,
@@ -408,7 +536,7 @@ fn emit(
         gpu,
         "mc_triangles.params",
         &TrianglesParams {
-            grid: samples.grid,
+            rows: flags.rows,
             z_begin: a as u32,
             n_layers: cell_layers as u32,
             blocks_per_layer: bpl as u32,
@@ -422,6 +550,7 @@ fn emit(
         gpu,
         &vparams,
         samples.buffer,
+        &flags.bits,
         &offsets_v,
         &vert_base,
         &positions,
@@ -429,19 +558,23 @@ fn emit(
     let tbound = bind_triangles(
         gpu,
         &tparams,
-        samples.buffer,
         table,
+        &flags.bits,
         &offsets_t,
         &vert_base,
         &triangles,
     )?;
-    let timer = gpu.pass_timer(2);
+    let made = u32::from(resident_flags.is_none());
+    let timer = gpu.pass_timer(made + 2);
     let mut encoder = gpu.encoder("mc_emit");
     let at = |i| timer.as_ref().map(|t| (t, i));
+    if resident_flags.is_none() {
+        flags.record(gpu, &mut encoder, at(0));
+    }
     let n_v = (vb_layers * bpl) as u32 * vbound.wg_size();
-    vbound.record(gpu, &mut encoder, n_v, at(0));
+    vbound.record(gpu, &mut encoder, n_v, at(made));
     let n_t = (cell_layers * bpl) as u32 * tbound.wg_size();
-    tbound.record(gpu, &mut encoder, n_t, at(1));
+    tbound.record(gpu, &mut encoder, n_t, at(made + 1));
     let staged_p = positions.stage(gpu, &mut encoder)?;
     let staged_t = triangles.stage(gpu, &mut encoder)?;
     let times = timer.map(|t| t.stage(gpu, &mut encoder)).transpose()?;
@@ -459,17 +592,30 @@ fn emit(
     Ok((p, t, times.map(|t| t.finish(gpu)).transpose()?))
 }
 
+fn bind_inside(
+    gpu: &Gpu,
+    params: &UniformBuffer<InsideParams>,
+    samples: &GpuArray<u32>,
+    bits: &GpuArray<u32>,
+) -> Result<BoundKernel> {
+    (gpu.kernel(Kernel::McInside)?)
+        .uniform(params)
+        .read(samples)
+        .write(bits)
+        .bind()
+}
+
 fn bind_classify(
     gpu: &Gpu,
     params: &UniformBuffer<ClassifyParams>,
-    samples: &GpuArray<u32>,
     table: &GpuArray<u32>,
+    bits: &GpuArray<u32>,
     block_counts: &GpuArray<[u32; 2]>,
 ) -> Result<BoundKernel> {
     (gpu.kernel(Kernel::McClassify)?)
         .uniform(params)
-        .read(samples)
         .read(table)
+        .read(bits)
         .write(block_counts)
         .bind()
 }
@@ -478,6 +624,7 @@ fn bind_vertices(
     gpu: &Gpu,
     params: &UniformBuffer<VerticesParams>,
     samples: &GpuArray<u32>,
+    bits: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
     positions: &GpuArray<[f32; 4]>,
@@ -485,6 +632,7 @@ fn bind_vertices(
     (gpu.kernel(Kernel::McVertices)?)
         .uniform(params)
         .read(samples)
+        .read(bits)
         .read(block_offsets)
         .write(vert_base)
         .write(positions)
@@ -494,16 +642,16 @@ fn bind_vertices(
 fn bind_triangles(
     gpu: &Gpu,
     params: &UniformBuffer<TrianglesParams>,
-    samples: &GpuArray<u32>,
     table: &GpuArray<u32>,
+    bits: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
     triangles: &GpuArray<[u32; 4]>,
 ) -> Result<BoundKernel> {
     (gpu.kernel(Kernel::McTriangles)?)
         .uniform(params)
-        .read(samples)
         .read(table)
+        .read(bits)
         .read(block_offsets)
         .read(vert_base)
         .write(triangles)
@@ -523,13 +671,28 @@ fn run_blocks<T: bytemuck::Pod>(
     out.read(gpu)
 }
 
+/// One `mc_inside` dispatch on explicit inputs, as
+/// [`super::mirror::mc_inside`] takes them (parity tests): the words of
+/// `params.n_layers` layers of bit rows.
+pub fn mc_inside(gpu: &Gpu, params: &InsideParams, samples: &[u32]) -> Result<Vec<u32>> {
+    let n_words = (params.n_layers * params.grid.ny * params.row_words) as usize;
+    let bits = GpuArray::output(gpu, "mc_inside.bits", n_words, u32::MAX)?;
+    let uniform = UniformBuffer::new(gpu, "mc_inside.params", params)?;
+    let samples = GpuArray::from_slice(gpu, "mc_inside.samples", samples)?;
+    let bound = bind_inside(gpu, &uniform, &samples, &bits)?;
+    let mut encoder = gpu.encoder(bound.kernel().name());
+    bound.record(gpu, &mut encoder, n_words as u32, None);
+    gpu.submit_and_wait(encoder)?;
+    bits.read(gpu)
+}
+
 /// One `mc_classify` dispatch on explicit inputs, as
 /// [`super::mirror::mc_classify`] takes them (parity tests): the counts of
 /// `params.n_layers · params.blocks_per_layer` blocks.
 pub fn mc_classify(
     gpu: &Gpu,
     params: &ClassifyParams,
-    samples: &[u32],
+    bits: &[u32],
     table: &[u32],
 ) -> Result<Vec<[u32; 2]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
@@ -540,9 +703,9 @@ pub fn mc_classify(
         [u32::MAX; 2],
     )?;
     let uniform = UniformBuffer::new(gpu, "mc_classify.params", params)?;
-    let samples = GpuArray::from_slice(gpu, "mc_classify.samples", samples)?;
+    let bits = GpuArray::from_slice(gpu, "mc_classify.bits", bits)?;
     let table = GpuArray::from_slice(gpu, "mc_classify.table", table)?;
-    let bound = bind_classify(gpu, &uniform, &samples, &table, &counts)?;
+    let bound = bind_classify(gpu, &uniform, &table, &bits, &counts)?;
     run_blocks(gpu, &bound, n_blocks, &counts)
 }
 
@@ -554,6 +717,7 @@ pub fn mc_vertices(
     gpu: &Gpu,
     params: &VerticesParams,
     samples: &[u32],
+    bits: &[u32],
     block_offsets: &[u32],
     n_vertices: usize,
 ) -> Result<(Vec<u32>, Vec<[f32; 4]>)> {
@@ -561,6 +725,7 @@ pub fn mc_vertices(
     let layer = (params.grid.nx * params.grid.ny) as usize;
     let uniform = UniformBuffer::new(gpu, "mc_vertices.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_vertices.samples", samples)?;
+    let bits = GpuArray::from_slice(gpu, "mc_vertices.bits", bits)?;
     let offsets = GpuArray::from_slice(gpu, "mc_vertices.block_offsets", block_offsets)?;
     let vert_base = GpuArray::zeroed(
         gpu,
@@ -568,7 +733,9 @@ pub fn mc_vertices(
         params.n_layers as usize * layer,
     )?;
     let positions = GpuArray::output(gpu, "mc_vertices.positions", n_vertices, [f32::NAN; 4])?;
-    let bound = bind_vertices(gpu, &uniform, &samples, &offsets, &vert_base, &positions)?;
+    let bound = bind_vertices(
+        gpu, &uniform, &samples, &bits, &offsets, &vert_base, &positions,
+    )?;
     let positions = run_blocks(gpu, &bound, n_blocks, &positions)?;
     Ok((vert_base.read(gpu)?, positions))
 }
@@ -578,7 +745,7 @@ pub fn mc_vertices(
 pub fn mc_triangles(
     gpu: &Gpu,
     params: &TrianglesParams,
-    samples: &[u32],
+    bits: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],
@@ -586,13 +753,13 @@ pub fn mc_triangles(
 ) -> Result<Vec<[u32; 4]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
     let uniform = UniformBuffer::new(gpu, "mc_triangles.params", params)?;
-    let samples = GpuArray::from_slice(gpu, "mc_triangles.samples", samples)?;
+    let bits = GpuArray::from_slice(gpu, "mc_triangles.bits", bits)?;
     let table = GpuArray::from_slice(gpu, "mc_triangles.table", table)?;
     let offsets = GpuArray::from_slice(gpu, "mc_triangles.block_offsets", block_offsets)?;
     let vert_base = GpuArray::from_slice(gpu, "mc_triangles.vert_base", vert_base)?;
     let triangles = GpuArray::output(gpu, "mc_triangles.triangles", n_triangles, [u32::MAX; 4])?;
     let bound = bind_triangles(
-        gpu, &uniform, &samples, &table, &offsets, &vert_base, &triangles,
+        gpu, &uniform, &table, &bits, &offsets, &vert_base, &triangles,
     )?;
     run_blocks(gpu, &bound, n_blocks, &triangles)
 }

@@ -12,6 +12,11 @@
 //! integer-to-float conversion of values beyond 2²⁴ is not specified to
 //! round like Rust's `as` (a label volume of those types uploads its 0/1
 //! flags as `f32`).
+//!
+//! The inside flags of the points, one bit each in [`BitRows`] (written by
+//! `mc_inside`), are what `mc_classify`, `mc_vertices` and `mc_triangles`
+//! read to find cases and crossing edges; [`inside_bit`] is the mirror of
+//! `kernels/shared/mc_bits.wgsl`.
 
 use rayon::prelude::*;
 
@@ -114,6 +119,56 @@ pub fn sample_grid(field: &Field<'_>, z_first: usize) -> SampleGrid {
         unused0: 0,
         unused1: 0,
     }
+}
+
+/// The `rows` member of `mc_classify`'s, `mc_vertices`' and
+/// `mc_triangles`' parameters: the padded grid and the layers of the inside
+/// flags `mc_inside` wrote — bit `x & 31` of word `x >> 5` of row
+/// `y + ny·(z − z_first)`, [`BitRows::row_words`] words a row, bits past
+/// `nx` zero. 32 bytes (three unused words), laid out alike in WGSL and by
+/// encase.
+#[derive(Debug, Clone, Copy, PartialEq, encase::ShaderType)]
+pub struct BitRows {
+    /// Sample counts per axis of the padded grid.
+    pub nx: u32,
+    pub ny: u32,
+    pub nz: u32,
+    /// The first (padded) layer the words hold.
+    pub z_first: u32,
+    /// Words per row: `⌈nx / 32⌉`.
+    pub row_words: u32,
+    pub unused0: u32,
+    pub unused1: u32,
+    pub unused2: u32,
+}
+
+impl BitRows {
+    /// The rows of `field`'s padded grid for words holding layers from
+    /// `z_first`.
+    pub fn new(field: &Field<'_>, z_first: usize) -> Self {
+        BitRows {
+            nx: field.dims[0] as u32,
+            ny: field.dims[1] as u32,
+            nz: field.dims[2] as u32,
+            z_first: z_first as u32,
+            row_words: field.dims[0].div_ceil(32) as u32,
+            unused0: 0,
+            unused1: 0,
+            unused2: 0,
+        }
+    }
+
+    /// Words of `n_layers` layers.
+    pub fn words(&self, n_layers: usize) -> usize {
+        n_layers * self.ny as usize * self.row_words as usize
+    }
+}
+
+/// `inside` of `kernels/shared/mc_bits.wgsl`: the inside flag (0 or 1) of
+/// point `(x, y, z)` of the padded grid from the bit rows `bits`.
+pub fn inside_bit(r: &BitRows, bits: &[u32], x: u32, y: u32, z: u32) -> u32 {
+    let word = bits[((y + r.ny * (z - r.z_first)) * r.row_words + (x >> 5)) as usize];
+    (word >> (x & 31)) & 1
 }
 
 /// Bytes one sample takes in the words (for binding-size limits).

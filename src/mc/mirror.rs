@@ -1,6 +1,7 @@
 //! The marching-cubes kernels' mirrors: plain CPU loops over the same
-//! workgroups and invocations as `kernels/mc_classify.wgsl`,
-//! `kernels/mc_vertices.wgsl` and `kernels/mc_triangles.wgsl`, with the same
+//! workgroups and invocations as `kernels/mc_inside.wgsl`,
+//! `kernels/mc_classify.wgsl`, `kernels/mc_vertices.wgsl` and
+//! `kernels/mc_triangles.wgsl`, with the same
 //! names, buffers and f32 expressions, one function per kernel. They read
 //! beside their WGSL; the production CPU path is the bit-row
 //! implementation in [`super::cpu`], tested equal to these mirrors chained
@@ -8,20 +9,20 @@
 //! on the same inputs (`tests/parity/mc_*.rs`), so a divergence names its
 //! kernel.
 //!
-//! Tolerances ([`TOL_POSITION_ULPS`]): block counts, vertex ids, edge ids and
-//! triangles are integers and compare exactly; positions are bit for bit on
+//! Tolerances ([`TOL_POSITION_ULPS`]): inside flags, block counts, vertex
+//! ids, edge ids and triangles are integers and compare exactly; positions are bit for bit on
 //! adapters with correctly rounded division (lavapipe), else within
 //! WGSL's 2.5-ulp division bound carried through `f32(p) + t`.
 
 use super::cpu::T_MIN;
 use super::exclusive_offsets;
 use super::field::Field;
-use super::gpu::{ClassifyParams, GpuRaw, TrianglesParams, VerticesParams};
-use super::grid::{grid_sample, sample_grid, sample_words};
+use super::gpu::{ClassifyParams, GpuRaw, InsideParams, TrianglesParams, VerticesParams};
+use super::grid::{BitRows, grid_sample, inside_bit, sample_grid, sample_words};
 use super::tables;
 use crate::Result;
 
-/// Invocations per workgroup of the three kernels (`WG_SIZE`; checked
+/// Invocations per workgroup of the four kernels (`WG_SIZE`; checked
 /// against the WGSL by `tests/shaders.rs`).
 pub const WG_SIZE: u32 = 256;
 
@@ -34,19 +35,38 @@ pub const TOL_POSITION_ULPS: u32 = 3;
 /// `edge_owner` of `mc_triangles.wgsl`: the corner owning each local edge.
 const EDGE_OWNER: [u32; 12] = [0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3];
 
+/// `mc_inside`: the inside flag of every point of `n_layers` layers from
+/// `z_begin`, as bit rows ([`BitRows`]): `bits` holds `n_layers · ny ·
+/// row_words` words, one invocation each.
+pub fn mc_inside(params: &InsideParams, samples: &[u32], bits: &mut [u32]) {
+    let p = params;
+    let n_words = p.n_layers * p.grid.ny * p.row_words;
+    for word in 0..n_words {
+        let row = word / p.row_words;
+        let x0 = (word % p.row_words) * 32;
+        let y = row % p.grid.ny;
+        let z = p.z_begin + row / p.grid.ny;
+        let mut flags = 0u32;
+        for b in 0..32.min(p.grid.nx - x0) {
+            if grid_sample(&p.grid, samples, x0 + b, y, z) >= p.grid.level {
+                flags |= 1 << b;
+            }
+        }
+        bits[word as usize] = flags;
+    }
+}
+
 /// `mc_classify`: per block of `WG_SIZE` points, (vertices, triangles).
 /// `block_counts` holds `n_layers · blocks_per_layer` entries.
 pub fn mc_classify(
     params: &ClassifyParams,
-    samples: &[u32],
+    bits: &[u32],
     table: &[u32],
     block_counts: &mut [[u32; 2]],
 ) {
     let p = params;
-    let inside = |x: u32, y: u32, z: u32| -> u32 {
-        u32::from(grid_sample(&p.grid, samples, x, y, z) >= p.grid.level)
-    };
-    let n_layer = p.grid.nx * p.grid.ny;
+    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
+    let n_layer = p.rows.nx * p.rows.ny;
     for w in 0..block_counts.len() as u32 {
         let layer = w / p.blocks_per_layer;
         let mut sh_sum = [0u32; 2];
@@ -55,20 +75,20 @@ pub fn mc_classify(
             let mut nv = 0;
             let mut nt = 0;
             if layer < p.n_layers && q < n_layer {
-                let x = q % p.grid.nx;
-                let y = q / p.grid.nx;
+                let x = q % p.rows.nx;
+                let y = q / p.rows.nx;
                 let z = p.z_begin + layer;
                 let m = inside(x, y, z);
-                if x + 1 < p.grid.nx && inside(x + 1, y, z) != m {
+                if x + 1 < p.rows.nx && inside(x + 1, y, z) != m {
                     nv += 1;
                 }
-                if y + 1 < p.grid.ny && inside(x, y + 1, z) != m {
+                if y + 1 < p.rows.ny && inside(x, y + 1, z) != m {
                     nv += 1;
                 }
-                if z + 1 < p.grid.nz && inside(x, y, z + 1) != m {
+                if z + 1 < p.rows.nz && inside(x, y, z + 1) != m {
                     nv += 1;
                 }
-                if x + 1 < p.grid.nx && y + 1 < p.grid.ny && z + 1 < p.grid.nz {
+                if x + 1 < p.rows.nx && y + 1 < p.rows.ny && z + 1 < p.rows.nz {
                     let mut case_ix = 0u32;
                     for c in 0..8u32 {
                         case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
@@ -93,12 +113,23 @@ pub fn mc_classify(
 pub fn mc_vertices(
     params: &VerticesParams,
     samples: &[u32],
+    bits: &[u32],
     block_offsets: &[u32],
     vert_base: &mut [u32],
     positions: &mut [[f32; 4]],
 ) {
     let p = params;
     let sample = |x: u32, y: u32, z: u32| grid_sample(&p.grid, samples, x, y, z);
+    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
+    // Vertex k (− v_start): on the edge (p, axis) whose ends hold samples a, b.
+    let write_vertex =
+        |positions: &mut [[f32; 4]], k: u32, q: [u32; 3], axis: usize, a: f32, b: f32| {
+            let t = ((p.grid.level - a) / (b - a)).clamp(T_MIN, 1.0 - T_MIN);
+            let mut u = q.map(|c| c as f32);
+            u[axis] += t;
+            let point = q[0] + p.grid.nx * (q[1] + p.grid.ny * q[2]);
+            positions[k as usize] = [u[0], u[1], u[2], f32::from_bits(3 * point + axis as u32)];
+        };
     let n_layer = p.grid.nx * p.grid.ny;
     let n_blocks = p.n_layers * p.blocks_per_layer;
     for w in 0..n_blocks {
@@ -115,28 +146,16 @@ pub fn mc_vertices(
             let y = q / p.grid.nx;
             let z = p.z_begin + layer;
             let mut crossing = 0u32;
-            let mut a = 0.0f32;
-            let mut far = [0.0f32; 3];
             if in_range {
-                a = sample(x, y, z);
-                let m = a >= p.grid.level;
-                if x + 1 < p.grid.nx {
-                    far[0] = sample(x + 1, y, z);
-                    if (far[0] >= p.grid.level) != m {
-                        crossing |= 1;
-                    }
+                let m = inside(x, y, z);
+                if x + 1 < p.grid.nx && inside(x + 1, y, z) != m {
+                    crossing |= 1;
                 }
-                if y + 1 < p.grid.ny {
-                    far[1] = sample(x, y + 1, z);
-                    if (far[1] >= p.grid.level) != m {
-                        crossing |= 2;
-                    }
+                if y + 1 < p.grid.ny && inside(x, y + 1, z) != m {
+                    crossing |= 2;
                 }
-                if z + 1 < p.grid.nz {
-                    far[2] = sample(x, y, z + 1);
-                    if (far[2] >= p.grid.level) != m {
-                        crossing |= 4;
-                    }
+                if z + 1 < p.grid.nz && inside(x, y, z + 1) != m {
+                    crossing |= 4;
                 }
             }
             let nv = crossing.count_ones();
@@ -146,20 +165,22 @@ pub fn mc_vertices(
             }
             let base = block_offsets[w as usize] + inclusive - nv;
             vert_base[(layer * n_layer + q) as usize] = base;
-            if layer >= p.n_owned {
+            if layer >= p.n_owned || crossing == 0 {
                 continue;
             }
-            let point = q + n_layer * z;
+            let at = [x, y, z];
+            let a = sample(x, y, z);
             let mut k = base - p.v_start;
-            for axis in 0..3u32 {
-                if crossing & (1 << axis) != 0 {
-                    let t =
-                        ((p.grid.level - a) / (far[axis as usize] - a)).clamp(T_MIN, 1.0 - T_MIN);
-                    let mut u = [x as f32, y as f32, z as f32];
-                    u[axis as usize] += t;
-                    positions[k as usize] = [u[0], u[1], u[2], f32::from_bits(3 * point + axis)];
-                    k += 1;
-                }
+            if crossing & 1 != 0 {
+                write_vertex(positions, k, at, 0, a, sample(x + 1, y, z));
+                k += 1;
+            }
+            if crossing & 2 != 0 {
+                write_vertex(positions, k, at, 1, a, sample(x, y + 1, z));
+                k += 1;
+            }
+            if crossing & 4 != 0 {
+                write_vertex(positions, k, at, 2, a, sample(x, y, z + 1));
             }
         }
     }
@@ -172,28 +193,26 @@ pub fn mc_vertices(
 /// nothing.
 pub fn mc_triangles(
     params: &TrianglesParams,
-    samples: &[u32],
+    bits: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],
     triangles: &mut [[u32; 4]],
 ) {
     let p = params;
-    let inside = |x: u32, y: u32, z: u32| -> u32 {
-        u32::from(grid_sample(&p.grid, samples, x, y, z) >= p.grid.level)
-    };
-    let n_layer = p.grid.nx * p.grid.ny;
+    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
+    let n_layer = p.rows.nx * p.rows.ny;
     // Vertex id of the edge (point o, axis).
     let vertex = |o: [u32; 3], axis: u32| -> u32 {
         let m = inside(o[0], o[1], o[2]);
         let mut rank = 0;
-        if axis > 0 && o[0] + 1 < p.grid.nx && inside(o[0] + 1, o[1], o[2]) != m {
+        if axis > 0 && o[0] + 1 < p.rows.nx && inside(o[0] + 1, o[1], o[2]) != m {
             rank += 1;
         }
-        if axis > 1 && o[1] + 1 < p.grid.ny && inside(o[0], o[1] + 1, o[2]) != m {
+        if axis > 1 && o[1] + 1 < p.rows.ny && inside(o[0], o[1] + 1, o[2]) != m {
             rank += 1;
         }
-        vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.grid.nx + o[0]) as usize] + rank
+        vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.rows.nx + o[0]) as usize] + rank
     };
     let n_blocks = p.n_layers * p.blocks_per_layer;
     for w in 0..n_blocks {
@@ -205,11 +224,11 @@ pub fn mc_triangles(
         let mut inclusive = 0u32;
         for lid in 0..WG_SIZE {
             let q = (w % p.blocks_per_layer) * WG_SIZE + lid;
-            let x = q % p.grid.nx;
-            let y = q / p.grid.nx;
+            let x = q % p.rows.nx;
+            let y = q / p.rows.nx;
             let z = p.z_begin + layer;
             let in_range =
-                layer < p.n_layers && q < n_layer && x + 1 < p.grid.nx && y + 1 < p.grid.ny;
+                layer < p.n_layers && q < n_layer && x + 1 < p.rows.nx && y + 1 < p.rows.ny;
             let mut case_ix = 0u32;
             let mut nt = 0u32;
             if in_range {
@@ -223,7 +242,7 @@ pub fn mc_triangles(
                 continue;
             }
             let out0 = block_offsets[w as usize] + inclusive - nt - p.t_start;
-            let cell = x + (p.grid.nx - 1) * (y + (p.grid.ny - 1) * z);
+            let cell = x + (p.rows.nx - 1) * (y + (p.rows.ny - 1) * z);
             let first = table[case_ix as usize];
             for k in 0..nt {
                 let mut v = [0u32; 3];
@@ -239,9 +258,9 @@ pub fn mc_triangles(
     }
 }
 
-/// The three mirrors chained over the whole grid of `field` in one slab,
-/// as the GPU runs them (classify, host scan, vertices, triangles): the
-/// reference the bit-row CPU path is tested against.
+/// The four mirrors chained over the whole grid of `field` in one slab,
+/// as the GPU runs them (inside flags, classify, host scan, vertices,
+/// triangles): the reference the bit-row CPU path is tested against.
 pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
     let [nx, ny, nz] = field.dims;
     if field.dims.iter().any(|&d| d < 2) {
@@ -250,40 +269,57 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
     let layer = nx * ny;
     let samples = sample_words(field, 0, field.volume().dims[2])?;
     let grid = sample_grid(field, 0);
+    let rows = BitRows::new(field, 0);
     let table = tables::table().flat();
     let bpl = layer.div_ceil(WG_SIZE as usize);
     let nz32 = nz as u32;
+    let mut bits = vec![0u32; rows.words(nz)];
+    let inside = InsideParams {
+        grid,
+        z_begin: 0,
+        n_layers: nz32,
+        row_words: rows.row_words,
+    };
+    mc_inside(&inside, &samples, &mut bits);
     let mut counts = vec![[0u32; 2]; nz * bpl];
     let classify = ClassifyParams {
-        grid,
+        rows,
         z_begin: 0,
         n_layers: nz32,
         blocks_per_layer: bpl as u32,
     };
-    mc_classify(&classify, &samples, &table, &mut counts);
+    mc_classify(&classify, &bits, &table, &mut counts);
     let off_v = exclusive_offsets(counts.iter().map(|c| c[0].into()), "vertices")?;
     let off_t = exclusive_offsets(counts.iter().map(|c| c[1].into()), "triangles")?;
     let mut vert_base = vec![0u32; nz * layer];
     let mut positions = vec![[0.0f32; 4]; off_v[nz * bpl] as usize];
     let vertices = VerticesParams {
         grid,
+        rows,
         z_begin: 0,
         n_layers: nz32,
         n_owned: nz32,
         blocks_per_layer: bpl as u32,
         v_start: 0,
     };
-    mc_vertices(&vertices, &samples, &off_v, &mut vert_base, &mut positions);
+    mc_vertices(
+        &vertices,
+        &samples,
+        &bits,
+        &off_v,
+        &mut vert_base,
+        &mut positions,
+    );
     let mut triangles = vec![[0u32; 4]; off_t[nz * bpl] as usize];
     let cells = TrianglesParams {
-        grid,
+        rows,
         z_begin: 0,
         n_layers: nz32 - 1,
         blocks_per_layer: bpl as u32,
         vb_first: 0,
         t_start: 0,
     };
-    mc_triangles(&cells, &samples, &table, &off_t, &vert_base, &mut triangles);
+    mc_triangles(&cells, &bits, &table, &off_t, &vert_base, &mut triangles);
     Ok(GpuRaw {
         positions,
         triangles,

@@ -5,8 +5,9 @@
 //!  Volume ──Field (f32 layers, labels → 0/1, optional outside padding)──┐
 //!     CPU: cpu::marching_cubes  (points → vertices, cells → triangles,  │
 //!          union-find grouping in the same pass)                        │
-//!     GPU: gpu::marching_cubes  (mc_classify → host scan of block sums → │
-//!          mc_vertices → mc_triangles, in z slabs; grouping on the host)│
+//!     GPU: gpu::marching_cubes  (mc_inside → mc_classify → host scan of  │
+//!          block sums → mc_vertices → mc_triangles, in z slabs;         │
+//!          grouping on the host)                                        │
 //!                               ▼                                        │
 //!  RawSurface (index-space positions, edge ids, triangles, cells, groups)┘
 //!                               ▼ world transform, group figures, Forest
@@ -24,7 +25,7 @@
 //! the same groups and tree.
 //!
 //! Kernel contracts: [`mirror`] holds one plain CPU loop per kernel
-//! (`mc_classify`, `mc_vertices`, `mc_triangles`) that reads beside its
+//! (`mc_inside`, `mc_classify`, `mc_vertices`, `mc_triangles`) that reads beside its
 //! WGSL; each GPU kernel is tested against its mirror on the same inputs,
 //! and the bit-row CPU path ([`cpu`], the fast path) against the mirrors
 //! chained (`tests/parity/mc_*.rs`).

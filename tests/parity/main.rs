@@ -18,6 +18,7 @@ mod exclusive_scan;
 mod hull_scan;
 mod implicit_field;
 mod mc_classify;
+mod mc_inside;
 mod mc_triangles;
 mod mc_vertices;
 mod network_update;

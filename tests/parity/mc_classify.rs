@@ -12,7 +12,7 @@ use crate::common;
 fn mc_classify_matches_its_mirror() {
     let Some(g) = common::gpu() else { return };
     for s in fixtures() {
-        let got = gpu::mc_classify(g, &s.classify, &s.classify_samples, &s.table).unwrap();
+        let got = gpu::mc_classify(g, &s.classify, &s.classify_bits, &s.table).unwrap();
         assert_eq!(find_sentinel(&got, [u32::MAX; 2]), None, "{}", s.what);
         compare_exact(&format!("mc_classify {}", s.what), &s.block_counts, &got)
             .unwrap_or_else(|m| panic!("{m}"));
@@ -24,7 +24,7 @@ fn mc_classify_matches_its_mirror() {
 fn mc_classify_negative_control() {
     let Some(g) = common::gpu() else { return };
     let s = &fixtures()[0];
-    let mut got = gpu::mc_classify(g, &s.classify, &s.classify_samples, &s.table).unwrap();
+    let mut got = gpu::mc_classify(g, &s.classify, &s.classify_bits, &s.table).unwrap();
     let k = got.iter().position(|c| c[1] > 0).unwrap();
     got[k][1] += 1;
     let m = compare_exact("corrupted", &s.block_counts, &got).unwrap_err();

@@ -1,13 +1,13 @@
-//! The inputs of the three marching-cubes kernels, made by their mirrors in
-//! sequence (`mc::mirror`), for the per-kernel parity modules
+//! The inputs of the four marching-cubes kernels, made by their mirrors in
+//! sequence (`mc::mirror`), for the per-kernel parity modules `mc_inside`,
 //! `mc_classify`, `mc_vertices` and `mc_triangles`: each GPU kernel runs on
 //! exactly the inputs its mirror gets, so a divergence names its kernel.
 //! A stage set covers the whole grid, or one emission slab `[a, b)` of
 //! point layers with the offsets and sample window the production path
 //! gives it (`mc::gpu`).
 
-use chisel::mc::gpu::{ClassifyParams, TrianglesParams, VerticesParams};
-use chisel::mc::grid::{inner_layers, sample_grid, sample_words};
+use chisel::mc::gpu::{ClassifyParams, InsideParams, TrianglesParams, VerticesParams};
+use chisel::mc::grid::{BitRows, inner_layers, sample_grid, sample_words};
 use chisel::mc::mirror::{self, WG_SIZE};
 use chisel::mc::{Field, IsoSpec, tables};
 use chisel::parity::Mismatch;
@@ -19,11 +19,17 @@ use crate::common;
 pub struct Stages {
     pub what: String,
     pub table: Vec<u32>,
-    pub classify: ClassifyParams,
+    /// `mc_inside` of the classification (whole grid) and of the emission
+    /// slab, with their samples and flags.
+    pub classify_inside: InsideParams,
     pub classify_samples: Vec<u32>,
+    pub classify_bits: Vec<u32>,
+    pub emit_inside: InsideParams,
+    pub emit_samples: Vec<u32>,
+    pub emit_bits: Vec<u32>,
+    pub classify: ClassifyParams,
     pub block_counts: Vec<[u32; 2]>,
     pub vertices: VerticesParams,
-    pub emit_samples: Vec<u32>,
     pub vertex_offsets: Vec<u32>,
     pub vert_base: Vec<u32>,
     pub positions: Vec<[f32; 4]>,
@@ -45,11 +51,33 @@ fn scan(values: impl Iterator<Item = u32>) -> Vec<u32> {
     out
 }
 
+/// The inside flags of padded layers `z0..z1` from `samples` (words of
+/// `grid`), by the mirror.
+fn inside(
+    field: &Field<'_>,
+    grid: chisel::mc::grid::SampleGrid,
+    samples: &[u32],
+    z0: usize,
+    z1: usize,
+) -> (InsideParams, BitRows, Vec<u32>) {
+    let rows = BitRows::new(field, z0);
+    let params = InsideParams {
+        grid,
+        z_begin: z0 as u32,
+        n_layers: (z1 - z0) as u32,
+        row_words: rows.row_words,
+    };
+    let mut bits = vec![u32::MAX; rows.words(z1 - z0)];
+    mirror::mc_inside(&params, samples, &mut bits);
+    (params, rows, bits)
+}
+
 /// The stages of `vol` at `iso` (border closed or open) for point layers
 /// `[a, b)` of the emission (`None`: the whole grid); classification always
 /// covers the whole grid. Samples are the words the production path
 /// uploads (`mc::grid`): the whole volume, and the slab's window of inner
-/// layers.
+/// layers; the inside flags are those of the classification (whole grid)
+/// and of the emission slab's layers and the two above.
 pub fn stages(
     what: &str,
     vol: &Volume,
@@ -64,14 +92,16 @@ pub fn stages(
     let table = tables::table().flat();
     let bpl = layer.div_ceil(WG_SIZE as usize);
     let nz32 = nz as u32;
+    let (classify_inside, rows, classify_bits) =
+        inside(&field, sample_grid(&field, 0), &samples, 0, nz);
     let classify = ClassifyParams {
-        grid: sample_grid(&field, 0),
+        rows,
         z_begin: 0,
         n_layers: nz32,
         blocks_per_layer: bpl as u32,
     };
     let mut block_counts = vec![[0u32; 2]; nz * bpl];
-    mirror::mc_classify(&classify, &samples, &table, &mut block_counts);
+    mirror::mc_classify(&classify, &classify_bits, &table, &mut block_counts);
     let off_v = scan(block_counts.iter().map(|c| c[0]));
     let off_t = scan(block_counts.iter().map(|c| c[1]));
     let (a, b) = slab.unwrap_or((0, nz));
@@ -80,8 +110,10 @@ pub fn stages(
     let (k0, k1) = inner_layers(&field, a, (b + 2).min(nz));
     let emit_samples = sample_words(&field, k0, k1).unwrap();
     let grid = sample_grid(&field, k0);
+    let (emit_inside, rows, emit_bits) = inside(&field, grid, &emit_samples, a, (b + 2).min(nz));
     let vertices = VerticesParams {
         grid,
+        rows,
         z_begin: a as u32,
         n_layers: vb_layers as u32,
         n_owned: (b - a) as u32,
@@ -94,12 +126,13 @@ pub fn stages(
     mirror::mc_vertices(
         &vertices,
         &emit_samples,
+        &emit_bits,
         &vertex_offsets,
         &mut vert_base,
         &mut positions,
     );
     let triangles_params = TrianglesParams {
-        grid,
+        rows,
         z_begin: a as u32,
         n_layers: cell_layers as u32,
         blocks_per_layer: bpl as u32,
@@ -111,7 +144,7 @@ pub fn stages(
     let mut triangles = vec![[u32::MAX; 4]; n_t as usize];
     mirror::mc_triangles(
         &triangles_params,
-        &emit_samples,
+        &emit_bits,
         &table,
         &triangle_offsets,
         &vert_base,
@@ -124,11 +157,15 @@ pub fn stages(
     Stages {
         what: what.into(),
         table,
-        classify,
+        classify_inside,
         classify_samples: samples,
+        classify_bits,
+        emit_inside,
+        emit_samples,
+        emit_bits,
+        classify,
         block_counts,
         vertices,
-        emit_samples,
         vertex_offsets,
         vert_base,
         positions,

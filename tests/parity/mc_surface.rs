@@ -153,6 +153,18 @@ fn mc_slabs_match_single_pass() {
         "cap must force slabs"
     );
     check(&small, "slabs", &vol, IsoSpec::Level(1000.5), true);
+    // Samples and inside flags resident (made once for both passes), the
+    // emission still in slabs (`vert_base` takes 4 bytes a point).
+    let resident = gpu.view(Some(192 << 10), false);
+    let sample_bytes = total / 2;
+    assert!(sample_bytes <= resident.max_binding_bytes() && total > resident.max_binding_bytes());
+    check(
+        &resident,
+        "resident slabs",
+        &vol,
+        IsoSpec::Level(1000.5),
+        true,
+    );
 }
 
 #[test]

@@ -12,7 +12,7 @@ fn run(g: &chisel::gpu::Gpu, s: &Stages) -> Vec<[u32; 4]> {
     gpu::mc_triangles(
         g,
         &s.triangles_params,
-        &s.emit_samples,
+        &s.emit_bits,
         &s.table,
         &s.triangle_offsets,
         &s.vert_base,

@@ -24,6 +24,7 @@ fn run(g: &Gpu, s: &Stages) -> (Vec<u32>, Vec<[f32; 4]>) {
         g,
         &s.vertices,
         &s.emit_samples,
+        &s.emit_bits,
         &s.vertex_offsets,
         s.positions.len(),
     )

@@ -16,7 +16,8 @@
 //                  must hold layers z_begin ..= z_begin + n_layers (the
 //                  last one clipped at nz − 1)
 //   block_counts:  per block (vertices, triangles), out
-// Inside: sample ≥ level. Mirror: mc::mirror::mc_classify; the host
+// Inside: the point's flag is set (sample ≥ level, by mc_inside).
+// Mirror: mc::mirror::mc_classify; the host
 // scans block_counts (exclusive) for mc_vertices/mc_triangles.
 
 #import dispatch

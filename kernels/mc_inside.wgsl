@@ -1,10 +1,12 @@
 // mc_inside: marching-cubes inside flags — one bit per point of `n_layers`
 // point layers from global layer `z_begin`, 1 where the sample is ≥ level
 // (or equals the label; shared/mc_grid.wgsl decodes it), packed in the bit
-// rows of shared/mc_bits.wgsl. mc_classify, mc_vertices and mc_triangles
-// read these flags instead of decoding the samples of every corner again:
-// each sample is read once here, by consecutive invocations in order, and
-// again only at the ends of crossing edges, by mc_vertices.
+// rows of shared/mc_bits.wgsl (`inside_bits`). mc_classify, mc_vertices
+// and mc_triangles read these flags instead of decoding the samples of
+// every corner again: each sample is decoded once here (a padding point
+// decodes the inner sample it mirrors), 32 consecutive samples an
+// invocation, and again only at the ends of crossing edges, by
+// mc_vertices.
 //
 // Dispatch: one invocation per output word (the 32 flags of one row's
 // points 32j ..< 32j + 32), 2-D grid past the per-dimension limit
@@ -14,7 +16,7 @@
 //   samples:  the volume's samples in their own type, packed in u32 words
 //             (shared/mc_grid.wgsl, params.grid); must hold the inner
 //             layers of layers z_begin ..< z_begin + n_layers
-//   bits:     n_layers · ny · row_words words out, row y + ny · layer
+//   inside_bits: n_layers · ny · row_words words out, row y + ny · layer
 // Mirror: mc::mirror::mc_inside.
 
 #import dispatch
@@ -31,7 +33,7 @@ const WG_SIZE: u32 = 256u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // binding 1: samples (shared/mc_grid.wgsl)
-@group(0) @binding(2) var<storage, read_write> bits: array<u32>;
+@group(0) @binding(2) var<storage, read_write> inside_bits: array<u32>;
 
 @compute @workgroup_size(WG_SIZE)
 fn main(@builtin(local_invocation_id) lid: vec3<u32>,
@@ -51,5 +53,5 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
             flags |= 1u << b;
         }
     }
-    bits[word] = flags;
+    inside_bits[word] = flags;
 }

@@ -10,7 +10,8 @@
 //   params:        bit rows (dims, first layer), slab position, t_start
 //                  (see Params)
 //   table:         257 case offsets, then 3 local edges per triangle
-//   inside_bits:   mc_inside's flags (shared/mc_bits.wgsl, params.rows)
+//   inside_bits:   mc_inside's flags (shared/mc_bits.wgsl, params.rows);
+//                  must hold layers z_begin ..= z_begin + n_layers
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  triangle counts (block w holds the difference of
 //                  entries w + 1 and w)

@@ -13,7 +13,9 @@
 //                  words (shared/mc_grid.wgsl, params.grid), read only at
 //                  the ends of crossing edges
 //   inside_bits:   mc_inside's flags (shared/mc_bits.wgsl, params.rows),
-//                  which find the crossing edges
+//                  which find the crossing edges; must hold layers
+//                  z_begin ..= z_begin + n_layers (the last one clipped at
+//                  nz − 1)
 //   block_offsets: per block and one more, exclusive scan of mc_classify's
 //                  vertex counts over the whole grid (host scan), so block
 //                  w holds block_offsets[w + 1] − block_offsets[w] vertices
@@ -59,12 +61,16 @@ fn sample(x: u32, y: u32, z: u32) -> f32 {
     return grid_sample(params.grid, x, y, z);
 }
 
-// Vertex k − v_start: on the edge (p, axis) whose ends hold samples a, b.
-fn write_vertex(k: u32, p: vec3<u32>, axis: u32, a: f32, b: f32) {
+fn flag(x: u32, y: u32, z: u32) -> u32 {
+    return inside(params.rows, x, y, z);
+}
+
+// Vertex k + v_start: on the edge (at, axis) whose ends hold samples a, b.
+fn write_vertex(k: u32, at: vec3<u32>, axis: u32, a: f32, b: f32) {
     let t = clamp((params.grid.level - a) / (b - a), T_MIN, 1.0 - T_MIN);
-    var u = vec3<f32>(p);
+    var u = vec3<f32>(at);
     u[axis] += t;
-    let point = p.x + params.grid.nx * (p.y + params.grid.ny * p.z);
+    let point = at.x + params.grid.nx * (at.y + params.grid.ny * at.z);
     positions[k] = vec4<f32>(u, bitcast<f32>(3u * point + axis));
 }
 
@@ -91,10 +97,10 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     // `crossing` bit a set for a crossing edge along axis a.
     var crossing = 0u;
     if in_range {
-        let m = inside(params.rows, x, y, z);
-        if x + 1u < params.grid.nx && inside(params.rows, x + 1u, y, z) != m { crossing |= 1u; }
-        if y + 1u < params.grid.ny && inside(params.rows, x, y + 1u, z) != m { crossing |= 2u; }
-        if z + 1u < params.grid.nz && inside(params.rows, x, y, z + 1u) != m { crossing |= 4u; }
+        let m = flag(x, y, z);
+        if x + 1u < params.grid.nx && flag(x + 1u, y, z) != m { crossing |= 1u; }
+        if y + 1u < params.grid.ny && flag(x, y + 1u, z) != m { crossing |= 2u; }
+        if z + 1u < params.grid.nz && flag(x, y, z + 1u) != m { crossing |= 4u; }
     }
     let nv = countOneBits(crossing);
     let inclusive = block_scan(lid.x, nv);
@@ -106,18 +112,18 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     if layer >= params.n_owned || crossing == 0u {
         return;
     }
-    let p = vec3<u32>(x, y, z);
+    let at = vec3<u32>(x, y, z);
     let a = sample(x, y, z);
     var k = base - params.v_start;
     if (crossing & 1u) != 0u {
-        write_vertex(k, p, 0u, a, sample(x + 1u, y, z));
+        write_vertex(k, at, 0u, a, sample(x + 1u, y, z));
         k += 1u;
     }
     if (crossing & 2u) != 0u {
-        write_vertex(k, p, 1u, a, sample(x, y + 1u, z));
+        write_vertex(k, at, 1u, a, sample(x, y + 1u, z));
         k += 1u;
     }
     if (crossing & 4u) != 0u {
-        write_vertex(k, p, 2u, a, sample(x, y, z + 1u));
+        write_vertex(k, at, 2u, a, sample(x, y, z + 1u));
     }
 }

@@ -325,11 +325,8 @@ fn params_sample(kernel: Kernel) -> Sample {
     }
 }
 
-/// `particle_update`'s `Params` with distinct values (floats by their bits).
-/// The marching-cubes kernels' `grid` member with distinct values from
-/// `base << 8`, and its flattened fields (`grid.<name>`).
-/// A `BitRows` with distinct words from `base`, and its flattened fields
-/// (`rows.<field>`).
+/// The marching-cubes kernels' `rows` member (`BitRows`) with distinct
+/// values from `base << 8`, and its flattened fields (`rows.<name>`).
 fn bit_rows_sample(base: u32) -> (mc::grid::BitRows, Vec<(&'static str, u32)>) {
     let v = |k: u32| (base << 8) + k;
     let rows = mc::grid::BitRows {
@@ -355,6 +352,8 @@ fn bit_rows_sample(base: u32) -> (mc::grid::BitRows, Vec<(&'static str, u32)>) {
     (rows, names.into_iter().zip((1..).map(v)).collect())
 }
 
+/// The marching-cubes kernels' `grid` member with distinct values from
+/// `base << 8`, and its flattened fields (`grid.<name>`).
 fn sample_grid_sample(base: u32) -> (mc::grid::SampleGrid, Vec<(&'static str, u32)>) {
     let v = |k: u32| (base << 8) + k;
     let f = |k: u32| f32::from_bits(v(k));
@@ -392,6 +391,7 @@ fn sample_grid_sample(base: u32) -> (mc::grid::SampleGrid, Vec<(&'static str, u3
     )
 }
 
+/// `particle_update`'s `Params` with distinct values (floats by their bits).
 fn particle_params_sample() -> Sample {
     use chisel::particles::wh::UpdateParams;
     let f = |v: u32| f32::from_bits(v);

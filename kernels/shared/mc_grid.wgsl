@@ -1,6 +1,6 @@
-// Shared by mc_classify, mc_vertices and mc_triangles: the samples of the
-// padded marching-cubes grid, read from the volume's own type: `samples`
-// (binding 1 of each kernel) holds the words of the inner layers from
+// Shared by mc_inside and mc_vertices: the samples of the padded
+// marching-cubes grid, read from the volume's own type: `samples`
+// (binding 1 of both kernels) holds the words of the inner layers from
 // grid.z_first — one f32, two 16-bit or four 8-bit samples a word, the
 // first in the low bits. Each kernel passes its `params.grid`. Padding and
 // labels are applied here, not by a conversion pass on the host.

@@ -2,13 +2,14 @@
 //! the block sums → `mc_vertices` → `mc_triangles`, in slabs of z layers.
 //!
 //! Inside flags: `mc_inside` packs the inside flag of every point into bit
-//! rows ([`super::grid::BitRows`]: one read of each sample, one bit kept),
-//! from which the other kernels find cases and crossing edges; only
-//! `mc_vertices` reads samples again, at the two ends of each crossing
-//! edge. With the samples resident (below) the flags of the whole grid are
-//! made once for both passes; otherwise each slab makes its own, a
-//! classify slab for its layers and the one above, an emission slab for
-//! its layers and the two above.
+//! rows, the `inside_bits` ([`super::grid::BitRows`]: one read of each
+//! sample, one bit kept), from which the other kernels find cases and
+//! crossing edges; only `mc_vertices` reads samples again, at the two ends
+//! of each crossing edge. With the samples resident (below) and the flags
+//! of the whole grid within one binding, they are made once for both
+//! passes; otherwise each slab makes its own, a classify slab for its
+//! layers and the one above, an emission slab for its layers and the two
+//! above.
 //!
 //! Scan: each kernel scans its own 256-point block in workgroup memory; the
 //! host scans the per-block sums of the whole grid (one `u32` pair per 256
@@ -22,8 +23,8 @@
 //! `f32` samples) it is uploaded once and stays resident for both passes;
 //! otherwise each slab uploads its own layers. Pass 1 classifies slabs whose
 //! samples fit one binding; pass 2 re-slabs knowing the exact per-layer
-//! vertex and triangle counts, so that samples, `vert_base`, positions and
-//! triangles of a slab each fit one binding. `vert_base` is cleared on the
+//! vertex and triangle counts, so that samples, inside flags, `vert_base`,
+//! positions and triangles of a slab each fit one binding. `vert_base` is cleared on the
 //! device (the vertex pass writes all of it); positions and triangles are
 //! cleared on the device too, and start as sentinels only on a device
 //! opened with sentinels (tests). Output is read back per slab; vertices and triangles come
@@ -95,7 +96,8 @@ pub struct GpuRaw {
     /// #F `[v0, v1, v2, cell]`.
     pub triangles: Vec<[u32; 4]>,
     /// GPU-clock seconds of `mc_inside`, `mc_classify`, `mc_vertices` and
-    /// `mc_triangles`, each over all slabs (`mc_inside` over both passes;
+    /// `mc_triangles`, each summed over its dispatches (`mc_inside` once
+    /// when the samples are resident, else per slab of both passes;
     /// timestamp queries; `None` when the device has none). Excludes
     /// uploads, readbacks and the host scan.
     pub kernel_seconds: Option<[f64; 4]>,
@@ -140,7 +142,7 @@ pub fn assemble(raw: GpuRaw, grouping: bool) -> RawSurface {
     }
 }
 
-/// The three passes. On a device with sentinels on
+/// The passes. On a device with sentinels on
 /// ([`crate::gpu::GpuOptions::sentinels`]) output buffers start as NaN /
 /// `u32::MAX` and any survivor is an error.
 pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
@@ -169,13 +171,15 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
     let sample_layer_bytes = (layer * sample_bytes(field)) as u64;
     let samples_bytes = |n: usize| (n as u64 * sample_layer_bytes).next_multiple_of(4);
     // Bytes of the inside flags of `n` layers.
-    let flag_bytes = |n: usize| BitRows::new(field, 0).words(n) as u64 * 4;
+    let bits_layer_bytes = BitRows::new(field, 0).words(1) as u64 * 4;
+    let bits_bytes = |n: usize| n as u64 * bits_layer_bytes;
     // A classify slab holds its layers plus one above.
-    let classify_layers = (max / sample_layer_bytes.max(flag_bytes(1))).saturating_sub(1) as usize;
+    let classify_layers =
+        (max / sample_layer_bytes.max(bits_layer_bytes)).saturating_sub(1) as usize;
     if classify_layers == 0 {
         return Err(Error::limit(
             "marching cubes: bytes of two sample or inside-flag layers (one storage binding)",
-            samples_bytes(2).max(flag_bytes(2)),
+            samples_bytes(2).max(bits_bytes(2)),
             max,
         ));
     }
@@ -199,27 +203,22 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
 
     // The inside flags of the whole grid, made once for both passes when
     // the samples are resident and the flags fit one binding; else each
-    // slab makes its own.
-    let resident_flags = match &resident {
-        Some(all) if flag_bytes(nz) <= max => {
+    // slab makes its own (`make`), first of its passes.
+    let resident_bits = match &resident {
+        Some(all) if bits_bytes(nz) <= max => {
             let samples = Samples {
                 buffer: all,
                 grid: sample_grid(field, 0),
             };
-            let flags = Flags::new(gpu, field, samples, 0, nz)?;
-            add_time(&[0], flags.make(gpu)?);
-            Some(flags)
+            let bits = InsideBits::new(gpu, field, samples, 0, nz)?;
+            add_time(&[0], bits.make(gpu)?);
+            Some(bits)
         }
         _ => None,
     };
-    // The kernels of a slab's passes: with its own flags or not.
-    let which = |first: &'static [usize], rest: &'static [usize]| {
-        if resident_flags.is_some() {
-            rest
-        } else {
-            first
-        }
-    };
+    let make = resident_bits.is_none();
+    // The kernels timed in a slab's submission: `mc_inside` first if made.
+    let timed = |kernels: &'static [usize]| &kernels[usize::from(!make)..];
 
     // Pass 1: block sums of the whole grid.
     let mut counts: Vec<[u32; 2]> = Vec::with_capacity(nz * bpl);
@@ -229,13 +228,13 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let mut slot = None;
         let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 1).min(nz))?;
         let mut own = None;
-        let flags = match &resident_flags {
-            Some(f) => f,
-            None => own.insert(Flags::new(gpu, field, samples, a, (b + 1).min(nz))?),
+        let bits = match &resident_bits {
+            Some(bits) => bits,
+            None => own.insert(InsideBits::new(gpu, field, samples, a, (b + 1).min(nz))?),
         };
-        let (c, t) = classify(gpu, &table, flags, resident_flags.is_none(), a, b - a, bpl)?;
+        let (c, t) = classify(gpu, &table, bits, make, a, b - a, bpl)?;
         counts.extend(c);
-        add_time(which(&[0, 1], &[1]), t);
+        add_time(timed(&[0, 1]), t);
         a = b;
     }
 
@@ -262,12 +261,12 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
         let vert_base = ((b + 1).min(nz) - a) as u64 * layer_bytes;
         let verts: u64 = layer_v[a..b].iter().sum::<u64>() * 16;
         let tris: u64 = layer_t[a..b.min(nz - 1)].iter().sum::<u64>() * 16;
-        let flags = if resident_flags.is_some() {
-            0
+        let bits = if make {
+            bits_bytes((b + 2).min(nz) - a)
         } else {
-            flag_bytes((b + 2).min(nz) - a)
+            0
         };
-        samples <= max && flags <= max && vert_base <= max && verts <= max && tris <= max
+        samples <= max && bits <= max && vert_base <= max && verts <= max && tris <= max
     };
     let mut a = 0;
     while a < nz {
@@ -290,21 +289,19 @@ pub fn marching_cubes_raw(gpu: &Gpu, field: &Field<'_>) -> Result<GpuRaw> {
             n_v: layer_v[a..b].iter().sum::<u64>() as usize,
             n_t: layer_t[a..b.min(nz - 1)].iter().sum::<u64>() as usize,
         };
+        let mut slot = None;
+        let samples = Samples::get(resident.as_ref(), &mut slot, gpu, field, a, (b + 2).min(nz))?;
+        let mut own = None;
+        let bits = match &resident_bits {
+            Some(bits) => bits,
+            None => own.insert(InsideBits::new(gpu, field, samples, a, (b + 2).min(nz))?),
+        };
         let (p, t, seconds) = emit(
-            gpu,
-            field,
-            resident.as_ref(),
-            resident_flags.as_ref(),
-            &table,
-            dims,
-            bpl,
-            &off_v,
-            &off_t,
-            &slab,
+            gpu, samples, bits, make, &table, dims, bpl, &off_v, &off_t, &slab,
         )?;
         out.positions.extend(p);
         out.triangles.extend(t);
-        add_time(which(&[0, 2, 3], &[2, 3]), seconds);
+        add_time(timed(&[0, 2, 3]), seconds);
         a = b;
     }
     out.kernel_seconds = kernel_seconds;
@@ -355,15 +352,16 @@ struct Slab {
     n_t: usize,
 }
 
-/// The inside flags of padded layers `z0..z1` (`mc_inside`), bound and
-/// ready to record: the output words and the rows that read them.
-struct Flags {
+/// The inside flags of padded layers `z0..z1` (`mc_inside`'s
+/// `inside_bits`), bound and ready to record: the words and the rows that
+/// read them.
+struct InsideBits {
     rows: BitRows,
-    bits: GpuArray<u32>,
+    words: GpuArray<u32>,
     bound: BoundKernel,
 }
 
-impl Flags {
+impl InsideBits {
     fn new(
         gpu: &Gpu,
         field: &Field<'_>,
@@ -383,9 +381,9 @@ impl Flags {
             },
         )?;
         // Every word is written by the kernel.
-        let bits = GpuArray::zeroed(gpu, "mc_inside.bits", rows.words(z1 - z0))?;
-        let bound = bind_inside(gpu, &params, samples.buffer, &bits)?;
-        Ok(Flags { rows, bits, bound })
+        let words = GpuArray::zeroed(gpu, "mc_inside.inside_bits", rows.words(z1 - z0))?;
+        let bound = bind_inside(gpu, &params, samples.buffer, &words)?;
+        Ok(InsideBits { rows, words, bound })
     }
 
     /// Records the `mc_inside` pass (one invocation per word).
@@ -396,7 +394,7 @@ impl Flags {
         timer: Option<(&PassTimer, u32)>,
     ) {
         self.bound
-            .record(gpu, encoder, self.bits.len() as u32, timer);
+            .record(gpu, encoder, self.words.len() as u32, timer);
     }
 
     /// Runs the `mc_inside` pass on its own; its GPU seconds.
@@ -415,14 +413,14 @@ fn upload_layers(gpu: &Gpu, field: &Field<'_>, k0: usize, k1: usize) -> Result<G
     GpuArray::from_slice(gpu, "mc.samples", &sample_words(field, k0, k1)?)
 }
 
-/// The block counts of layers `z_begin..z_begin + n_layers` from `flags`
-/// (made first when `make_flags`), and the GPU seconds of the passes
-/// (`mc_inside` when made, `mc_classify`).
+/// The block counts of layers `z_begin..z_begin + n_layers` from
+/// `inside_bits` (made first when `make`), and the GPU seconds of the
+/// passes (`mc_inside` when made, `mc_classify`).
 fn classify(
     gpu: &Gpu,
     table: &GpuArray<u32>,
-    flags: &Flags,
-    make_flags: bool,
+    inside_bits: &InsideBits,
+    make: bool,
     z_begin: usize,
     n_layers: usize,
     bpl: usize,
@@ -433,20 +431,20 @@ fn classify(
         gpu,
         "mc_classify.params",
         &ClassifyParams {
-            rows: flags.rows,
+            rows: inside_bits.rows,
             z_begin: z_begin as u32,
             n_layers: n_layers as u32,
             blocks_per_layer: bpl as u32,
         },
     )?;
     let counts = GpuArray::output(gpu, "mc_classify.block_counts", n_blocks, [u32::MAX; 2])?;
-    let bound = bind_classify(gpu, &params, table, &flags.bits, &counts)?;
-    let made = u32::from(make_flags);
+    let bound = bind_classify(gpu, &params, table, &inside_bits.words, &counts)?;
+    let made = u32::from(make);
     let timer = gpu.pass_timer(made + 1);
     let mut encoder = gpu.encoder("mc_classify");
     let at = |i| timer.as_ref().map(|t| (t, i));
-    if make_flags {
-        flags.record(gpu, &mut encoder, at(0));
+    if make {
+        inside_bits.record(gpu, &mut encoder, at(0));
     }
     let n_invocations = n_blocks as u32 * bound.wg_size();
     bound.record(gpu, &mut encoder, n_invocations, at(made));
@@ -473,18 +471,20 @@ fn sentinel(kernel: Kernel, index: usize) -> Error {
 type PassSeconds = Option<Vec<f64>>;
 
 /// Positions, triangles and the kernels' GPU seconds of one slab
-/// (`mc_inside` when it made its own flags, `mc_vertices`, `mc_triangles`).
+/// (`mc_inside` when made, `mc_vertices`, `mc_triangles`).
 type SlabOutput = (Vec<[f32; 4]>, Vec<[u32; 4]>, PassSeconds);
 
+/// The vertices and triangles of one emission slab from its samples and
+/// `inside_bits` (made first when `make`).
 #[expect(
     clippy::too_many_arguments,
-    reason = "two passes sharing the slab's buffers"
+    reason = "the passes of one slab sharing its buffers"
 )]
 fn emit(
     gpu: &Gpu,
-    field: &Field<'_>,
-    resident: Option<&GpuArray<u32>>,
-    resident_flags: Option<&Flags>,
+    samples: Samples<'_>,
+    inside_bits: &InsideBits,
+    make: bool,
     table: &GpuArray<u32>,
     dims: [u32; 3],
     bpl: usize,
@@ -496,13 +496,6 @@ fn emit(
     let (a, b) = (slab.a, slab.b);
     let vb_layers = (b + 1).min(nz) - a;
     let cell_layers = b.min(nz - 1).saturating_sub(a);
-    let mut slot = None;
-    let samples = Samples::get(resident, &mut slot, gpu, field, a, (b + 2).min(nz))?;
-    let mut own = None;
-    let flags = match resident_flags {
-        Some(f) => f,
-        None => own.insert(Flags::new(gpu, field, samples, a, (b + 2).min(nz))?),
-    };
     let layer = (dims[0] * dims[1]) as usize;
     // Each slab's offsets and the next one (the kernels take a block's
     // count as the difference).
@@ -524,7 +517,7 @@ fn emit(
         "mc_vertices.params",
         &VerticesParams {
             grid: samples.grid,
-            rows: flags.rows,
+            rows: inside_bits.rows,
             z_begin: a as u32,
             n_layers: vb_layers as u32,
             n_owned: (b - a) as u32,
@@ -536,7 +529,7 @@ fn emit(
         gpu,
         "mc_triangles.params",
         &TrianglesParams {
-            rows: flags.rows,
+            rows: inside_bits.rows,
             z_begin: a as u32,
             n_layers: cell_layers as u32,
             blocks_per_layer: bpl as u32,
@@ -550,7 +543,7 @@ fn emit(
         gpu,
         &vparams,
         samples.buffer,
-        &flags.bits,
+        &inside_bits.words,
         &offsets_v,
         &vert_base,
         &positions,
@@ -559,17 +552,17 @@ fn emit(
         gpu,
         &tparams,
         table,
-        &flags.bits,
+        &inside_bits.words,
         &offsets_t,
         &vert_base,
         &triangles,
     )?;
-    let made = u32::from(resident_flags.is_none());
+    let made = u32::from(make);
     let timer = gpu.pass_timer(made + 2);
     let mut encoder = gpu.encoder("mc_emit");
     let at = |i| timer.as_ref().map(|t| (t, i));
-    if resident_flags.is_none() {
-        flags.record(gpu, &mut encoder, at(0));
+    if make {
+        inside_bits.record(gpu, &mut encoder, at(0));
     }
     let n_v = (vb_layers * bpl) as u32 * vbound.wg_size();
     vbound.record(gpu, &mut encoder, n_v, at(made));
@@ -596,12 +589,12 @@ fn bind_inside(
     gpu: &Gpu,
     params: &UniformBuffer<InsideParams>,
     samples: &GpuArray<u32>,
-    bits: &GpuArray<u32>,
+    inside_bits: &GpuArray<u32>,
 ) -> Result<BoundKernel> {
     (gpu.kernel(Kernel::McInside)?)
         .uniform(params)
         .read(samples)
-        .write(bits)
+        .write(inside_bits)
         .bind()
 }
 
@@ -609,13 +602,13 @@ fn bind_classify(
     gpu: &Gpu,
     params: &UniformBuffer<ClassifyParams>,
     table: &GpuArray<u32>,
-    bits: &GpuArray<u32>,
+    inside_bits: &GpuArray<u32>,
     block_counts: &GpuArray<[u32; 2]>,
 ) -> Result<BoundKernel> {
     (gpu.kernel(Kernel::McClassify)?)
         .uniform(params)
         .read(table)
-        .read(bits)
+        .read(inside_bits)
         .write(block_counts)
         .bind()
 }
@@ -624,7 +617,7 @@ fn bind_vertices(
     gpu: &Gpu,
     params: &UniformBuffer<VerticesParams>,
     samples: &GpuArray<u32>,
-    bits: &GpuArray<u32>,
+    inside_bits: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
     positions: &GpuArray<[f32; 4]>,
@@ -632,7 +625,7 @@ fn bind_vertices(
     (gpu.kernel(Kernel::McVertices)?)
         .uniform(params)
         .read(samples)
-        .read(bits)
+        .read(inside_bits)
         .read(block_offsets)
         .write(vert_base)
         .write(positions)
@@ -643,7 +636,7 @@ fn bind_triangles(
     gpu: &Gpu,
     params: &UniformBuffer<TrianglesParams>,
     table: &GpuArray<u32>,
-    bits: &GpuArray<u32>,
+    inside_bits: &GpuArray<u32>,
     block_offsets: &GpuArray<u32>,
     vert_base: &GpuArray<u32>,
     triangles: &GpuArray<[u32; 4]>,
@@ -651,7 +644,7 @@ fn bind_triangles(
     (gpu.kernel(Kernel::McTriangles)?)
         .uniform(params)
         .read(table)
-        .read(bits)
+        .read(inside_bits)
         .read(block_offsets)
         .read(vert_base)
         .write(triangles)
@@ -676,14 +669,14 @@ fn run_blocks<T: bytemuck::Pod>(
 /// `params.n_layers` layers of bit rows.
 pub fn mc_inside(gpu: &Gpu, params: &InsideParams, samples: &[u32]) -> Result<Vec<u32>> {
     let n_words = (params.n_layers * params.grid.ny * params.row_words) as usize;
-    let bits = GpuArray::output(gpu, "mc_inside.bits", n_words, u32::MAX)?;
+    let inside_bits = GpuArray::output(gpu, "mc_inside.inside_bits", n_words, u32::MAX)?;
     let uniform = UniformBuffer::new(gpu, "mc_inside.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_inside.samples", samples)?;
-    let bound = bind_inside(gpu, &uniform, &samples, &bits)?;
+    let bound = bind_inside(gpu, &uniform, &samples, &inside_bits)?;
     let mut encoder = gpu.encoder(bound.kernel().name());
     bound.record(gpu, &mut encoder, n_words as u32, None);
     gpu.submit_and_wait(encoder)?;
-    bits.read(gpu)
+    inside_bits.read(gpu)
 }
 
 /// One `mc_classify` dispatch on explicit inputs, as
@@ -692,7 +685,7 @@ pub fn mc_inside(gpu: &Gpu, params: &InsideParams, samples: &[u32]) -> Result<Ve
 pub fn mc_classify(
     gpu: &Gpu,
     params: &ClassifyParams,
-    bits: &[u32],
+    inside_bits: &[u32],
     table: &[u32],
 ) -> Result<Vec<[u32; 2]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
@@ -703,9 +696,9 @@ pub fn mc_classify(
         [u32::MAX; 2],
     )?;
     let uniform = UniformBuffer::new(gpu, "mc_classify.params", params)?;
-    let bits = GpuArray::from_slice(gpu, "mc_classify.bits", bits)?;
+    let inside_bits = GpuArray::from_slice(gpu, "mc_classify.inside_bits", inside_bits)?;
     let table = GpuArray::from_slice(gpu, "mc_classify.table", table)?;
-    let bound = bind_classify(gpu, &uniform, &table, &bits, &counts)?;
+    let bound = bind_classify(gpu, &uniform, &table, &inside_bits, &counts)?;
     run_blocks(gpu, &bound, n_blocks, &counts)
 }
 
@@ -717,7 +710,7 @@ pub fn mc_vertices(
     gpu: &Gpu,
     params: &VerticesParams,
     samples: &[u32],
-    bits: &[u32],
+    inside_bits: &[u32],
     block_offsets: &[u32],
     n_vertices: usize,
 ) -> Result<(Vec<u32>, Vec<[f32; 4]>)> {
@@ -725,7 +718,7 @@ pub fn mc_vertices(
     let layer = (params.grid.nx * params.grid.ny) as usize;
     let uniform = UniformBuffer::new(gpu, "mc_vertices.params", params)?;
     let samples = GpuArray::from_slice(gpu, "mc_vertices.samples", samples)?;
-    let bits = GpuArray::from_slice(gpu, "mc_vertices.bits", bits)?;
+    let inside_bits = GpuArray::from_slice(gpu, "mc_vertices.inside_bits", inside_bits)?;
     let offsets = GpuArray::from_slice(gpu, "mc_vertices.block_offsets", block_offsets)?;
     let vert_base = GpuArray::zeroed(
         gpu,
@@ -734,7 +727,13 @@ pub fn mc_vertices(
     )?;
     let positions = GpuArray::output(gpu, "mc_vertices.positions", n_vertices, [f32::NAN; 4])?;
     let bound = bind_vertices(
-        gpu, &uniform, &samples, &bits, &offsets, &vert_base, &positions,
+        gpu,
+        &uniform,
+        &samples,
+        &inside_bits,
+        &offsets,
+        &vert_base,
+        &positions,
     )?;
     let positions = run_blocks(gpu, &bound, n_blocks, &positions)?;
     Ok((vert_base.read(gpu)?, positions))
@@ -745,7 +744,7 @@ pub fn mc_vertices(
 pub fn mc_triangles(
     gpu: &Gpu,
     params: &TrianglesParams,
-    bits: &[u32],
+    inside_bits: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],
@@ -753,13 +752,19 @@ pub fn mc_triangles(
 ) -> Result<Vec<[u32; 4]>> {
     let n_blocks = params.n_layers * params.blocks_per_layer;
     let uniform = UniformBuffer::new(gpu, "mc_triangles.params", params)?;
-    let bits = GpuArray::from_slice(gpu, "mc_triangles.bits", bits)?;
+    let inside_bits = GpuArray::from_slice(gpu, "mc_triangles.inside_bits", inside_bits)?;
     let table = GpuArray::from_slice(gpu, "mc_triangles.table", table)?;
     let offsets = GpuArray::from_slice(gpu, "mc_triangles.block_offsets", block_offsets)?;
     let vert_base = GpuArray::from_slice(gpu, "mc_triangles.vert_base", vert_base)?;
     let triangles = GpuArray::output(gpu, "mc_triangles.triangles", n_triangles, [u32::MAX; 4])?;
     let bound = bind_triangles(
-        gpu, &uniform, &table, &bits, &offsets, &vert_base, &triangles,
+        gpu,
+        &uniform,
+        &table,
+        &inside_bits,
+        &offsets,
+        &vert_base,
+        &triangles,
     )?;
     run_blocks(gpu, &bound, n_blocks, &triangles)
 }

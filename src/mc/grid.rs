@@ -55,7 +55,7 @@ impl SampleKind {
     }
 }
 
-/// The `grid` member of the three kernels' parameters: the padded grid,
+/// The `grid` member of `mc_inside`'s and `mc_vertices`' parameters: the padded grid,
 /// which inner layers the `samples` words hold, and how to decode them.
 /// 48 bytes (two unused words), so that it is laid out alike as the first
 /// member of a uniform struct in WGSL and by encase.

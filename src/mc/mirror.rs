@@ -1,17 +1,17 @@
 //! The marching-cubes kernels' mirrors: plain CPU loops over the same
 //! workgroups and invocations as `kernels/mc_inside.wgsl`,
 //! `kernels/mc_classify.wgsl`, `kernels/mc_vertices.wgsl` and
-//! `kernels/mc_triangles.wgsl`, with the same
-//! names, buffers and f32 expressions, one function per kernel. They read
-//! beside their WGSL; the production CPU path is the bit-row
+//! `kernels/mc_triangles.wgsl`, with the same names, buffers and f32
+//! expressions, one function per kernel. They read beside their WGSL; the production CPU path is the bit-row
 //! implementation in [`super::cpu`], tested equal to these mirrors chained
 //! (`tests/mc.rs`), and each GPU kernel is tested against its mirror
 //! on the same inputs (`tests/parity/mc_*.rs`), so a divergence names its
 //! kernel.
 //!
 //! Tolerances ([`TOL_POSITION_ULPS`]): inside flags, block counts, vertex
-//! ids, edge ids and triangles are integers and compare exactly; positions are bit for bit on
-//! adapters with correctly rounded division (lavapipe), else within
+//! ids, edge ids and triangles are integers and compare exactly; positions
+//! are bit for bit on adapters with correctly rounded division (lavapipe),
+//! else within
 //! WGSL's 2.5-ulp division bound carried through `f32(p) + t`.
 
 use super::cpu::T_MIN;
@@ -36,9 +36,9 @@ pub const TOL_POSITION_ULPS: u32 = 3;
 const EDGE_OWNER: [u32; 12] = [0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3];
 
 /// `mc_inside`: the inside flag of every point of `n_layers` layers from
-/// `z_begin`, as bit rows ([`BitRows`]): `bits` holds `n_layers · ny ·
+/// `z_begin`, as bit rows ([`BitRows`]): `inside_bits` holds `n_layers · ny ·
 /// row_words` words, one invocation each.
-pub fn mc_inside(params: &InsideParams, samples: &[u32], bits: &mut [u32]) {
+pub fn mc_inside(params: &InsideParams, samples: &[u32], inside_bits: &mut [u32]) {
     let p = params;
     let n_words = p.n_layers * p.grid.ny * p.row_words;
     for word in 0..n_words {
@@ -52,7 +52,7 @@ pub fn mc_inside(params: &InsideParams, samples: &[u32], bits: &mut [u32]) {
                 flags |= 1 << b;
             }
         }
-        bits[word as usize] = flags;
+        inside_bits[word as usize] = flags;
     }
 }
 
@@ -60,12 +60,12 @@ pub fn mc_inside(params: &InsideParams, samples: &[u32], bits: &mut [u32]) {
 /// `block_counts` holds `n_layers · blocks_per_layer` entries.
 pub fn mc_classify(
     params: &ClassifyParams,
-    bits: &[u32],
+    inside_bits: &[u32],
     table: &[u32],
     block_counts: &mut [[u32; 2]],
 ) {
     let p = params;
-    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
+    let flag = |x: u32, y: u32, z: u32| inside_bit(&p.rows, inside_bits, x, y, z);
     let n_layer = p.rows.nx * p.rows.ny;
     for w in 0..block_counts.len() as u32 {
         let layer = w / p.blocks_per_layer;
@@ -78,20 +78,20 @@ pub fn mc_classify(
                 let x = q % p.rows.nx;
                 let y = q / p.rows.nx;
                 let z = p.z_begin + layer;
-                let m = inside(x, y, z);
-                if x + 1 < p.rows.nx && inside(x + 1, y, z) != m {
+                let m = flag(x, y, z);
+                if x + 1 < p.rows.nx && flag(x + 1, y, z) != m {
                     nv += 1;
                 }
-                if y + 1 < p.rows.ny && inside(x, y + 1, z) != m {
+                if y + 1 < p.rows.ny && flag(x, y + 1, z) != m {
                     nv += 1;
                 }
-                if z + 1 < p.rows.nz && inside(x, y, z + 1) != m {
+                if z + 1 < p.rows.nz && flag(x, y, z + 1) != m {
                     nv += 1;
                 }
                 if x + 1 < p.rows.nx && y + 1 < p.rows.ny && z + 1 < p.rows.nz {
                     let mut case_ix = 0u32;
                     for c in 0..8u32 {
-                        case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
+                        case_ix |= flag(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
                     }
                     nt = table[case_ix as usize + 1] - table[case_ix as usize];
                 }
@@ -113,21 +113,21 @@ pub fn mc_classify(
 pub fn mc_vertices(
     params: &VerticesParams,
     samples: &[u32],
-    bits: &[u32],
+    inside_bits: &[u32],
     block_offsets: &[u32],
     vert_base: &mut [u32],
     positions: &mut [[f32; 4]],
 ) {
     let p = params;
     let sample = |x: u32, y: u32, z: u32| grid_sample(&p.grid, samples, x, y, z);
-    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
-    // Vertex k (− v_start): on the edge (p, axis) whose ends hold samples a, b.
+    let flag = |x: u32, y: u32, z: u32| inside_bit(&p.rows, inside_bits, x, y, z);
+    // Vertex k + v_start: on the edge (at, axis) whose ends hold samples a, b.
     let write_vertex =
-        |positions: &mut [[f32; 4]], k: u32, q: [u32; 3], axis: usize, a: f32, b: f32| {
+        |positions: &mut [[f32; 4]], k: u32, at: [u32; 3], axis: usize, a: f32, b: f32| {
             let t = ((p.grid.level - a) / (b - a)).clamp(T_MIN, 1.0 - T_MIN);
-            let mut u = q.map(|c| c as f32);
+            let mut u = at.map(|c| c as f32);
             u[axis] += t;
-            let point = q[0] + p.grid.nx * (q[1] + p.grid.ny * q[2]);
+            let point = at[0] + p.grid.nx * (at[1] + p.grid.ny * at[2]);
             positions[k as usize] = [u[0], u[1], u[2], f32::from_bits(3 * point + axis as u32)];
         };
     let n_layer = p.grid.nx * p.grid.ny;
@@ -147,14 +147,14 @@ pub fn mc_vertices(
             let z = p.z_begin + layer;
             let mut crossing = 0u32;
             if in_range {
-                let m = inside(x, y, z);
-                if x + 1 < p.grid.nx && inside(x + 1, y, z) != m {
+                let m = flag(x, y, z);
+                if x + 1 < p.grid.nx && flag(x + 1, y, z) != m {
                     crossing |= 1;
                 }
-                if y + 1 < p.grid.ny && inside(x, y + 1, z) != m {
+                if y + 1 < p.grid.ny && flag(x, y + 1, z) != m {
                     crossing |= 2;
                 }
-                if z + 1 < p.grid.nz && inside(x, y, z + 1) != m {
+                if z + 1 < p.grid.nz && flag(x, y, z + 1) != m {
                     crossing |= 4;
                 }
             }
@@ -193,23 +193,23 @@ pub fn mc_vertices(
 /// nothing.
 pub fn mc_triangles(
     params: &TrianglesParams,
-    bits: &[u32],
+    inside_bits: &[u32],
     table: &[u32],
     block_offsets: &[u32],
     vert_base: &[u32],
     triangles: &mut [[u32; 4]],
 ) {
     let p = params;
-    let inside = |x: u32, y: u32, z: u32| inside_bit(&p.rows, bits, x, y, z);
+    let flag = |x: u32, y: u32, z: u32| inside_bit(&p.rows, inside_bits, x, y, z);
     let n_layer = p.rows.nx * p.rows.ny;
     // Vertex id of the edge (point o, axis).
     let vertex = |o: [u32; 3], axis: u32| -> u32 {
-        let m = inside(o[0], o[1], o[2]);
+        let m = flag(o[0], o[1], o[2]);
         let mut rank = 0;
-        if axis > 0 && o[0] + 1 < p.rows.nx && inside(o[0] + 1, o[1], o[2]) != m {
+        if axis > 0 && o[0] + 1 < p.rows.nx && flag(o[0] + 1, o[1], o[2]) != m {
             rank += 1;
         }
-        if axis > 1 && o[1] + 1 < p.rows.ny && inside(o[0], o[1] + 1, o[2]) != m {
+        if axis > 1 && o[1] + 1 < p.rows.ny && flag(o[0], o[1] + 1, o[2]) != m {
             rank += 1;
         }
         vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.rows.nx + o[0]) as usize] + rank
@@ -233,7 +233,7 @@ pub fn mc_triangles(
             let mut nt = 0u32;
             if in_range {
                 for c in 0..8u32 {
-                    case_ix |= inside(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
+                    case_ix |= flag(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
                 }
                 nt = table[case_ix as usize + 1] - table[case_ix as usize];
             }
@@ -273,14 +273,14 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
     let table = tables::table().flat();
     let bpl = layer.div_ceil(WG_SIZE as usize);
     let nz32 = nz as u32;
-    let mut bits = vec![0u32; rows.words(nz)];
+    let mut inside_bits = vec![0u32; rows.words(nz)];
     let inside = InsideParams {
         grid,
         z_begin: 0,
         n_layers: nz32,
         row_words: rows.row_words,
     };
-    mc_inside(&inside, &samples, &mut bits);
+    mc_inside(&inside, &samples, &mut inside_bits);
     let mut counts = vec![[0u32; 2]; nz * bpl];
     let classify = ClassifyParams {
         rows,
@@ -288,7 +288,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
         n_layers: nz32,
         blocks_per_layer: bpl as u32,
     };
-    mc_classify(&classify, &bits, &table, &mut counts);
+    mc_classify(&classify, &inside_bits, &table, &mut counts);
     let off_v = exclusive_offsets(counts.iter().map(|c| c[0].into()), "vertices")?;
     let off_t = exclusive_offsets(counts.iter().map(|c| c[1].into()), "triangles")?;
     let mut vert_base = vec![0u32; nz * layer];
@@ -305,7 +305,7 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
     mc_vertices(
         &vertices,
         &samples,
-        &bits,
+        &inside_bits,
         &off_v,
         &mut vert_base,
         &mut positions,
@@ -319,7 +319,14 @@ pub fn marching_cubes(field: &Field<'_>) -> Result<GpuRaw> {
         vb_first: 0,
         t_start: 0,
     };
-    mc_triangles(&cells, &bits, &table, &off_t, &vert_base, &mut triangles);
+    mc_triangles(
+        &cells,
+        &inside_bits,
+        &table,
+        &off_t,
+        &vert_base,
+        &mut triangles,
+    );
     Ok(GpuRaw {
         positions,
         triangles,

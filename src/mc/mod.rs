@@ -25,8 +25,8 @@
 //! the same groups and tree.
 //!
 //! Kernel contracts: [`mirror`] holds one plain CPU loop per kernel
-//! (`mc_inside`, `mc_classify`, `mc_vertices`, `mc_triangles`) that reads beside its
-//! WGSL; each GPU kernel is tested against its mirror on the same inputs,
+//! (`mc_inside`, `mc_classify`, `mc_vertices`, `mc_triangles`) that reads
+//! beside its WGSL; each GPU kernel is tested against its mirror on the same inputs,
 //! and the bit-row CPU path ([`cpu`], the fast path) against the mirrors
 //! chained (`tests/parity/mc_*.rs`).
 

@@ -201,7 +201,8 @@ fn retyped(vol: &Volume, f: impl Fn(&[i16]) -> VolumeData) -> Volume {
 /// The fixtures every kernel module runs: random volumes (levels between
 /// and on the samples) in i16, and as u16, i8, f32 (each uploaded in its
 /// own type) and f64 (converted to f32 on the host), with the border
-/// closed and open; label volumes (u8 in its own type, i32 converted); an
+/// closed and open; rows of 64 and 66 points (whole and partial flag
+/// words); label volumes (u8 in its own type, i32 converted); an
 /// emission slab in the middle of the grid (closed and open); and the real
 /// CT (headsq at the skin and bone levels).
 pub fn fixtures() -> Vec<Stages> {
@@ -251,6 +252,13 @@ pub fn fixtures() -> Vec<Stages> {
         false,
         None,
     ));
+    // Rows of whole flag words (64 points open: two words) and of a
+    // partial last word (66 closed: three words, two bits in the last).
+    let vol = random_volume(6, [64, 9, 7]);
+    for close in [true, false] {
+        let what = format!("64 wide closed {close}");
+        out.push(stages(&what, &vol, IsoSpec::Level(1000.5), close, None));
+    }
     let vol = random_volume(5, [40, 30, 24]);
     for close in [true, false] {
         out.push(stages(

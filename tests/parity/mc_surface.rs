@@ -1,5 +1,5 @@
-//! Parity of marching cubes (`mc_classify`, `mc_vertices`, `mc_triangles`)
-//! against the CPU mirror `mc::cpu`.
+//! Parity of marching cubes (`mc_inside`, `mc_classify`, `mc_vertices`,
+//! `mc_triangles`) end to end against the CPU path `mc::cpu`.
 //!
 //! Both sides compute `t = clamp((level − a) / (b − a), T_MIN, 1 − T_MIN)`
 //! and `u[axis] = f32(p[axis]) + t` with the same f32 operations (one
@@ -139,7 +139,9 @@ fn mc_labels() {
 }
 
 /// A binding cap of 64 KiB forces many classify slabs and one-or-two-layer
-/// emission slabs (the triangles of one layer take most of a binding).
+/// emission slabs (the triangles of one layer take most of a binding), each
+/// making its own inside flags; a cap of 192 KiB keeps the samples and the
+/// whole grid's flags resident while the emission still runs in slabs.
 #[test]
 fn mc_slabs_match_single_pass() {
     let Some(gpu) = common::gpu() else { return };

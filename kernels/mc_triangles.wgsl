@@ -48,18 +48,23 @@ const WG_SIZE: u32 = SCAN_WG;
 // The block's count (from block_offsets), read by all as a uniform value.
 var<workgroup> sh_count: u32;
 
-fn flag(x: u32, y: u32, z: u32) -> u32 {
-    return inside(params.rows, x, y, z);
+// The flag of point (x + dx, y + dy, z + dz) from the cell's
+// neighbourhood `near`: bit dx + 3·(dy + 3·dz), dx, dy ≤ 2, dz ≤ 1 (five
+// rows of three flags, inside_run; row y + 2 only in layer z, where the
+// owners of z edges, the only ones that look past the cell's rows, lie).
+fn flag(near: u32, dx: u32, dy: u32, dz: u32) -> u32 {
+    return (near >> (dx + 3u * (dy + 3u * dz))) & 1u;
 }
 
-// Vertex id of the edge (point o, axis).
-fn vertex(o: vec3<u32>, axis: u32) -> u32 {
-    let m = flag(o.x, o.y, o.z);
+// Vertex id of the edge (owner corner d of cell (x, y, z), axis).
+fn vertex(near: u32, x: u32, y: u32, z: u32, d: vec3<u32>, axis: u32) -> u32 {
+    let o = vec3<u32>(x, y, z) + d;
+    let m = flag(near, d.x, d.y, d.z);
     var rank = 0u;
-    if axis > 0u && o.x + 1u < params.rows.nx && flag(o.x + 1u, o.y, o.z) != m {
+    if axis > 0u && o.x + 1u < params.rows.nx && flag(near, d.x + 1u, d.y, d.z) != m {
         rank += 1u;
     }
-    if axis > 1u && o.y + 1u < params.rows.ny && flag(o.x, o.y + 1u, o.z) != m {
+    if axis > 1u && o.y + 1u < params.rows.ny && flag(near, d.x, d.y + 1u, d.z) != m {
         rank += 1u;
     }
     let n_layer = params.rows.nx * params.rows.ny;
@@ -87,11 +92,15 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     let z = params.z_begin + layer;
     let in_range = layer < params.n_layers && q < n_layer
         && x + 1u < params.rows.nx && y + 1u < params.rows.ny;
+    var near = 0u;
     var case_ix = 0u;
     var nt = 0u;
     if in_range {
+        let r = params.rows;
+        near = inside_run(r, x, y, z) | (inside_run(r, x, y + 1u, z) << 3u)
+            | (inside_run(r, x, y, z + 1u) << 9u) | (inside_run(r, x, y + 1u, z + 1u) << 12u);
         for (var c = 0u; c < 8u; c++) {
-            case_ix |= flag(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u)) << c;
+            case_ix |= flag(near, c & 1u, (c >> 1u) & 1u, c >> 2u) << c;
         }
         nt = table[case_ix + 1u] - table[case_ix];
     }
@@ -99,6 +108,7 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
     if nt == 0u {
         return;
     }
+    near |= inside_run(params.rows, x, y + 2u, z) << 6u;
     let out0 = block_offsets[w] + inclusive - nt - params.t_start;
     let cell = x + (params.rows.nx - 1u) * (y + (params.rows.ny - 1u) * z);
     let first = table[case_ix];
@@ -107,8 +117,8 @@ fn main(@builtin(local_invocation_id) lid: vec3<u32>,
         for (var j = 0u; j < 3u; j++) {
             let e = table[257u + 3u * (first + k) + j];
             let c = edge_owner[e];
-            let o = vec3<u32>(x + (c & 1u), y + ((c >> 1u) & 1u), z + (c >> 2u));
-            v[j] = vertex(o, e / 4u);
+            let d = vec3<u32>(c & 1u, (c >> 1u) & 1u, c >> 2u);
+            v[j] = vertex(near, x, y, z, d, e / 4u);
         }
         triangles[out0 + k] = vec4<u32>(v, cell);
     }

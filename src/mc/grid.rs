@@ -15,8 +15,8 @@
 //!
 //! The inside flags of the points, one bit each in [`BitRows`] (written by
 //! `mc_inside`), are what `mc_classify`, `mc_vertices` and `mc_triangles`
-//! read to find cases and crossing edges; [`inside_bit`] is the mirror of
-//! `kernels/shared/mc_bits.wgsl`.
+//! read to find cases and crossing edges; [`inside_bit`] and
+//! [`inside_run`] are the mirrors of `kernels/shared/mc_bits.wgsl`.
 
 use rayon::prelude::*;
 
@@ -169,6 +169,22 @@ impl BitRows {
 pub fn inside_bit(r: &BitRows, bits: &[u32], x: u32, y: u32, z: u32) -> u32 {
     let word = bits[((y + r.ny * (z - r.z_first)) * r.row_words + (x >> 5)) as usize];
     (word >> (x & 31)) & 1
+}
+
+/// `inside_run` of `kernels/shared/mc_bits.wgsl`: the inside flags of
+/// points `x`, `x + 1`, `x + 2` of row `(y, z)` as bits 0–2 (one or two word
+/// reads); 0 past the row's end and for a row past the grid.
+pub fn inside_run(r: &BitRows, bits: &[u32], x: u32, y: u32, z: u32) -> u32 {
+    if y >= r.ny || z >= r.nz {
+        return 0;
+    }
+    let at = ((y + r.ny * (z - r.z_first)) * r.row_words + (x >> 5)) as usize;
+    let s = x & 31;
+    let mut run = bits[at] >> s;
+    if s > 29 && (x >> 5) + 1 < r.row_words {
+        run |= bits[at + 1] << (32 - s);
+    }
+    run & 7
 }
 
 /// Bytes one sample takes in the words (for binding-size limits).

@@ -18,7 +18,7 @@ use super::cpu::T_MIN;
 use super::exclusive_offsets;
 use super::field::Field;
 use super::gpu::{ClassifyParams, GpuRaw, InsideParams, TrianglesParams, VerticesParams};
-use super::grid::{BitRows, grid_sample, inside_bit, sample_grid, sample_words};
+use super::grid::{BitRows, grid_sample, inside_bit, inside_run, sample_grid, sample_words};
 use super::tables;
 use crate::Result;
 
@@ -200,16 +200,20 @@ pub fn mc_triangles(
     triangles: &mut [[u32; 4]],
 ) {
     let p = params;
-    let flag = |x: u32, y: u32, z: u32| inside_bit(&p.rows, inside_bits, x, y, z);
+    let run = |x: u32, y: u32, z: u32| inside_run(&p.rows, inside_bits, x, y, z);
+    // The flag of point (x + dx, y + dy, z + dz) from the neighbourhood
+    // `near`: bit dx + 3·(dy + 3·dz).
+    let flag = |near: u32, dx: u32, dy: u32, dz: u32| (near >> (dx + 3 * (dy + 3 * dz))) & 1;
     let n_layer = p.rows.nx * p.rows.ny;
-    // Vertex id of the edge (point o, axis).
-    let vertex = |o: [u32; 3], axis: u32| -> u32 {
-        let m = flag(o[0], o[1], o[2]);
+    // Vertex id of the edge (owner corner d of cell (x, y, z), axis).
+    let vertex = |near: u32, x: u32, y: u32, z: u32, d: [u32; 3], axis: u32| -> u32 {
+        let o = [x + d[0], y + d[1], z + d[2]];
+        let m = flag(near, d[0], d[1], d[2]);
         let mut rank = 0;
-        if axis > 0 && o[0] + 1 < p.rows.nx && flag(o[0] + 1, o[1], o[2]) != m {
+        if axis > 0 && o[0] + 1 < p.rows.nx && flag(near, d[0] + 1, d[1], d[2]) != m {
             rank += 1;
         }
-        if axis > 1 && o[1] + 1 < p.rows.ny && flag(o[0], o[1] + 1, o[2]) != m {
+        if axis > 1 && o[1] + 1 < p.rows.ny && flag(near, d[0], d[1] + 1, d[2]) != m {
             rank += 1;
         }
         vert_base[((o[2] - p.vb_first) * n_layer + o[1] * p.rows.nx + o[0]) as usize] + rank
@@ -229,11 +233,16 @@ pub fn mc_triangles(
             let z = p.z_begin + layer;
             let in_range =
                 layer < p.n_layers && q < n_layer && x + 1 < p.rows.nx && y + 1 < p.rows.ny;
+            let mut near = 0u32;
             let mut case_ix = 0u32;
             let mut nt = 0u32;
             if in_range {
+                near = run(x, y, z)
+                    | run(x, y + 1, z) << 3
+                    | run(x, y, z + 1) << 9
+                    | run(x, y + 1, z + 1) << 12;
                 for c in 0..8u32 {
-                    case_ix |= flag(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)) << c;
+                    case_ix |= flag(near, c & 1, (c >> 1) & 1, c >> 2) << c;
                 }
                 nt = table[case_ix as usize + 1] - table[case_ix as usize];
             }
@@ -241,6 +250,7 @@ pub fn mc_triangles(
             if nt == 0 {
                 continue;
             }
+            near |= run(x, y + 2, z) << 6;
             let out0 = block_offsets[w as usize] + inclusive - nt - p.t_start;
             let cell = x + (p.rows.nx - 1) * (y + (p.rows.ny - 1) * z);
             let first = table[case_ix as usize];
@@ -249,8 +259,8 @@ pub fn mc_triangles(
                 for j in 0..3 {
                     let e = table[(257 + 3 * (first + k)) as usize + j];
                     let c = EDGE_OWNER[e as usize];
-                    let o = [x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2)];
-                    v[j] = vertex(o, e / 4);
+                    let d = [c & 1, (c >> 1) & 1, c >> 2];
+                    v[j] = vertex(near, x, y, z, d, e / 4);
                 }
                 triangles[(out0 + k) as usize] = [v[0], v[1], v[2], cell];
             }
